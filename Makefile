@@ -1,0 +1,36 @@
+# The two commands a new user needs are `make demo` and `make test`; both install what is
+# missing first (deploy/setup.sh is idempotent and quick when everything is there).
+VENV   := .venv
+PY     := $(VENV)/bin/python
+BUILD  := build
+JOBS   ?= 2
+
+.PHONY: setup build test test-cpp test-py demo bench clean
+
+setup:
+	@deploy/setup.sh
+
+build: setup
+	@if [ ! -f $(BUILD)/build.ninja ]; then \
+	  cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	        -DPython3_EXECUTABLE=$(abspath $(PY)) ; fi
+	@cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	$(PY) -m pytest -q tests
+
+test-cpp: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-py: build
+	$(PY) -m pytest -q tests
+
+demo: build
+	$(VENV)/bin/skillbus demo
+
+bench: build
+	$(PY) bench/lockstep_overhead.py
+
+clean:
+	rm -rf $(BUILD)

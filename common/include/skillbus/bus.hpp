@@ -1,0 +1,89 @@
+// The bus: publish bytes on a channel, subscribe a handler, dispatch with a timeout.
+//
+// Every skillbus process talks through this interface, never through LCM directly, so
+// that the transport is picked by a URL at start-up:
+//   udpm://239.255.76.67:7667?ttl=0   LCM over UDP multicast (the default)
+//   memq://                           LCM in-process queue (unit tests)
+//   dds://DOMAIN                      Cyclone DDS (reserved; not built yet, clear error)
+// Dispatch is single-threaded: handlers run inside handle(), on the caller's thread.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace skillbus {
+
+using Bytes = std::vector<uint8_t>;
+
+// A handler sees the channel a message arrived on and its raw bytes. The bytes are
+// valid only for the duration of the call.
+using Handler = std::function<void(const std::string& channel, const uint8_t* data, size_t size)>;
+
+constexpr const char* kDefaultBusUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+class BusError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Bus {
+ public:
+  virtual ~Bus() = default;
+  virtual void publish(const std::string& channel, const void* data, size_t size) = 0;
+  // `channel` is an exact name or a regular expression (LCM semantics). queue_capacity
+  // bounds how many undelivered messages are kept for this subscription; LCM's default
+  // of 30 silently drops bursts, so ours is far larger.
+  virtual int subscribe(const std::string& channel, Handler handler, int queue_capacity = 10000) = 0;
+  virtual void unsubscribe(int subscription_id) = 0;
+  // Dispatches pending messages, waiting at most `timeout` for the first one.
+  // Returns true if at least one message was handled.
+  virtual bool handle(std::chrono::milliseconds timeout) = 0;
+  virtual std::string url() const = 0;
+};
+
+// The URL from the argument, else $SKILLBUS_BUS_URL, else kDefaultBusUrl.
+std::string resolve_bus_url(const std::string& url = "");
+
+// Opens the backend that the URL names; throws BusError naming the URL when it cannot.
+std::unique_ptr<Bus> open_bus(const std::string& url = "");
+
+// Prefix for several robots on one bus: channel("SB_WM_REQ") -> "<ns>SB_WM_REQ" where
+// ns comes from $SKILLBUS_NAMESPACE (empty by default).
+std::string channel(const std::string& name);
+
+// Typed helpers over the generated LCM bindings.
+template <class T>
+void publish_msg(Bus& bus, const std::string& ch, const T& msg) {
+  Bytes buf(static_cast<size_t>(msg.getEncodedSize()));
+  if (msg.encode(buf.data(), 0, static_cast<int>(buf.size())) < 0)
+    throw BusError("cannot encode message for channel " + ch);
+  bus.publish(ch, buf.data(), buf.size());
+}
+
+template <class T>
+Bytes encode_msg(const T& msg) {
+  Bytes buf(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
+}
+
+// Decodes `size` bytes as T; returns false (leaving `out` unspecified) on a wrong type
+// fingerprint or truncated bytes. Never throws on bad input.
+// (LCM's generated C++ throws std::length_error on some corrupt string lengths; that is
+// caught here, which is why every decode goes through this function.)
+template <class T>
+bool decode_msg(const uint8_t* data, size_t size, T& out) {
+  if (size > static_cast<size_t>(INT32_MAX)) return false;
+  try {
+    return out.decode(data, 0, static_cast<int>(size)) == static_cast<int>(size);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+}  // namespace skillbus

@@ -1,0 +1,155 @@
+// Lockstep: the clock master and its participants (protocol in docs/lockstep.md).
+//
+// Frame n:
+//   master:       on_frame_start(n) publishes its state stamped n, then clock(n) with
+//                 the counts of everything published since the previous clock;
+//   participant:  waits until it holds every announced message on its channels,
+//                 delivers them in canonical order (frame, sender, seq), runs
+//                 on_frame(n), publishes stamped n, acks n with its counts and digest;
+//   master:       when all acks for n are in, delivers the participants' outputs to its
+//                 own subscriptions in canonical order, runs on_frame_end(n) (apply
+//                 commands, step physics) and folds every digest into the session digest.
+// Nothing here reads the wall clock for behaviour; timeouts only detect faults, and a
+// fault stops the run with an error that names the participant, or channel and frame.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "skillbus/lockstep_frame.hpp"
+
+namespace skillbus {
+
+using FrameCallback = std::function<void(int64_t frame, int64_t sim_time_ns)>;
+using MessageHandler = std::function<void(const StampedMessage&)>;
+
+struct MasterConfig {
+  std::string name = "clock";
+  std::vector<std::string> participants;  // expected, by name
+  int64_t frame_period_ns = 10'000'000;   // 10 ms
+  int64_t frames = -1;                    // how many frames to run; -1 = until stop()
+  std::chrono::milliseconds join_timeout{10000};
+  std::chrono::milliseconds ack_timeout{5000};
+  std::chrono::milliseconds message_timeout{2000};
+  std::chrono::milliseconds resend_interval{250};  // re-publish an unacknowledged clock
+};
+
+class LockstepMaster {
+ public:
+  LockstepMaster(Bus& bus, MasterConfig config);
+  ~LockstepMaster();
+
+  // Lockstep subscription: participants' messages on this exact channel are delivered
+  // after all acks of their frame, in canonical order, before on_frame_end.
+  void subscribe(const std::string& channel, MessageHandler handler);
+
+  // Publish state for the current frame (call from on_frame_start).
+  template <class T>
+  void publish(const std::string& ch, const T& msg) { outbox_.publish(ch, msg); }
+
+  FrameCallback on_frame_start;
+  FrameCallback on_frame_end;
+
+  RunResult run();
+  void stop(const std::string& reason = "");  // from a callback: end after this frame
+  const BadInputCounter& bad_input() const { return bad_; }
+  const MasterConfig& config() const { return cfg_; }
+
+ private:
+  bool wait_for_joins(std::string& error);
+  bool run_frame(int64_t frame, int64_t sim_time, std::vector<ChannelCount>& carried, std::string& error);
+  void publish_stop(int64_t frame, int64_t sim_time, const std::string& reason);
+  void on_join(const uint8_t* d, size_t n, const std::string& ch);
+  void on_ack(const uint8_t* d, size_t n, const std::string& ch);
+
+  Bus& bus_;
+  MasterConfig cfg_;
+  std::vector<std::string> expected_;  // sorted
+  BadInputCounter bad_;
+  FrameOutbox outbox_;
+  FrameInbox inbox_;
+  std::set<std::string> stamped_channels_;
+  std::map<std::string, MessageHandler> handlers_;
+  std::vector<int> subs_;
+  std::set<std::string> joined_;
+  struct Ack {
+    std::vector<ChannelCount> counts;
+    Digest digest{};
+    std::string error;
+  };
+  int64_t awaiting_frame_ = -1;
+  std::map<std::string, Ack> acks_;
+  Sha256 session_;
+  Digest session_digest_{};
+  bool stop_requested_ = false;
+  std::string stop_reason_;
+};
+
+enum class ClockMode { Lockstep, WallClock };
+
+struct ParticipantConfig {
+  std::string name;
+  std::string kind = "cpp";
+  ClockMode mode = ClockMode::Lockstep;
+  std::chrono::milliseconds message_timeout{2000};  // announced messages must arrive within
+  std::chrono::milliseconds clock_timeout{10000};   // a silent master is an error after
+  std::chrono::milliseconds join_interval{100};
+  int64_t wall_frame_period_ns = 10'000'000;        // wall-clock mode only
+  int64_t wall_frames = -1;                         // wall-clock mode: -1 = until stop()
+};
+
+class LockstepParticipant {
+ public:
+  LockstepParticipant(Bus& bus, ParticipantConfig config);
+  ~LockstepParticipant();
+
+  void subscribe(const std::string& channel, MessageHandler handler);
+
+  // Publish for the current frame (call from on_frame or a message handler).
+  template <class T>
+  void publish(const std::string& ch, const T& msg) { outbox_.publish(ch, msg); }
+
+  FrameCallback on_frame;
+
+  RunResult run();
+  void stop();
+  int64_t frame() const { return outbox_.frame(); }
+  const BadInputCounter& bad_input() const { return bad_; }
+  const std::string& name() const { return cfg_.name; }
+
+ private:
+  RunResult run_lockstep();
+  RunResult run_wall_clock();
+  void on_clock(const uint8_t* d, size_t n, const std::string& ch);
+  void send_ack(int64_t frame, int64_t sim_time, const std::string& error);
+
+  Bus& bus_;
+  ParticipantConfig cfg_;
+  BadInputCounter bad_;
+  FrameOutbox outbox_;
+  FrameInbox inbox_;
+  std::set<std::string> stamped_channels_;
+  std::map<std::string, MessageHandler> handlers_;
+  std::vector<int> subs_;
+  struct Clock {
+    int64_t frame = -1, sim_time_ns = 0;
+    std::vector<ChannelCount> counts;
+    bool stop = false;
+    std::string stop_reason;
+  };
+  bool have_clock_ = false;
+  Clock next_clock_;
+  bool stop_seen_ = false;
+  std::string stop_reason_;
+  int64_t last_acked_ = -1;
+  Bytes last_ack_;
+  Sha256 running_;
+  Digest running_digest_{};
+  bool stop_requested_ = false;
+};
+
+}  // namespace skillbus

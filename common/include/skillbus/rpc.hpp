@@ -1,0 +1,130 @@
+// RPC over the bus. A server of area "WM" takes rpc_request_t on SB_WM_REQ and answers
+// with rpc_reply_t on SB_WM_REP; the payloads are LCM encodings of each method's own
+// types. (client_id, request_id) names a call across retries:
+//  * the client resends the same request every retry interval until a reply with its
+//    ids arrives or the call's timeout passes (then RpcTimeout, never a hang);
+//  * the server remembers the replies of the last `memory` calls and answers a retry
+//    from that memory without running the method again, so a write happens once;
+//  * failures come back as typed replies (ERROR, UNKNOWN_METHOD, BAD_REQUEST) that the
+//    client raises as RpcRemoteError with the server's message.
+// Timeouts use the steady clock: they detect faults, they never steer behaviour.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <map>
+#include <string>
+#include <unordered_map>
+
+#include "skillbus/bus.hpp"
+#include "skillbus/log.hpp"
+
+namespace skillbus {
+
+std::string rpc_request_channel(const std::string& area);  // "SB_<AREA>_REQ" (namespaced)
+std::string rpc_reply_channel(const std::string& area);    // "SB_<AREA>_REP" (namespaced)
+
+class RpcError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+class RpcTimeout : public RpcError {
+ public:
+  using RpcError::RpcError;
+};
+class RpcRemoteError : public RpcError {
+ public:
+  RpcRemoteError(int8_t status, const std::string& what) : RpcError(what), status(status) {}
+  int8_t status;
+};
+// Thrown by a method to answer BAD_REQUEST instead of ERROR.
+class RpcBadRequest : public RpcError {
+ public:
+  using RpcError::RpcError;
+};
+
+class RpcServer {
+ public:
+  using RawMethod = std::function<Bytes(const uint8_t* payload, size_t size)>;
+
+  RpcServer(Bus& bus, const std::string& area, size_t memory = 4096);
+  ~RpcServer();
+
+  void add_raw_method(const std::string& name, RawMethod method);
+
+  // A method on generated LCM types: the request is decoded (BAD_REQUEST if it cannot
+  // be) and the reply encoded. An exception thrown by fn becomes an ERROR reply.
+  template <class Req, class Rep>
+  void add_method(const std::string& name, std::function<Rep(const Req&)> fn) {
+    add_raw_method(name, [name, fn](const uint8_t* p, size_t n) {
+      Req req;
+      if (!decode_msg(p, n, req)) throw RpcBadRequest("payload of " + name + " does not decode as its request type");
+      return encode_msg(fn(req));
+    });
+  }
+
+  long served() const { return served_; }
+  long duplicates() const { return duplicates_; }
+  long expired() const { return expired_; }
+  const BadInputCounter& bad_input() const { return bad_; }
+
+ private:
+  void on_request(const std::string& ch, const uint8_t* data, size_t size);
+  void remember(const std::string& key, Bytes reply);
+
+  Bus& bus_;
+  std::string area_, req_channel_, rep_channel_;
+  size_t memory_;
+  int sub_ = -1;
+  std::map<std::string, RawMethod> methods_;
+  std::list<std::string> order_;  // oldest first
+  std::unordered_map<std::string, Bytes> answered_;
+  long served_ = 0, duplicates_ = 0, expired_ = 0;
+  BadInputCounter bad_;
+};
+
+struct CallOptions {
+  std::chrono::milliseconds timeout{2000};
+  std::chrono::milliseconds retry_interval{100};
+};
+
+class RpcClient {
+ public:
+  // client_name is for people; the client id adds the pid and a per-incarnation nonce
+  // so that a restarted client never collides with its predecessor's request ids.
+  RpcClient(Bus& bus, const std::string& area, const std::string& client_name);
+  ~RpcClient();
+
+  Bytes call_raw(const std::string& method, const Bytes& payload, const CallOptions& opts = {});
+
+  template <class Rep, class Req>
+  Rep call(const std::string& method, const Req& req, const CallOptions& opts = {}) {
+    const Bytes out = call_raw(method, encode_msg(req), opts);
+    Rep rep;
+    if (!decode_msg(out.data(), out.size(), rep))
+      throw RpcError("reply of " + area_ + "." + method + " does not decode as its reply type");
+    return rep;
+  }
+
+  const std::string& client_id() const { return client_id_; }
+  long retries() const { return retries_; }
+
+ private:
+  void on_reply(const std::string& ch, const uint8_t* data, size_t size);
+
+  Bus& bus_;
+  std::string area_, req_channel_, client_id_;
+  int sub_ = -1;
+  int64_t next_request_id_ = 1;
+  int64_t waiting_for_ = 0;
+  bool got_reply_ = false;
+  int8_t reply_status_ = 0;
+  std::string reply_error_;
+  Bytes reply_payload_;
+  long retries_ = 0;
+  BadInputCounter bad_;
+};
+
+}  // namespace skillbus

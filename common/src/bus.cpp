@@ -1,0 +1,33 @@
+// open_bus(): picks the backend by URL scheme. Only LCM exists today; a Cyclone DDS
+// backend slots in here behind dds:// without any caller changing.
+#include <cstdlib>
+
+#include "lcm_bus.hpp"
+#include "skillbus/bus.hpp"
+
+namespace skillbus {
+
+std::string resolve_bus_url(const std::string& url) {
+  if (!url.empty()) return url;
+  const char* env = std::getenv("SKILLBUS_BUS_URL");
+  if (env && *env) return env;
+  return kDefaultBusUrl;
+}
+
+std::unique_ptr<Bus> open_bus(const std::string& url_in) {
+  const std::string url = resolve_bus_url(url_in);
+  const auto scheme_end = url.find("://");
+  const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
+  if (scheme == "udpm" || scheme == "memq" || scheme == "file" || scheme == "tcpq")
+    return std::make_unique<LcmBus>(url);
+  if (scheme == "dds")
+    throw BusError("bus URL '" + url + "': the Cyclone DDS backend is not built into this version");
+  throw BusError("bus URL '" + url + "': unknown scheme (expected udpm://, memq:// or dds://)");
+}
+
+std::string channel(const std::string& name) {
+  const char* ns = std::getenv("SKILLBUS_NAMESPACE");
+  return (ns ? std::string(ns) : std::string()) + name;
+}
+
+}  // namespace skillbus

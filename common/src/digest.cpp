@@ -1,0 +1,49 @@
+#include "skillbus/digest.hpp"
+
+#include <openssl/evp.h>
+
+#include <stdexcept>
+
+namespace skillbus {
+
+Sha256::Sha256() : ctx_(EVP_MD_CTX_new()) {
+  if (!ctx_ || EVP_DigestInit_ex(static_cast<EVP_MD_CTX*>(ctx_), EVP_sha256(), nullptr) != 1)
+    throw std::runtime_error("OpenSSL SHA-256 unavailable");
+}
+
+Sha256::~Sha256() { EVP_MD_CTX_free(static_cast<EVP_MD_CTX*>(ctx_)); }
+
+void Sha256::update(const void* data, size_t size) {
+  EVP_DigestUpdate(static_cast<EVP_MD_CTX*>(ctx_), data, size);
+}
+
+void Sha256::update_str(const std::string& s) {
+  const uint32_t n = static_cast<uint32_t>(s.size());
+  const uint8_t len[4] = {uint8_t(n), uint8_t(n >> 8), uint8_t(n >> 16), uint8_t(n >> 24)};
+  update(len, 4);
+  update(s.data(), s.size());
+}
+
+void Sha256::update_i64(int64_t v) {
+  uint8_t b[8];
+  for (int i = 0; i < 8; ++i) b[i] = uint8_t(uint64_t(v) >> (8 * i));
+  update(b, 8);
+}
+
+Digest Sha256::finish() {
+  Digest d{};
+  unsigned int n = 0;
+  auto* ctx = static_cast<EVP_MD_CTX*>(ctx_);
+  EVP_DigestFinal_ex(ctx, d.data(), &n);
+  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+  return d;
+}
+
+std::string to_hex(const Digest& d) {
+  static const char* h = "0123456789abcdef";
+  std::string s;
+  for (uint8_t b : d) { s += h[b >> 4]; s += h[b & 15]; }
+  return s;
+}
+
+}  // namespace skillbus

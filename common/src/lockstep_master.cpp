@@ -1,0 +1,235 @@
+#include <unistd.h>
+
+#include <algorithm>
+#include <thread>
+
+#include "skillbus/lockstep.hpp"
+#include "skillbus_msgs/lockstep_ack_t.hpp"
+#include "skillbus_msgs/lockstep_clock_t.hpp"
+#include "skillbus_msgs/lockstep_join_t.hpp"
+
+namespace skillbus {
+namespace {
+
+using steady = std::chrono::steady_clock;
+const char* kLog = "lockstep-master";
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+double seconds(std::chrono::milliseconds d) { return static_cast<double>(d.count()) / 1000.0; }
+
+std::string secs_text(std::chrono::milliseconds d) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", seconds(d));
+  return buf;
+}
+
+}  // namespace
+
+LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
+    : bus_(bus),
+      cfg_(std::move(config)),
+      expected_(cfg_.participants),
+      bad_(kLog),
+      outbox_(bus, cfg_.name),
+      inbox_(cfg_.name, bad_) {
+  std::sort(expected_.begin(), expected_.end());
+  expected_.erase(std::unique(expected_.begin(), expected_.end()), expected_.end());
+  subs_.push_back(bus_.subscribe(join_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
+    on_join(d, n, ch);
+  }));
+  subs_.push_back(bus_.subscribe(ack_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
+    on_ack(d, n, ch);
+  }));
+}
+
+LockstepMaster::~LockstepMaster() {
+  for (int s : subs_) bus_.unsubscribe(s);
+}
+
+void LockstepMaster::subscribe(const std::string& ch, MessageHandler handler) {
+  handlers_[ch] = std::move(handler);
+  if (stamped_channels_.insert(ch).second)
+    subs_.push_back(bus_.subscribe(ch, [this](const std::string& c, const uint8_t* d, size_t n) { inbox_.add(c, d, n); }));
+}
+
+void LockstepMaster::stop(const std::string& reason) {
+  stop_requested_ = true;
+  stop_reason_ = reason;
+}
+
+void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) {
+  skillbus_msgs::lockstep_join_t j;
+  if (!decode_msg(d, n, j)) return bad_.record(ch, "not a lockstep_join_t", n);
+  if (!std::binary_search(expected_.begin(), expected_.end(), j.participant)) {
+    if (joined_.insert("?" + j.participant).second)
+      SB_WARN(kLog, "ignoring participant '" << j.participant << "' (pid " << j.pid
+                                             << "): not among the expected " << join_names(expected_));
+    return;
+  }
+  if (joined_.insert(j.participant).second)
+    SB_INFO(kLog, "participant '" << j.participant << "' (" << j.kind << ", pid " << j.pid << ") joined");
+}
+
+void LockstepMaster::on_ack(const uint8_t* d, size_t n, const std::string& ch) {
+  skillbus_msgs::lockstep_ack_t a;
+  if (!decode_msg(d, n, a)) return bad_.record(ch, "not a lockstep_ack_t", n);
+  if (a.header.frame != awaiting_frame_) return;  // a resent ack of an earlier frame
+  if (!std::binary_search(expected_.begin(), expected_.end(), a.header.sender)) return;
+  Ack& ack = acks_[a.header.sender];
+  ack.counts = std::move(a.counts);
+  std::copy(std::begin(a.digest), std::end(a.digest), ack.digest.begin());
+  ack.error = std::move(a.error);
+}
+
+bool LockstepMaster::wait_for_joins(std::string& error) {
+  const auto deadline = steady::now() + cfg_.join_timeout;
+  auto all_joined = [&] {
+    return std::all_of(expected_.begin(), expected_.end(), [&](const std::string& p) { return joined_.count(p) > 0; });
+  };
+  while (!all_joined()) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - steady::now());
+    if (left.count() <= 0) {
+      std::vector<std::string> missing;
+      for (const auto& p : expected_)
+        if (!joined_.count(p)) missing.push_back(p);
+      error = "lockstep: participant(s) " + join_names(missing) + " never joined within " +
+              secs_text(cfg_.join_timeout);
+      return false;
+    }
+    bus_.handle(std::min(left, std::chrono::milliseconds(50)));
+  }
+  return true;
+}
+
+void LockstepMaster::publish_stop(int64_t frame, int64_t sim_time, const std::string& reason) {
+  skillbus_msgs::lockstep_clock_t c;
+  c.header.frame = frame;
+  c.header.sim_time_ns = sim_time;
+  c.header.sender = cfg_.name;
+  c.frame_period_ns = cfg_.frame_period_ns;
+  c.participants = expected_;
+  c.num_participants = static_cast<int32_t>(expected_.size());
+  c.stop = true;
+  c.stop_reason = reason;
+  // The stop is not acknowledged; send it a few times so a lost datagram does not
+  // leave participants waiting for their clock timeout.
+  for (int i = 0; i < 3; ++i) {
+    publish_msg(bus_, clock_channel(), c);
+    if (i < 2) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<ChannelCount>& carried,
+                               std::string& error) {
+  outbox_.begin_frame(frame, sim_time);
+  if (on_frame_start) on_frame_start(frame, sim_time);
+
+  skillbus_msgs::lockstep_clock_t c;
+  c.header.frame = frame;
+  c.header.sim_time_ns = sim_time;
+  c.header.sender = cfg_.name;
+  c.frame_period_ns = cfg_.frame_period_ns;
+  c.participants = expected_;
+  c.num_participants = static_cast<int32_t>(expected_.size());
+  c.counts = carried;
+  for (auto& own : outbox_.counts()) c.counts.push_back(own);
+  c.num_counts = static_cast<int32_t>(c.counts.size());
+  c.stop = false;
+  const Bytes clock = encode_msg(c);
+
+  acks_.clear();
+  awaiting_frame_ = frame;
+  const auto start = steady::now();
+  auto resend_at = start;
+  while (acks_.size() < expected_.size()) {
+    const auto now = steady::now();
+    if (now - start >= cfg_.ack_timeout) {
+      std::vector<std::string> missing;
+      for (const auto& p : expected_)
+        if (!acks_.count(p)) missing.push_back(p);
+      error = "lockstep: no ack for frame " + std::to_string(frame) + " from participant(s) " + join_names(missing) +
+              " within " + secs_text(cfg_.ack_timeout);
+      return false;
+    }
+    if (now >= resend_at) {
+      bus_.publish(clock_channel(), clock.data(), clock.size());
+      resend_at = now + cfg_.resend_interval;
+    }
+    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
+        std::min(resend_at, start + cfg_.ack_timeout) - steady::now());
+    bus_.handle(std::max(wait, std::chrono::milliseconds(0)));
+  }
+  awaiting_frame_ = -1;
+  for (const auto& [name, ack] : acks_)
+    if (!ack.error.empty()) {
+      error = "lockstep: participant " + name + " failed in frame " + std::to_string(frame) + ": " + ack.error;
+      return false;
+    }
+
+  // Everything the participants published in this frame, as their acks announce it.
+  carried.clear();
+  for (const auto& [name, ack] : acks_)
+    for (const auto& cc : ack.counts) carried.push_back(cc);
+  const auto expected = expectations_for(carried, stamped_channels_, cfg_.name);
+  const auto msg_deadline = steady::now() + cfg_.message_timeout;
+  for (std::string miss = inbox_.missing(expected); !miss.empty(); miss = inbox_.missing(expected)) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(msg_deadline - steady::now());
+    if (left.count() <= 0) {
+      error = "lockstep: message lost on " + miss + " (master " + cfg_.name + ")";
+      return false;
+    }
+    bus_.handle(std::min(left, std::chrono::milliseconds(50)));
+  }
+  for (const auto& m : inbox_.take(expected, frame + 1)) {
+    auto h = handlers_.find(m.channel);
+    if (h != handlers_.end()) h->second(m);
+  }
+  if (on_frame_end) on_frame_end(frame, sim_time);
+
+  // Session digest: previous digest, frame, the master's own output, then every
+  // participant's frame digest in name order (never arrival order).
+  session_.update(session_digest_.data(), session_digest_.size());
+  session_.update_i64(frame);
+  const Digest own = outbox_.finish_frame();
+  session_.update(own.data(), own.size());
+  for (const auto& [name, ack] : acks_) {
+    session_.update_str(name);
+    session_.update(ack.digest.data(), ack.digest.size());
+  }
+  session_digest_ = session_.finish();
+  return true;
+}
+
+RunResult LockstepMaster::run() {
+  RunResult r;
+  auto wall_start = steady::now();
+  std::string error;
+  int64_t frame = 0, sim_time = 0;
+  if (wait_for_joins(error)) {
+    wall_start = steady::now();  // the figures are about frames, not about start-up
+    SB_INFO(kLog, "all " << expected_.size() << " participant(s) joined; starting frames of "
+                         << cfg_.frame_period_ns / 1e6 << " ms");
+    std::vector<ChannelCount> carried;
+    while ((cfg_.frames < 0 || frame < cfg_.frames) && !stop_requested_) {
+      if (!run_frame(frame, sim_time, carried, error)) break;
+      ++frame;
+      sim_time += cfg_.frame_period_ns;
+    }
+  }
+  r.ok = error.empty();
+  r.error = error;
+  r.frames = frame;
+  r.sim_time_ns = sim_time;
+  r.digest = session_digest_;
+  if (!r.ok) SB_ERROR(kLog, error);
+  publish_stop(frame, sim_time, r.ok ? stop_reason_ : error);
+  r.wall_seconds = std::chrono::duration<double>(steady::now() - wall_start).count();
+  return r;
+}
+
+}  // namespace skillbus

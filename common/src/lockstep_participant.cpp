@@ -1,0 +1,189 @@
+#include <unistd.h>
+
+#include <thread>
+
+#include "skillbus/lockstep.hpp"
+#include "skillbus_msgs/lockstep_ack_t.hpp"
+#include "skillbus_msgs/lockstep_clock_t.hpp"
+#include "skillbus_msgs/lockstep_join_t.hpp"
+
+namespace skillbus {
+namespace {
+using steady = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+}  // namespace
+
+LockstepParticipant::LockstepParticipant(Bus& bus, ParticipantConfig config)
+    : bus_(bus),
+      cfg_(std::move(config)),
+      bad_("lockstep " + cfg_.name),
+      outbox_(bus, cfg_.name),
+      inbox_(cfg_.name, bad_) {
+  if (cfg_.name.empty()) throw std::invalid_argument("a lockstep participant needs a name");
+  if (cfg_.mode == ClockMode::Lockstep)
+    subs_.push_back(bus_.subscribe(clock_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
+      on_clock(d, n, ch);
+    }));
+}
+
+LockstepParticipant::~LockstepParticipant() {
+  for (int s : subs_) bus_.unsubscribe(s);
+}
+
+void LockstepParticipant::subscribe(const std::string& ch, MessageHandler handler) {
+  handlers_[ch] = std::move(handler);
+  if (!stamped_channels_.insert(ch).second) return;
+  subs_.push_back(bus_.subscribe(ch, [this](const std::string& c, const uint8_t* d, size_t n) {
+    if (cfg_.mode == ClockMode::Lockstep) return inbox_.add(c, d, n);
+    // Wall-clock mode: no counts to wait for; deliver on arrival.
+    StampedMessage m{c, {}, Bytes(d, d + n)};
+    if (!peek_stamp(d, n, m.stamp)) return bad_.record(c, "no lockstep header (frame, sender, seq)", n);
+    if (m.stamp.sender == cfg_.name) return;
+    handlers_[c](m);
+  }));
+}
+
+void LockstepParticipant::stop() { stop_requested_ = true; }
+
+void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string& ch) {
+  skillbus_msgs::lockstep_clock_t c;
+  if (!decode_msg(d, n, c)) return bad_.record(ch, "not a lockstep_clock_t", n);
+  if (c.stop) {
+    stop_seen_ = true;
+    stop_reason_ = c.stop_reason;
+    return;
+  }
+  if (c.header.frame == last_acked_ && !last_ack_.empty()) {
+    bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());  // our ack was lost
+    return;
+  }
+  if (c.header.frame <= last_acked_) return;
+  if (have_clock_ && c.header.frame == next_clock_.frame) return;  // a resend we already hold
+  have_clock_ = true;
+  next_clock_.frame = c.header.frame;
+  next_clock_.sim_time_ns = c.header.sim_time_ns;
+  next_clock_.counts = std::move(c.counts);
+}
+
+void LockstepParticipant::send_ack(int64_t frame, int64_t sim_time, const std::string& error) {
+  skillbus_msgs::lockstep_ack_t a;
+  a.header.frame = frame;
+  a.header.sim_time_ns = sim_time;
+  a.header.sender = cfg_.name;
+  a.header.seq = 0;
+  a.counts = outbox_.counts();
+  a.num_counts = static_cast<int32_t>(a.counts.size());
+  const Digest d = outbox_.finish_frame();
+  std::copy(d.begin(), d.end(), a.digest);
+  a.error = error;
+  last_ack_ = encode_msg(a);
+  last_acked_ = frame;
+  bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());
+  running_.update(running_digest_.data(), running_digest_.size());
+  running_.update(d.data(), d.size());
+  running_digest_ = running_.finish();
+}
+
+RunResult LockstepParticipant::run() {
+  return cfg_.mode == ClockMode::Lockstep ? run_lockstep() : run_wall_clock();
+}
+
+RunResult LockstepParticipant::run_lockstep() {
+  RunResult r;
+  auto wall_start = steady::now();
+  auto fail = [&](const std::string& e) {
+    r.ok = false;
+    r.error = e;
+    SB_ERROR("lockstep " + cfg_.name, e);
+  };
+
+  // Join: announce ourselves until the first clock shows the master has started.
+  skillbus_msgs::lockstep_join_t j;
+  j.participant = cfg_.name;
+  j.kind = cfg_.kind;
+  j.pid = ::getpid();
+  auto last_event = steady::now();
+  auto next_join = last_event;
+  while (!have_clock_ && !stop_seen_) {
+    const auto now = steady::now();
+    if (now - last_event > cfg_.clock_timeout) {
+      fail("lockstep: no clock from the master within " + std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) +
+           " s of joining");
+      return r;
+    }
+    if (now >= next_join) {
+      publish_msg(bus_, join_channel(), j);
+      next_join = now + cfg_.join_interval;
+    }
+    bus_.handle(milliseconds(10));
+  }
+  wall_start = steady::now();
+
+  while (!stop_requested_) {
+    // Wait for the clock of the next frame.
+    last_event = steady::now();
+    while (!have_clock_ && !stop_seen_) {
+      if (steady::now() - last_event > cfg_.clock_timeout) {
+        fail("lockstep: no clock after frame " + std::to_string(last_acked_) + " within " +
+             std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) + " s (master gone?)");
+        return r;
+      }
+      bus_.handle(milliseconds(50));
+    }
+    if (stop_seen_ && !have_clock_) break;
+    Clock clk = std::move(next_clock_);
+    have_clock_ = false;
+
+    // Wait until every message announced for this frame on our channels is here.
+    const auto expected = expectations_for(clk.counts, stamped_channels_, cfg_.name);
+    const auto deadline = steady::now() + cfg_.message_timeout;
+    std::string miss;
+    for (miss = inbox_.missing(expected); !miss.empty() && !stop_seen_; miss = inbox_.missing(expected)) {
+      const auto left = std::chrono::duration_cast<milliseconds>(deadline - steady::now());
+      if (left.count() <= 0) break;
+      bus_.handle(std::min(left, milliseconds(50)));
+    }
+    if (stop_seen_) break;
+    outbox_.begin_frame(clk.frame, clk.sim_time_ns);
+    if (!miss.empty()) {
+      const std::string e = "message lost on " + miss + " (noticed by " + cfg_.name + ")";
+      send_ack(clk.frame, clk.sim_time_ns, e);
+      fail("lockstep: " + e);
+      return r;
+    }
+    for (const auto& m : inbox_.take(expected, clk.frame)) handlers_[m.channel](m);
+    if (on_frame) on_frame(clk.frame, clk.sim_time_ns);
+    send_ack(clk.frame, clk.sim_time_ns, "");
+    ++r.frames;
+    r.sim_time_ns = clk.sim_time_ns + 0;
+  }
+  if (stop_seen_ && !stop_reason_.empty()) fail("lockstep stopped by the master: " + stop_reason_);
+  r.digest = running_digest_;
+  r.wall_seconds = std::chrono::duration<double>(steady::now() - wall_start).count();
+  return r;
+}
+
+RunResult LockstepParticipant::run_wall_clock() {
+  RunResult r;
+  const auto start = steady::now();
+  const auto period = std::chrono::nanoseconds(cfg_.wall_frame_period_ns);
+  for (int64_t frame = 0; !stop_requested_ && (cfg_.wall_frames < 0 || frame < cfg_.wall_frames); ++frame) {
+    const auto due = start + frame * period;
+    for (auto now = steady::now(); now < due; now = steady::now())
+      bus_.handle(std::chrono::ceil<milliseconds>(due - now));
+    const int64_t sim_time = frame * cfg_.wall_frame_period_ns;
+    outbox_.begin_frame(frame, sim_time);
+    if (on_frame) on_frame(frame, sim_time);
+    running_.update(running_digest_.data(), running_digest_.size());
+    const Digest d = outbox_.finish_frame();
+    running_.update(d.data(), d.size());
+    running_digest_ = running_.finish();
+    r.frames = frame + 1;
+    r.sim_time_ns = sim_time;
+  }
+  r.digest = running_digest_;
+  r.wall_seconds = std::chrono::duration<double>(steady::now() - start).count();
+  return r;
+}
+
+}  // namespace skillbus

@@ -1,0 +1,165 @@
+#include "skillbus/rpc.hpp"
+
+#include <unistd.h>
+
+#include <random>
+
+#include "skillbus_msgs/rpc_reply_t.hpp"
+#include "skillbus_msgs/rpc_request_t.hpp"
+
+namespace skillbus {
+namespace {
+
+using skillbus_msgs::rpc_reply_t;
+using skillbus_msgs::rpc_request_t;
+
+std::string upper(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+int64_t realtime_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+std::string rpc_request_channel(const std::string& area) { return channel("SB_" + upper(area) + "_REQ"); }
+std::string rpc_reply_channel(const std::string& area) { return channel("SB_" + upper(area) + "_REP"); }
+
+// ---------------------------------------------------------------- server
+
+RpcServer::RpcServer(Bus& bus, const std::string& area, size_t memory)
+    : bus_(bus),
+      area_(area),
+      req_channel_(rpc_request_channel(area)),
+      rep_channel_(rpc_reply_channel(area)),
+      memory_(memory),
+      bad_("rpc-server " + area) {
+  sub_ = bus_.subscribe(req_channel_, [this](const std::string& ch, const uint8_t* d, size_t n) { on_request(ch, d, n); });
+}
+
+RpcServer::~RpcServer() { bus_.unsubscribe(sub_); }
+
+void RpcServer::add_raw_method(const std::string& name, RawMethod method) { methods_[name] = std::move(method); }
+
+void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t size) {
+  rpc_request_t req;
+  if (!decode_msg(data, size, req)) {
+    bad_.record(ch, "not an rpc_request_t", size);
+    return;
+  }
+  const std::string key = req.client_id + '\n' + std::to_string(req.request_id);
+  if (auto it = answered_.find(key); it != answered_.end()) {
+    ++duplicates_;  // a retry: answer again from memory, do not run the method twice
+    bus_.publish(rep_channel_, it->second.data(), it->second.size());
+    return;
+  }
+  if (req.deadline_ns != 0 && realtime_ns() > req.deadline_ns) {
+    ++expired_;  // the client has given up; running it now would surprise it
+    return;
+  }
+  rpc_reply_t rep;
+  rep.client_id = req.client_id;
+  rep.request_id = req.request_id;
+  rep.method = req.method;
+  rep.status = rpc_reply_t::OK;
+  auto m = methods_.find(req.method);
+  if (m == methods_.end()) {
+    rep.status = rpc_reply_t::UNKNOWN_METHOD;
+    rep.error = "unknown method '" + req.method + "' on " + area_;
+  } else {
+    try {
+      Bytes out = m->second(req.payload.data(), req.payload.size());
+      rep.payload.assign(out.begin(), out.end());
+    } catch (const RpcBadRequest& e) {
+      rep.status = rpc_reply_t::BAD_REQUEST;
+      rep.error = e.what();
+    } catch (const std::exception& e) {
+      rep.status = rpc_reply_t::ERROR;
+      rep.error = area_ + "." + req.method + " failed: " + e.what();
+    }
+  }
+  rep.payload_size = static_cast<int32_t>(rep.payload.size());
+  ++served_;
+  Bytes buf = encode_msg(rep);
+  bus_.publish(rep_channel_, buf.data(), buf.size());
+  remember(key, std::move(buf));
+}
+
+void RpcServer::remember(const std::string& key, Bytes reply) {
+  answered_[key] = std::move(reply);
+  order_.push_back(key);
+  while (order_.size() > memory_) {
+    answered_.erase(order_.front());
+    order_.pop_front();
+  }
+}
+
+// ---------------------------------------------------------------- client
+
+RpcClient::RpcClient(Bus& bus, const std::string& area, const std::string& client_name)
+    : bus_(bus), area_(area), req_channel_(rpc_request_channel(area)), bad_("rpc-client " + area) {
+  std::random_device rd;  // identity only: never part of anything hashed under lockstep
+  char nonce[17];
+  std::snprintf(nonce, sizeof nonce, "%08x%08x", rd(), rd());
+  client_id_ = client_name + ":" + std::to_string(::getpid()) + ":" + nonce;
+  sub_ = bus_.subscribe(rpc_reply_channel(area),
+                        [this](const std::string& ch, const uint8_t* d, size_t n) { on_reply(ch, d, n); });
+}
+
+RpcClient::~RpcClient() { bus_.unsubscribe(sub_); }
+
+void RpcClient::on_reply(const std::string& ch, const uint8_t* data, size_t size) {
+  rpc_reply_t rep;
+  if (!decode_msg(data, size, rep)) {
+    bad_.record(ch, "not an rpc_reply_t", size);
+    return;
+  }
+  if (rep.client_id != client_id_ || rep.request_id != waiting_for_ || got_reply_) return;
+  got_reply_ = true;
+  reply_status_ = rep.status;
+  reply_error_ = rep.error;
+  reply_payload_.assign(rep.payload.begin(), rep.payload.end());
+}
+
+Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const CallOptions& opts) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  const auto deadline = start + opts.timeout;
+  rpc_request_t req;
+  req.client_id = client_id_;
+  req.request_id = next_request_id_++;
+  req.deadline_ns = realtime_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(opts.timeout).count();
+  req.method = method;
+  req.payload.assign(payload.begin(), payload.end());
+  req.payload_size = static_cast<int32_t>(req.payload.size());
+  const Bytes buf = encode_msg(req);
+
+  waiting_for_ = req.request_id;
+  got_reply_ = false;
+  int attempts = 0;
+  while (!got_reply_) {
+    const auto now = clock::now();
+    if (now >= deadline) break;
+    bus_.publish(req_channel_, buf.data(), buf.size());
+    if (attempts++ > 0) ++retries_;
+    const auto resend_at = std::min(deadline, now + opts.retry_interval);
+    while (!got_reply_) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(resend_at - clock::now());
+      if (left.count() <= 0) break;
+      bus_.handle(left);
+    }
+  }
+  waiting_for_ = 0;
+  if (!got_reply_) {
+    const double secs = std::chrono::duration<double>(opts.timeout).count();
+    throw RpcTimeout("rpc " + area_ + "." + method + ": no reply on " + rpc_reply_channel(area_) + " within " +
+                     std::to_string(secs).substr(0, 5) + " s (" + std::to_string(attempts) + " attempts)");
+  }
+  if (reply_status_ != rpc_reply_t::OK) throw RpcRemoteError(reply_status_, reply_error_);
+  return reply_payload_;
+}
+
+}  // namespace skillbus

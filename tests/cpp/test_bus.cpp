@@ -1,0 +1,88 @@
+#include <gtest/gtest.h>
+
+#include "skillbus/bus.hpp"
+#include "skillbus/faulty_bus.hpp"
+#include "skillbus_msgs/test_sample_t.hpp"
+
+using namespace skillbus;
+using namespace std::chrono_literals;
+
+TEST(Bus, MemqDeliversToSubscribersOfThatChannelOnly) {
+  auto bus = open_bus("memq://");
+  std::vector<std::string> got;
+  bus->subscribe("A", [&](const std::string& ch, const uint8_t* d, size_t n) { got.push_back(ch + ":" + std::string(d, d + n)); });
+  bus->publish("A", "one", 3);
+  bus->publish("B", "two", 3);
+  bus->publish("A", "three", 5);
+  while (bus->handle(0ms)) {
+  }
+  EXPECT_EQ(got, (std::vector<std::string>{"A:one", "A:three"}));
+}
+
+TEST(Bus, QueueCapacityKeepsBursts) {
+  // LCM's default queue of 30 would drop most of this burst.
+  auto bus = open_bus("memq://");
+  int got = 0;
+  bus->subscribe("A", [&](const std::string&, const uint8_t*, size_t) { ++got; });
+  for (int i = 0; i < 500; ++i) bus->publish("A", "x", 1);
+  while (bus->handle(0ms)) {
+  }
+  EXPECT_EQ(got, 500);
+}
+
+TEST(Bus, UnsubscribeStopsDelivery) {
+  auto bus = open_bus("memq://");
+  int got = 0;
+  int id = bus->subscribe("A", [&](const std::string&, const uint8_t*, size_t) { ++got; });
+  bus->unsubscribe(id);
+  bus->publish("A", "x", 1);
+  bus->handle(10ms);
+  EXPECT_EQ(got, 0);
+}
+
+TEST(Bus, UnknownSchemeIsAClearError) {
+  try {
+    open_bus("carrier-pigeon://coop");
+    FAIL() << "expected BusError";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("carrier-pigeon://coop"), std::string::npos);
+  }
+  EXPECT_THROW(open_bus("dds://0"), BusError);
+}
+
+TEST(Bus, UrlFromEnvironmentWhenNoneGiven) {
+  setenv("SKILLBUS_BUS_URL", "memq://", 1);
+  EXPECT_EQ(resolve_bus_url(), "memq://");
+  EXPECT_EQ(resolve_bus_url("udpm://239.255.76.67:7700?ttl=0"), "udpm://239.255.76.67:7700?ttl=0");
+  unsetenv("SKILLBUS_BUS_URL");
+  EXPECT_EQ(resolve_bus_url(), kDefaultBusUrl);
+}
+
+TEST(Bus, TypedRoundTripAndRejectsOtherTypes) {
+  auto bus = open_bus("memq://");
+  skillbus_msgs::test_sample_t in{};
+  in.text = "hello";
+  in.values = {1, 2, 3};
+  in.num_values = 3;
+  bool ok = false;
+  skillbus_msgs::test_sample_t out;
+  bus->subscribe("T", [&](const std::string&, const uint8_t* d, size_t n) { ok = decode_msg(d, n, out); });
+  publish_msg(*bus, "T", in);
+  bus->handle(100ms);
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(out.text, "hello");
+  EXPECT_EQ(out.values, (std::vector<int64_t>{1, 2, 3}));
+  const uint8_t garbage[16] = {1, 2, 3};
+  EXPECT_FALSE(decode_msg(garbage, sizeof garbage, out));
+}
+
+TEST(FaultyBus, DropsEveryNthPublish) {
+  auto bus = std::make_unique<DropEveryNthBus>(open_bus("memq://"), 3);
+  int got = 0;
+  bus->subscribe("A", [&](const std::string&, const uint8_t*, size_t) { ++got; });
+  for (int i = 0; i < 9; ++i) bus->publish("A", "x", 1);
+  while (bus->handle(0ms)) {
+  }
+  EXPECT_EQ(got, 6);
+  EXPECT_EQ(bus->dropped(), 3);
+}
