@@ -15,6 +15,8 @@ build: setup
 	  cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	        -DPython3_EXECUTABLE=$(abspath $(PY)) ; fi
 	@cmake --build $(BUILD) -j $(JOBS)
+	@# The generated Python bindings live in the build tree; put them on the venv's path.
+	@$(PY) -c "import site,sys; open(site.getsitepackages()[0] + '/skillbus_msgs.pth','w').write(sys.argv[1] + '\n')" $(abspath $(BUILD))/gen/python
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

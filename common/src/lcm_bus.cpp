@@ -1,5 +1,7 @@
 #include "lcm_bus.hpp"
 
+#include "skillbus/log.hpp"
+
 namespace skillbus {
 
 LcmBus::LcmBus(const std::string& url) : url_(url) {
@@ -21,7 +23,15 @@ void LcmBus::publish(const std::string& channel, const void* data, size_t size) 
 
 void LcmBus::on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
   auto* sub = static_cast<Sub*>(user);
-  sub->handler(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size);
+  // An exception must not unwind through LCM's C code; a failing handler is logged and
+  // the dispatch loop goes on (servers never crash on input).
+  try {
+    sub->handler(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size);
+  } catch (const std::exception& e) {
+    SB_ERROR("bus", "handler for " << channel << " failed: " << e.what());
+  } catch (...) {
+    SB_ERROR("bus", "handler for " << channel << " failed with a non-standard exception");
+  }
 }
 
 int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_capacity) {

@@ -63,7 +63,7 @@ void LockstepMaster::stop(const std::string& reason) {
 }
 
 void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) {
-  skillbus_msgs::lockstep_join_t j;
+  skillbus_msgs::lockstep_join_t j{};
   if (!decode_msg(d, n, j)) return bad_.record(ch, "not a lockstep_join_t", n);
   if (!std::binary_search(expected_.begin(), expected_.end(), j.participant)) {
     if (joined_.insert("?" + j.participant).second)
@@ -76,7 +76,7 @@ void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) 
 }
 
 void LockstepMaster::on_ack(const uint8_t* d, size_t n, const std::string& ch) {
-  skillbus_msgs::lockstep_ack_t a;
+  skillbus_msgs::lockstep_ack_t a{};
   if (!decode_msg(d, n, a)) return bad_.record(ch, "not a lockstep_ack_t", n);
   if (a.header.frame != awaiting_frame_) return;  // a resent ack of an earlier frame
   if (!std::binary_search(expected_.begin(), expected_.end(), a.header.sender)) return;
@@ -107,7 +107,7 @@ bool LockstepMaster::wait_for_joins(std::string& error) {
 }
 
 void LockstepMaster::publish_stop(int64_t frame, int64_t sim_time, const std::string& reason) {
-  skillbus_msgs::lockstep_clock_t c;
+  skillbus_msgs::lockstep_clock_t c{};
   c.header.frame = frame;
   c.header.sim_time_ns = sim_time;
   c.header.sender = cfg_.name;
@@ -127,9 +127,14 @@ void LockstepMaster::publish_stop(int64_t frame, int64_t sim_time, const std::st
 bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<ChannelCount>& carried,
                                std::string& error) {
   outbox_.begin_frame(frame, sim_time);
-  if (on_frame_start) on_frame_start(frame, sim_time);
+  try {
+    if (on_frame_start) on_frame_start(frame, sim_time);
+  } catch (const std::exception& e) {
+    error = "lockstep: master " + cfg_.name + " failed to start frame " + std::to_string(frame) + ": " + e.what();
+    return false;
+  }
 
-  skillbus_msgs::lockstep_clock_t c;
+  skillbus_msgs::lockstep_clock_t c{};
   c.header.frame = frame;
   c.header.sim_time_ns = sim_time;
   c.header.sender = cfg_.name;
@@ -185,11 +190,16 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
     }
     bus_.handle(std::min(left, std::chrono::milliseconds(50)));
   }
-  for (const auto& m : inbox_.take(expected, frame + 1)) {
-    auto h = handlers_.find(m.channel);
-    if (h != handlers_.end()) h->second(m);
+  try {
+    for (const auto& m : inbox_.take(expected, frame + 1)) {
+      auto h = handlers_.find(m.channel);
+      if (h != handlers_.end()) h->second(m);
+    }
+    if (on_frame_end) on_frame_end(frame, sim_time);
+  } catch (const std::exception& e) {
+    error = "lockstep: master " + cfg_.name + " failed to end frame " + std::to_string(frame) + ": " + e.what();
+    return false;
   }
-  if (on_frame_end) on_frame_end(frame, sim_time);
 
   // Session digest: previous digest, frame, the master's own output, then every
   // participant's frame digest in name order (never arrival order).

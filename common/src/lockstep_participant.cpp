@@ -46,7 +46,7 @@ void LockstepParticipant::subscribe(const std::string& ch, MessageHandler handle
 void LockstepParticipant::stop() { stop_requested_ = true; }
 
 void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string& ch) {
-  skillbus_msgs::lockstep_clock_t c;
+  skillbus_msgs::lockstep_clock_t c{};
   if (!decode_msg(d, n, c)) return bad_.record(ch, "not a lockstep_clock_t", n);
   if (c.stop) {
     stop_seen_ = true;
@@ -66,7 +66,7 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
 }
 
 void LockstepParticipant::send_ack(int64_t frame, int64_t sim_time, const std::string& error) {
-  skillbus_msgs::lockstep_ack_t a;
+  skillbus_msgs::lockstep_ack_t a{};
   a.header.frame = frame;
   a.header.sim_time_ns = sim_time;
   a.header.sender = cfg_.name;
@@ -98,7 +98,7 @@ RunResult LockstepParticipant::run_lockstep() {
   };
 
   // Join: announce ourselves until the first clock shows the master has started.
-  skillbus_msgs::lockstep_join_t j;
+  skillbus_msgs::lockstep_join_t j{};
   j.participant = cfg_.name;
   j.kind = cfg_.kind;
   j.pid = ::getpid();
@@ -151,9 +151,18 @@ RunResult LockstepParticipant::run_lockstep() {
       fail("lockstep: " + e);
       return r;
     }
-    for (const auto& m : inbox_.take(expected, clk.frame)) handlers_[m.channel](m);
-    if (on_frame) on_frame(clk.frame, clk.sim_time_ns);
-    send_ack(clk.frame, clk.sim_time_ns, "");
+    std::string failure;
+    try {
+      for (const auto& m : inbox_.take(expected, clk.frame)) handlers_[m.channel](m);
+      if (on_frame) on_frame(clk.frame, clk.sim_time_ns);
+    } catch (const std::exception& e) {
+      failure = std::string("frame handler failed: ") + e.what();
+    }
+    send_ack(clk.frame, clk.sim_time_ns, failure);
+    if (!failure.empty()) {
+      fail("lockstep: " + cfg_.name + " in frame " + std::to_string(clk.frame) + ": " + failure);
+      return r;
+    }
     ++r.frames;
     r.sim_time_ns = clk.sim_time_ns + 0;
   }

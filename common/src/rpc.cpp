@@ -60,7 +60,7 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
     ++expired_;  // the client has given up; running it now would surprise it
     return;
   }
-  rpc_reply_t rep;
+  rpc_reply_t rep{};
   rep.client_id = req.client_id;
   rep.request_id = req.request_id;
   rep.method = req.method;
@@ -128,7 +128,7 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   const auto deadline = start + opts.timeout;
-  rpc_request_t req;
+  rpc_request_t req{};
   req.client_id = client_id_;
   req.request_id = next_request_id_++;
   req.deadline_ns = realtime_ns() + std::chrono::duration_cast<std::chrono::nanoseconds>(opts.timeout).count();

@@ -1,0 +1,152 @@
+"""The bus: publish bytes on a channel, subscribe a handler, dispatch with a timeout.
+
+Every skillbus process talks through this interface, never through LCM directly, so the
+transport is picked by URL at start-up::
+
+    udpm://239.255.76.67:7667?ttl=0   LCM over UDP multicast (the default)
+    memq://                           LCM in-process queue (unit tests)
+    dds://DOMAIN                      Cyclone DDS (reserved; not built yet, clear error)
+
+Example::
+
+    bus = open_bus("memq://")
+    bus.subscribe("SB_X", lambda channel, data: print(channel, data))
+    bus.publish("SB_X", b"hello")
+    bus.handle(0.1)
+"""
+
+from __future__ import annotations
+
+import abc
+import collections
+import logging
+import os
+from typing import Callable
+
+import lcm
+
+Handler = Callable[[str, bytes], None]
+DEFAULT_URL = "udpm://239.255.76.67:7667?ttl=0"
+DEFAULT_QUEUE_CAPACITY = 10000  # LCM's default of 30 silently drops bursts
+
+log = logging.getLogger("bus")
+
+
+class BusError(RuntimeError):
+    pass
+
+
+class Bus(abc.ABC):
+    @abc.abstractmethod
+    def publish(self, channel: str, data: bytes) -> None: ...
+
+    @abc.abstractmethod
+    def subscribe(self, channel: str, handler: Handler,
+                  queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int: ...
+
+    @abc.abstractmethod
+    def unsubscribe(self, subscription_id: int) -> None: ...
+
+    @abc.abstractmethod
+    def handle(self, timeout: float) -> bool:
+        """Dispatches pending messages, waiting at most ``timeout`` seconds for the first.
+        Returns True if a message was handled."""
+
+    @property
+    @abc.abstractmethod
+    def url(self) -> str: ...
+
+
+def resolve_url(url: str | None = None) -> str:
+    return url or os.environ.get("SKILLBUS_BUS_URL") or DEFAULT_URL
+
+
+def channel(name: str) -> str:
+    """Namespaced channel name: $SKILLBUS_NAMESPACE + name (several robots on one bus)."""
+    return os.environ.get("SKILLBUS_NAMESPACE", "") + name
+
+
+def open_bus(url: str | None = None) -> Bus:
+    url = resolve_url(url)
+    scheme = url.split("://", 1)[0] if "://" in url else ""
+    if scheme in ("udpm", "memq", "file", "tcpq"):
+        return LcmBus(url)
+    if scheme == "dds":
+        raise BusError(f"bus URL '{url}': the Cyclone DDS backend is not built into this version")
+    raise BusError(f"bus URL '{url}': unknown scheme (expected udpm://, memq:// or dds://)")
+
+
+class LcmBus(Bus):
+    def __init__(self, url: str) -> None:
+        self._url = url
+        try:
+            self._lcm = lcm.LCM(url)
+        except (RuntimeError, OSError) as e:
+            raise BusError(f"cannot open LCM at '{url}' (for udpm:// the host needs a multicast "
+                           f"route, e.g. `ip route add 224.0.0.0/4 dev lo`): {e}") from e
+        self._subs: dict[int, lcm.LCMSubscription] = {}
+        self._next_id = 1
+
+    @property
+    def url(self) -> str:
+        return self._url
+
+    def publish(self, channel: str, data: bytes) -> None:
+        self._lcm.publish(channel, data)
+
+    def subscribe(self, channel: str, handler: Handler,
+                  queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
+        def guarded(ch: str, data: bytes) -> None:
+            # A failing handler is logged; the dispatch loop goes on (never crash on input).
+            try:
+                handler(ch, data)
+            except Exception:
+                log.exception("handler for %s failed", ch)
+
+        sub = self._lcm.subscribe(channel, guarded)
+        sub.set_queue_capacity(queue_capacity)
+        sid = self._next_id
+        self._next_id += 1
+        self._subs[sid] = sub
+        return sid
+
+    def unsubscribe(self, subscription_id: int) -> None:
+        sub = self._subs.pop(subscription_id, None)
+        if sub is not None:
+            self._lcm.unsubscribe(sub)
+
+    def handle(self, timeout: float) -> bool:
+        r = self._lcm.handle_timeout(max(0, int(timeout * 1000 + 0.999)))
+        if r < 0:
+            raise BusError(f"LCM dispatch failed on {self._url}")
+        return r > 0
+
+
+class DropEveryNthBus(Bus):
+    """Drops every n-th message published on each channel (tests of retries and loss)."""
+
+    def __init__(self, inner: Bus, n: int) -> None:
+        self.inner, self.n = inner, n
+        self.published: collections.Counter[str] = collections.Counter()
+        self.dropped = 0
+
+    @property
+    def url(self) -> str:
+        return self.inner.url
+
+    def publish(self, channel: str, data: bytes) -> None:
+        self.published[channel] += 1
+        if self.n > 0 and self.published[channel] % self.n == 0:
+            self.dropped += 1
+            return
+        self.inner.publish(channel, data)
+
+    def subscribe(self, channel: str, handler: Handler,
+                  queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
+        return self.inner.subscribe(channel, handler, queue_capacity)
+
+    def unsubscribe(self, subscription_id: int) -> None:
+        self.inner.unsubscribe(subscription_id)
+
+    def handle(self, timeout: float) -> bool:
+        return self.inner.handle(timeout)

@@ -1,0 +1,46 @@
+"""The `skillbus` command."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from skillbus.log import setup_logging
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="skillbus", description="skill-based robot control without ROS")
+    ap.add_argument("--log-level", default=None, help="debug, info, warn or error")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    d = sub.add_parser("demo", help="run the main job (for now: a short lockstep session)")
+    d.add_argument("--frames", type=int, default=1000)
+    d.add_argument("--python", type=int, default=3, help="Python participants")
+    d.add_argument("--cpp", type=int, default=1, help="C++ participants")
+    d.add_argument("--timeout", type=float, default=120.0, help="seconds before the run is abandoned")
+
+    p = sub.add_parser("lockstep-participant", help="run a demo lockstep participant")
+    p.add_argument("--name", required=True)
+    p.add_argument("--url", default=None, help="bus URL (default: $SKILLBUS_BUS_URL or udpm default)")
+    p.add_argument("--wall-clock", action="store_true", help="run on the wall clock, without a master")
+    p.add_argument("--frames", type=int, default=None, help="wall-clock mode: stop after this many frames")
+    p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
+    p.add_argument("--clock-timeout", type=float, default=10.0)
+    p.add_argument("--message-timeout", type=float, default=2.0)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    setup_logging(args.log_level)
+    if args.command == "demo":
+        from skillbus import demo
+        return demo.main(args)
+    if args.command == "lockstep-participant":
+        from skillbus import lockstep_demo
+        return lockstep_demo.main(args)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,376 @@
+"""The lockstep participant in Python (protocol: docs/lockstep.md).
+
+A participant joins the clock master by name; for every frame n it
+
+1. waits for ``clock(n)``, which lists what everyone published since the last clock;
+2. waits until it holds every listed message on the channels it subscribed to, and hands
+   them to its handlers in canonical order (frame, sender, seq), never arrival order;
+3. runs ``on_frame(n, sim_time_ns)``, where it publishes its outputs stamped n;
+4. acknowledges n with what it published per channel and a SHA-256 of it.
+
+A message that never arrives is an error naming the channel, sender and frame. In
+wall-clock mode the same code runs without a master, on a local timer.
+
+Example::
+
+    p = LockstepParticipant(open_bus(), "planner")
+    p.subscribe("SB_DEMO_STATE", lambda m: print(m.stamp.frame, len(m.data)))
+    p.on_frame = lambda frame, t: p.publish("SB_DEMO_CMD", test_sample_t())
+    result = p.run()
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import logging
+import os
+import struct
+import time
+from io import BytesIO
+from typing import Any, Callable
+
+from skillbus.bus import Bus, channel
+from skillbus.log import BadInputCounter
+from skillbus.msgs import channel_count_t, decode, header_t, lockstep_ack_t, lockstep_clock_t, lockstep_join_t
+
+
+def clock_channel() -> str:
+    return channel("SB_LOCKSTEP_CLOCK")
+
+
+def ack_channel() -> str:
+    return channel("SB_LOCKSTEP_ACK")
+
+
+def join_channel() -> str:
+    return channel("SB_LOCKSTEP_JOIN")
+
+
+@dataclasses.dataclass(frozen=True)
+class Stamp:
+    frame: int
+    sim_time_ns: int
+    sender: str
+    seq: int
+
+
+@dataclasses.dataclass
+class StampedMessage:
+    channel: str
+    stamp: Stamp
+    data: bytes
+
+
+@dataclasses.dataclass
+class RunResult:
+    ok: bool = True
+    error: str = ""
+    frames: int = 0
+    sim_time_ns: int = 0
+    wall_seconds: float = 0.0
+    digest: bytes = bytes(32)
+
+    @property
+    def digest_hex(self) -> str:
+        return self.digest.hex()
+
+
+class LockstepError(RuntimeError):
+    pass
+
+
+def peek_stamp(data: bytes) -> Stamp | None:
+    """Reads the header_t that every lockstep message carries right after its fingerprint."""
+    if len(data) < 33:
+        return None
+    try:
+        h = header_t._decode_one(BytesIO(data[8:]))
+    except Exception:
+        return None
+    if not h.sender or h.seq < 0 or h.frame < 0:
+        return None
+    return Stamp(h.frame, h.sim_time_ns, h.sender, h.seq)
+
+
+def _str_bytes(s: str | bytes) -> bytes:
+    b = s.encode() if isinstance(s, str) else s
+    return struct.pack("<I", len(b)) + b
+
+
+class FrameOutbox:
+    """Stamps, counts and hashes what one process publishes in a frame."""
+
+    def __init__(self, bus: Bus, sender: str) -> None:
+        self.bus, self.sender = bus, sender
+        self.frame, self.sim_time_ns, self.seq = -1, 0, 0
+        self.counts: dict[str, int] = {}
+        self._hash = hashlib.sha256()
+
+    def begin_frame(self, frame: int, sim_time_ns: int) -> None:
+        self.frame, self.sim_time_ns, self.seq = frame, sim_time_ns, 0
+        self.counts = {}
+        self._hash = hashlib.sha256()
+
+    def publish(self, ch: str, msg: Any) -> None:
+        h = header_t()
+        h.frame, h.sim_time_ns, h.sender, h.seq = self.frame, self.sim_time_ns, self.sender, self.seq
+        msg.header = h
+        self.seq += 1
+        data = msg.encode()
+        self.bus.publish(ch, data)
+        self.counts[ch] = self.counts.get(ch, 0) + 1
+        self._hash.update(_str_bytes(ch))
+        self._hash.update(_str_bytes(data))
+
+    def count_list(self) -> list[channel_count_t]:
+        out = []
+        for ch in sorted(self.counts):
+            c = channel_count_t()
+            c.sender, c.channel, c.frame, c.count = self.sender, ch, self.frame, self.counts[ch]
+            out.append(c)
+        return out
+
+    def finish_frame(self) -> bytes:
+        return self._hash.digest()
+
+
+class FrameInbox:
+    """Holds stamped messages until everything announced for a frame is there."""
+
+    def __init__(self, me: str, bad: BadInputCounter) -> None:
+        self.me, self.bad = me, bad
+        self.held: dict[tuple[str, str, int], dict[int, StampedMessage]] = {}
+        self.floor = -1
+        self.duplicates = self.stale = 0
+
+    def add(self, ch: str, data: bytes) -> None:
+        s = peek_stamp(data)
+        if s is None:
+            self.bad.record(ch, "no lockstep header (frame, sender, seq)", len(data))
+            return
+        if s.sender == self.me:
+            return
+        if s.frame < self.floor:
+            self.stale += 1
+            return
+        slot = self.held.setdefault((ch, s.sender, s.frame), {})
+        if s.seq in slot:
+            self.duplicates += 1
+            return
+        slot[s.seq] = StampedMessage(ch, s, data)
+
+    def missing(self, expected: list[channel_count_t]) -> str:
+        for e in expected:
+            got = len(self.held.get((e.channel, e.sender, e.frame), ()))
+            if got < e.count:
+                return (f"channel {e.channel} from sender {e.sender} in frame {e.frame}: "
+                        f"got {got} of {e.count}")
+        return ""
+
+    def take(self, expected: list[channel_count_t], floor: int) -> list[StampedMessage]:
+        out: list[StampedMessage] = []
+        for e in expected:
+            slot = self.held.pop((e.channel, e.sender, e.frame), None)
+            if slot:
+                out.extend(slot.values())
+        out.sort(key=lambda m: (m.stamp.frame, m.stamp.sender, m.stamp.seq))
+        self.floor = max(self.floor, floor)
+        for key in [k for k in self.held if k[2] < self.floor]:
+            self.stale += len(self.held.pop(key))
+        return out
+
+
+def expectations_for(announced: list[channel_count_t], subscribed: set[str], me: str) -> list[channel_count_t]:
+    return [c for c in announced if c.sender != me and c.count > 0 and c.channel in subscribed]
+
+
+MessageHandler = Callable[[StampedMessage], None]
+FrameCallback = Callable[[int, int], None]
+
+
+class LockstepParticipant:
+    def __init__(self, bus: Bus, name: str, *, kind: str = "python", wall_clock: bool = False,
+                 message_timeout: float = 2.0, clock_timeout: float = 10.0, join_interval: float = 0.1,
+                 wall_frame_period_ns: int = 10_000_000, wall_frames: int | None = None) -> None:
+        if not name:
+            raise ValueError("a lockstep participant needs a name")
+        self.bus, self.name, self.kind, self.wall_clock = bus, name, kind, wall_clock
+        self.message_timeout, self.clock_timeout, self.join_interval = message_timeout, clock_timeout, join_interval
+        self.wall_frame_period_ns, self.wall_frames = wall_frame_period_ns, wall_frames
+        self.log = logging.getLogger(f"lockstep {name}")
+        self.bad_input = BadInputCounter(f"lockstep {name}")
+        self.outbox = FrameOutbox(bus, name)
+        self.inbox = FrameInbox(name, self.bad_input)
+        self.handlers: dict[str, MessageHandler] = {}
+        self.on_frame: FrameCallback | None = None
+        self._subs: list[int] = []
+        self._next_clock: lockstep_clock_t | None = None
+        self._stop_seen, self._stop_reason = False, ""
+        self._last_acked, self._last_ack = -1, b""
+        self._running = bytes(32)
+        self._stop_requested = False
+        if not wall_clock:
+            self._subs.append(bus.subscribe(clock_channel(), self._on_clock))
+
+    # -- API ---------------------------------------------------------------
+    def subscribe(self, ch: str, handler: MessageHandler) -> None:
+        """Lockstep subscription to an exact channel name."""
+        first = ch not in self.handlers
+        self.handlers[ch] = handler
+        if first:
+            self._subs.append(self.bus.subscribe(ch, self._on_stamped))
+
+    def publish(self, ch: str, msg: Any) -> None:
+        """Publishes for the current frame (from on_frame or a message handler)."""
+        self.outbox.publish(ch, msg)
+
+    @property
+    def frame(self) -> int:
+        return self.outbox.frame
+
+    def stop(self) -> None:
+        self._stop_requested = True
+
+    def close(self) -> None:
+        for s in self._subs:
+            self.bus.unsubscribe(s)
+        self._subs = []
+
+    def run(self) -> RunResult:
+        return self._run_wall_clock() if self.wall_clock else self._run_lockstep()
+
+    # -- bus callbacks -----------------------------------------------------
+    def _on_stamped(self, ch: str, data: bytes) -> None:
+        if not self.wall_clock:
+            self.inbox.add(ch, data)
+            return
+        s = peek_stamp(data)
+        if s is None:
+            self.bad_input.record(ch, "no lockstep header (frame, sender, seq)", len(data))
+        elif s.sender != self.name:
+            self.handlers[ch](StampedMessage(ch, s, data))  # wall clock: on arrival
+
+    def _on_clock(self, ch: str, data: bytes) -> None:
+        c = decode(lockstep_clock_t, data)
+        if c is None:
+            self.bad_input.record(ch, "not a lockstep_clock_t", len(data))
+            return
+        if c.stop:
+            self._stop_seen, self._stop_reason = True, c.stop_reason
+            return
+        frame = c.header.frame
+        if frame == self._last_acked and self._last_ack:
+            self.bus.publish(ack_channel(), self._last_ack)  # our ack was lost: resend
+            return
+        if frame <= self._last_acked:
+            return
+        if self._next_clock is not None and self._next_clock.header.frame == frame:
+            return
+        self._next_clock = c
+
+    # -- loops -------------------------------------------------------------
+    def _send_ack(self, frame: int, sim_time_ns: int, error: str) -> None:
+        a = lockstep_ack_t()
+        h = header_t()
+        h.frame, h.sim_time_ns, h.sender, h.seq = frame, sim_time_ns, self.name, 0
+        a.header = h
+        a.counts = self.outbox.count_list()
+        a.num_counts = len(a.counts)
+        digest = self.outbox.finish_frame()
+        a.digest = digest
+        a.error = error
+        self._last_ack, self._last_acked = a.encode(), frame
+        self.bus.publish(ack_channel(), self._last_ack)
+        self._running = hashlib.sha256(self._running + digest).digest()
+
+    def _fail(self, r: RunResult, error: str) -> RunResult:
+        r.ok, r.error = False, error
+        self.log.error("%s", error)
+        r.digest = self._running
+        return r
+
+    def _run_lockstep(self) -> RunResult:
+        r = RunResult()
+        join = lockstep_join_t()
+        join.participant, join.kind, join.pid = self.name, self.kind, os.getpid()
+        join_bytes = join.encode()
+        last_event = time.monotonic()
+        next_join = last_event
+        while self._next_clock is None and not self._stop_seen:
+            now = time.monotonic()
+            if now - last_event > self.clock_timeout:
+                return self._fail(r, f"lockstep: no clock from the master within {self.clock_timeout:.1f} s "
+                                     f"of joining")
+            if now >= next_join:
+                self.bus.publish(join_channel(), join_bytes)
+                next_join = now + self.join_interval
+            self.bus.handle(0.01)
+        wall_start = time.monotonic()
+        subscribed = set(self.handlers)
+        while not self._stop_requested:
+            last_event = time.monotonic()
+            while self._next_clock is None and not self._stop_seen:
+                if time.monotonic() - last_event > self.clock_timeout:
+                    return self._fail(r, f"lockstep: no clock after frame {self._last_acked} within "
+                                         f"{self.clock_timeout:.1f} s (master gone?)")
+                self.bus.handle(0.05)
+            if self._next_clock is None:
+                break  # stopped
+            clk, self._next_clock = self._next_clock, None
+            frame, sim_time = clk.header.frame, clk.header.sim_time_ns
+            expected = expectations_for(clk.counts, subscribed, self.name)
+            deadline = time.monotonic() + self.message_timeout
+            miss = self.inbox.missing(expected)
+            while miss and not self._stop_seen:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    break
+                self.bus.handle(min(left, 0.05))
+                miss = self.inbox.missing(expected)
+            if self._stop_seen:
+                break
+            self.outbox.begin_frame(frame, sim_time)
+            if miss:
+                err = f"message lost on {miss} (noticed by {self.name})"
+                self._send_ack(frame, sim_time, err)
+                return self._fail(r, "lockstep: " + err)
+            failure = ""
+            try:
+                for m in self.inbox.take(expected, frame):
+                    self.handlers[m.channel](m)
+                if self.on_frame is not None:
+                    self.on_frame(frame, sim_time)
+            except Exception as e:  # the frame fails with a message; the master stops the run
+                self.log.exception("frame %d failed", frame)
+                failure = f"frame handler failed: {type(e).__name__}: {e}"
+            self._send_ack(frame, sim_time, failure)
+            if failure:
+                return self._fail(r, f"lockstep: {self.name} in frame {frame}: {failure}")
+            r.frames += 1
+            r.sim_time_ns = sim_time
+        if self._stop_seen and self._stop_reason:
+            return self._fail(r, f"lockstep stopped by the master: {self._stop_reason}")
+        r.digest = self._running
+        r.wall_seconds = time.monotonic() - wall_start
+        return r
+
+    def _run_wall_clock(self) -> RunResult:
+        r = RunResult()
+        start = time.monotonic()
+        period = self.wall_frame_period_ns * 1e-9
+        frame = 0
+        while not self._stop_requested and (self.wall_frames is None or frame < self.wall_frames):
+            due = start + frame * period
+            while (left := due - time.monotonic()) > 0:
+                self.bus.handle(left)
+            sim_time = frame * self.wall_frame_period_ns
+            self.outbox.begin_frame(frame, sim_time)
+            if self.on_frame is not None:
+                self.on_frame(frame, sim_time)
+            self._running = hashlib.sha256(self._running + self.outbox.finish_frame()).digest()
+            frame += 1
+            r.frames, r.sim_time_ns = frame, sim_time
+        r.digest = self._running
+        r.wall_seconds = time.monotonic() - start
+        return r

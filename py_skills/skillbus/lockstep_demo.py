@@ -1,0 +1,78 @@
+"""The Python participant of the lockstep demo world (C++ twin: common/apps/sb_demo_participant.cpp).
+
+Each frame it folds SB_DEMO_STATE (from the clock) and the other participants'
+SB_DEMO_CMD into its state, in the order they are handled, and publishes SB_DEMO_CMD
+with the result, so any arrival-order dependence would change the session digest.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from skillbus.bus import channel, open_bus
+from skillbus.lockstep import LockstepParticipant, StampedMessage
+from skillbus.msgs import decode, test_sample_t
+
+MASK = (1 << 64) - 1
+
+
+def demo_mix(state: int, value: int) -> int:
+    """Same as common/apps/demo_mix.hpp, on unsigned 64-bit integers."""
+    state ^= value & MASK
+    state = (state * 0x100000001B3) & MASK
+    state ^= state >> 29
+    return state
+
+
+def to_int64(u: int) -> int:
+    return u - (1 << 64) if u >= 1 << 63 else u
+
+
+class DemoParticipant:
+    def __init__(self, participant: LockstepParticipant, drop_at_frame: int = -1) -> None:
+        self.p = participant
+        self.state = 0
+        self.received = 0
+        self.drop_at_frame = drop_at_frame
+        self.cmd_channel = channel("SB_DEMO_CMD")
+        participant.subscribe(channel("SB_DEMO_STATE"), self.fold)
+        participant.subscribe(self.cmd_channel, self.fold)
+        participant.on_frame = self.on_frame
+
+    def fold(self, m: StampedMessage) -> None:
+        s = decode(test_sample_t, m.data)
+        if s is None:
+            return
+        self.state = demo_mix(self.state, s.i64)
+        self.received += 1
+
+    def on_frame(self, frame: int, sim_time_ns: int) -> None:
+        out = test_sample_t()
+        out.i64 = to_int64(demo_mix(self.state, frame))
+        out.text = self.p.name
+        if frame == self.drop_at_frame:
+            # Count it as published but never send it: receivers must report the loss.
+            real_publish = self.p.bus.publish
+            self.p.bus.publish = lambda ch, data: None  # type: ignore[method-assign]
+            self.p.publish(self.cmd_channel, out)
+            self.p.bus.publish = real_publish  # type: ignore[method-assign]
+            return
+        self.p.publish(self.cmd_channel, out)
+
+
+def main(args) -> int:
+    bus = open_bus(args.url)
+    p = LockstepParticipant(bus, args.name, kind="python-demo", wall_clock=args.wall_clock,
+                            wall_frames=args.frames, clock_timeout=args.clock_timeout,
+                            message_timeout=args.message_timeout)
+    demo = DemoParticipant(p, args.drop_at_frame)
+    r = p.run()
+    print(json.dumps({"ok": r.ok, "error": r.error, "name": args.name, "frames": r.frames,
+                      "received": demo.received, "digest": r.digest_hex,
+                      "bad_input": p.bad_input.total}), flush=True)
+    return 0 if r.ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

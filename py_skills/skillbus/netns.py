@@ -1,0 +1,177 @@
+"""A private network namespace for multi-process runs, and processes that never leak.
+
+LCM's UDP multicast needs a multicast route; joining a group on the host would send
+IGMP reports out of the real interface. So tests and the demo run their processes in a
+network namespace of their own (``unshare -rn``; loopback up, multicast on, a route for
+224.0.0.0/4 to lo): hermetic, and several can run side by side. Where no namespace can
+be made, :class:`Sandbox` falls back to the host only if the host already routes
+multicast to lo, with ttl=0 and a port of its own; otherwise it refuses with a reason.
+
+Example::
+
+    with Sandbox() as box:
+        clock = box.start("clock", ["build/common/sb_clock", "--participants", "p1"])
+        part = box.start("p1", [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", "p1"])
+        box.wait(clock, timeout=30)
+    # every process is gone here, also after an exception or a timeout
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import select
+import shutil
+import signal
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+SETUP = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
+
+
+class SandboxError(RuntimeError):
+    pass
+
+
+@dataclasses.dataclass
+class Proc:
+    name: str
+    popen: subprocess.Popen
+    stdout_path: Path
+    stderr_path: Path
+
+    @property
+    def returncode(self) -> int | None:
+        return self.popen.poll()
+
+    def stdout(self) -> str:
+        return self.stdout_path.read_text(errors="replace")
+
+    def stderr(self) -> str:
+        return self.stderr_path.read_text(errors="replace")
+
+
+def _host_routes_multicast_to_lo() -> bool:
+    try:
+        out = subprocess.run(["ip", "route", "get", "239.255.76.67"], capture_output=True, text=True,
+                             timeout=5).stdout
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return " dev lo " in out + " "
+
+
+class Sandbox:
+    """Starts processes in one private network namespace and always cleans them up."""
+
+    def __init__(self, log_dir: str | Path | None = None, port: int | None = None) -> None:
+        self._own_dir = log_dir is None
+        self.log_dir = Path(log_dir or tempfile.mkdtemp(prefix="skillbus-"))
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.port = port or 7667
+        self.procs: list[Proc] = []
+        self._holder: subprocess.Popen | None = None
+        self.mode = ""
+
+    # -- namespace --------------------------------------------------------
+    def __enter__(self) -> "Sandbox":
+        try:
+            self._enter_namespace()
+            self.mode = "netns"
+        except SandboxError as why:
+            if not _host_routes_multicast_to_lo():
+                raise SandboxError(f"no private network namespace ({why}) and the host does not route "
+                                   f"multicast to lo; refusing to join multicast groups on a real "
+                                   f"interface") from None
+            self.mode = "host"
+            self.port = 20000 + os.getpid() % 20000  # a port of our own on the shared host
+        return self
+
+    def _enter_namespace(self) -> None:
+        if not shutil.which("unshare") or not shutil.which("nsenter"):
+            raise SandboxError("unshare/nsenter not found")
+        self._holder = subprocess.Popen(
+            ["unshare", "-rn", "--", "sh", "-c", f"{SETUP} && echo ready && exec sleep 2147483647"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        ready, _, _ = select.select([self._holder.stdout], [], [], 10)
+        line = self._holder.stdout.readline().decode().strip() if ready else ""
+        if line != "ready":
+            err = self._holder.stderr.read1(4096).decode(errors="replace").strip() if ready else "timed out"
+            self._kill_holder()
+            raise SandboxError(f"unshare -rn failed: {err or 'no output'}")
+
+    def _kill_holder(self) -> None:
+        if self._holder is not None:
+            try:
+                os.killpg(self._holder.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            self._holder.wait(timeout=10)
+            self._holder = None
+
+    @property
+    def url(self) -> str:
+        return f"udpm://239.255.76.67:{self.port}?ttl=0"
+
+    def prefix(self) -> list[str]:
+        """Command prefix that runs a program inside the namespace."""
+        if self.mode == "netns":
+            return ["nsenter", "-t", str(self._holder.pid), "-n", "-U", "--preserve-credentials", "--"]
+        return []
+
+    def env(self, extra: dict[str, str] | None = None) -> dict[str, str]:
+        e = dict(os.environ)
+        e["SKILLBUS_BUS_URL"] = self.url
+        e["PYTHONUNBUFFERED"] = "1"
+        e.update(extra or {})
+        return e
+
+    # -- processes --------------------------------------------------------
+    def start(self, name: str, argv: list[str], env: dict[str, str] | None = None) -> Proc:
+        out = self.log_dir / f"{name}.out"
+        err = self.log_dir / f"{name}.err"
+        with open(out, "wb") as fo, open(err, "wb") as fe:
+            popen = subprocess.Popen(self.prefix() + [str(a) for a in argv], stdout=fo, stderr=fe,
+                                     stdin=subprocess.DEVNULL, env=self.env(env), start_new_session=True)
+        proc = Proc(name, popen, out, err)
+        self.procs.append(proc)
+        return proc
+
+    def wait(self, proc: Proc, timeout: float) -> int:
+        """Waits for one process; raises TimeoutError naming it (the sandbox still cleans up)."""
+        try:
+            return proc.popen.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise TimeoutError(f"{proc.name} did not finish within {timeout:.0f} s; "
+                               f"last stderr: {proc.stderr()[-2000:]}") from None
+
+    def wait_all(self, timeout: float) -> dict[str, int]:
+        deadline = time.monotonic() + timeout
+        return {p.name: self.wait(p, max(0.0, deadline - time.monotonic())) for p in self.procs}
+
+    def kill(self, proc: Proc, sig: int = signal.SIGKILL) -> None:
+        try:
+            os.killpg(proc.popen.pid, sig)
+        except ProcessLookupError:
+            pass
+
+    def stop_all(self, grace: float = 3.0) -> None:
+        for p in self.procs:
+            if p.popen.poll() is None:
+                self.kill(p, signal.SIGTERM)
+        deadline = time.monotonic() + grace
+        for p in self.procs:
+            try:
+                p.popen.wait(timeout=max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                self.kill(p, signal.SIGKILL)
+                p.popen.wait(timeout=10)
+
+    def __exit__(self, *exc) -> None:
+        try:
+            self.stop_all()
+        finally:
+            self._kill_holder()
+            if self._own_dir and exc[0] is None:
+                shutil.rmtree(self.log_dir, ignore_errors=True)
