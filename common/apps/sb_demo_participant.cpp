@@ -3,7 +3,7 @@
 // Each frame it folds SB_DEMO_STATE and the other participants' SB_DEMO_CMD (canonical
 // order) into its state and publishes SB_DEMO_CMD with the result. Prints a JSON summary.
 // --drop-at-frame N announces but does not send its SB_DEMO_CMD of frame N (to test that
-// a lost message is reported with its channel and frame).
+// a lost message is reported with its channel and frame). --bare: no demo traffic.
 //
 // Reads:   SB_LOCKSTEP_CLOCK, SB_DEMO_STATE, SB_DEMO_CMD
 // Writes:  SB_LOCKSTEP_JOIN, SB_LOCKSTEP_ACK, SB_DEMO_CMD
@@ -44,7 +44,7 @@ class DropNextBus : public Bus {
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv, {"url", "name", "drop-at-frame", "clock-timeout-ms", "message-timeout-ms", "frames"},
-                  {"wall-clock"});
+                  {"wall-clock", "bare"});
   ParticipantConfig cfg;
   cfg.name = args.str("name");
   if (cfg.name.empty()) apps::Args::die("--name is required");
@@ -71,9 +71,12 @@ int main(int argc, char** argv) {
     state = apps::demo_mix(state, s.i64);
     ++received;
   };
-  p.subscribe(channel("SB_DEMO_STATE"), fold);
-  p.subscribe(cmd_channel, fold);
+  if (!args.flag("bare")) {  // --bare: only the lockstep protocol (benchmarks)
+    p.subscribe(channel("SB_DEMO_STATE"), fold);
+    p.subscribe(cmd_channel, fold);
+  }
   p.on_frame = [&](int64_t frame, int64_t sim_time) {
+    if (args.flag("bare")) return;
     skillbus_msgs::test_sample_t out{};
     out.i64 = static_cast<int64_t>(apps::demo_mix(state, frame));
     out.text = cfg.name;

@@ -6,8 +6,10 @@
 //   fail   always answers an ERROR reply (to test typed errors)
 // --drop-every N drops every N-th message it publishes (RPC tests under loss).
 // --exit-after-idle-ms stops it after that long without a request (default: never).
+// SIGTERM or SIGINT stop it; it then prints its statistics as JSON.
 //
 // Reads:   SB_COUNTER_REQ       Writes: SB_COUNTER_REP
+#include <csignal>
 #include <cstdio>
 #include <map>
 
@@ -18,6 +20,11 @@
 
 using namespace skillbus;
 using skillbus_msgs::rpc_counter_t;
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+}  // namespace
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv, {"url", "drop-every", "exit-after-idle-ms", "area"});
@@ -52,7 +59,9 @@ int main(int argc, char** argv) {
                bus->url().c_str());
   const long long idle_ms = args.num("exit-after-idle-ms", -1);
   auto last = std::chrono::steady_clock::now();
-  for (;;) {
+  std::signal(SIGTERM, on_signal);  // stop cleanly and print the statistics
+  std::signal(SIGINT, on_signal);
+  while (!g_stop) {
     if (bus->handle(std::chrono::milliseconds(100))) last = std::chrono::steady_clock::now();
     if (idle_ms >= 0 && std::chrono::steady_clock::now() - last > std::chrono::milliseconds(idle_ms)) break;
   }

@@ -1,5 +1,8 @@
 #include "lcm_bus.hpp"
 
+#include <cerrno>
+#include <cstring>
+
 #include "skillbus/log.hpp"
 
 namespace skillbus {
@@ -54,8 +57,10 @@ void LcmBus::unsubscribe(int id) {
 
 bool LcmBus::handle(std::chrono::milliseconds timeout) {
   const int ms = static_cast<int>(std::max<int64_t>(0, timeout.count()));
+  errno = 0;
   const int r = lcm_handle_timeout(lcm_, ms);
-  if (r < 0) throw BusError("LCM dispatch failed on " + url_);
+  if (r < 0 && errno == EINTR) return false;  // a signal (e.g. SIGTERM to stop) is not a bus failure
+  if (r < 0) throw BusError("LCM dispatch failed on " + url_ + ": " + std::strerror(errno));
   return r > 0;
 }
 

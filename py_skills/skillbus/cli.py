@@ -24,6 +24,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--url", default=None, help="bus URL (default: $SKILLBUS_BUS_URL or udpm default)")
     p.add_argument("--wall-clock", action="store_true", help="run on the wall clock, without a master")
     p.add_argument("--frames", type=int, default=None, help="wall-clock mode: stop after this many frames")
+    p.add_argument("--bare", action="store_true", help="no demo traffic: only the lockstep protocol")
     p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
     p.add_argument("--clock-timeout", type=float, default=10.0)
     p.add_argument("--message-timeout", type=float, default=2.0)

@@ -66,10 +66,10 @@ def main(args) -> int:
     p = LockstepParticipant(bus, args.name, kind="python-demo", wall_clock=args.wall_clock,
                             wall_frames=args.frames, clock_timeout=args.clock_timeout,
                             message_timeout=args.message_timeout)
-    demo = DemoParticipant(p, args.drop_at_frame)
+    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame)
     r = p.run()
     print(json.dumps({"ok": r.ok, "error": r.error, "name": args.name, "frames": r.frames,
-                      "received": demo.received, "digest": r.digest_hex,
+                      "received": demo.received if demo else 0, "digest": r.digest_hex,
                       "bad_input": p.bad_input.total}), flush=True)
     return 0 if r.ok else 1
 

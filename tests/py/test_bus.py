@@ -1,0 +1,81 @@
+import pytest
+
+from skillbus.bus import BusError, DropEveryNthBus, open_bus, resolve_url
+
+
+def drain(bus):
+    while bus.handle(0):
+        pass
+
+
+def test_memq_delivers_only_subscribed_channels():
+    bus = open_bus("memq://")
+    got = []
+    bus.subscribe("A", lambda ch, d: got.append((ch, d)))
+    bus.publish("A", b"one")
+    bus.publish("B", b"two")
+    bus.publish("A", b"three")
+    drain(bus)
+    assert got == [("A", b"one"), ("A", b"three")]
+
+
+def test_bursts_are_not_dropped_by_the_default_queue():
+    bus = open_bus("memq://")
+    got = []
+    bus.subscribe("A", lambda ch, d: got.append(d))
+    for i in range(500):
+        bus.publish("A", b"x")
+    drain(bus)
+    assert len(got) == 500
+
+
+def test_unsubscribe_stops_delivery():
+    bus = open_bus("memq://")
+    got = []
+    sid = bus.subscribe("A", lambda ch, d: got.append(d))
+    bus.unsubscribe(sid)
+    bus.publish("A", b"x")
+    bus.handle(0.01)
+    assert got == []
+
+
+def test_a_failing_handler_does_not_stop_dispatch(caplog):
+    bus = open_bus("memq://")
+    got = []
+
+    def bad(ch, d):
+        raise ValueError("boom")
+
+    bus.subscribe("A", bad)
+    bus.subscribe("A", lambda ch, d: got.append(d))
+    bus.publish("A", b"x")
+    drain(bus)
+    assert got == [b"x"]
+    assert "handler for A failed" in caplog.text
+
+
+@pytest.mark.parametrize("url,needle", [("carrier-pigeon://coop", "unknown scheme"),
+                                        ("dds://0", "Cyclone DDS backend is not built")])
+def test_bad_urls_are_clear_errors(url, needle):
+    with pytest.raises(BusError, match=needle):
+        open_bus(url)
+
+
+def test_url_resolution(monkeypatch):
+    monkeypatch.setenv("SKILLBUS_BUS_URL", "memq://")
+    assert resolve_url() == "memq://"
+    assert resolve_url("udpm://239.255.76.67:7700?ttl=0").endswith("7700?ttl=0")
+    monkeypatch.delenv("SKILLBUS_BUS_URL")
+    assert resolve_url() == "udpm://239.255.76.67:7667?ttl=0"
+
+
+def test_drop_every_nth_counts_per_channel():
+    bus = DropEveryNthBus(open_bus("memq://"), 3)
+    got = []
+    bus.subscribe("A", lambda ch, d: got.append(d))
+    bus.subscribe("B", lambda ch, d: got.append(d))
+    for i in range(6):
+        bus.publish("A", b"a")
+        bus.publish("B", b"b")
+    drain(bus)
+    assert len(got) == 8 and bus.dropped == 4

@@ -1,0 +1,96 @@
+import time
+
+import pytest
+
+from skillbus.bus import DropEveryNthBus, open_bus
+from skillbus.msgs import rpc_counter_t, rpc_reply_t
+from skillbus.rpc import RpcClient, RpcRemoteError, RpcServer, RpcTimeout
+
+
+def counter_server(bus):
+    counters = {}
+
+    def add(req):
+        c = counters.setdefault(req.key, rpc_counter_t())
+        c.key = req.key
+        c.value += req.amount
+        c.writes += 1
+        return c
+
+    def boom(req):
+        raise RuntimeError("the method exploded")
+
+    server = RpcServer(bus, "counter")
+    server.add_method("add", add, rpc_counter_t, rpc_counter_t)
+    server.add_method("boom", boom, rpc_counter_t, rpc_counter_t)
+    return server, counters
+
+
+def req(key, amount):
+    r = rpc_counter_t()
+    r.key, r.amount = key, amount
+    return r
+
+
+def test_call_returns_the_reply():
+    bus = open_bus("memq://")
+    server, counters = counter_server(bus)
+    client = RpcClient(bus, "counter", "t")
+    assert client.call("add", req("a", 5), rpc_counter_t).value == 5
+    rep = client.call("add", req("a", 7), rpc_counter_t)
+    assert (rep.value, rep.writes) == (12, 2)
+
+
+def test_every_write_once_when_every_third_message_per_direction_is_dropped():
+    bus = DropEveryNthBus(open_bus("memq://"), 3)
+    server, counters = counter_server(bus)
+    client = RpcClient(bus, "counter", "t")
+    for i in range(1, 301):
+        client.call("add", req("k", i), rpc_counter_t, retry_interval=0.005)
+    assert counters["k"].writes == 300
+    assert counters["k"].value == 300 * 301 // 2
+    assert server.duplicates > 0 and client.retries > 0
+
+
+def test_unknown_method_error_and_bad_request_are_typed():
+    bus = open_bus("memq://")
+    server, counters = counter_server(bus)
+    client = RpcClient(bus, "counter", "t")
+    with pytest.raises(RpcRemoteError, match="unknown method 'nope'") as e:
+        client.call("nope", req("a", 1), rpc_counter_t)
+    assert e.value.status == rpc_reply_t.UNKNOWN_METHOD
+    with pytest.raises(RpcRemoteError, match="the method exploded") as e:
+        client.call("boom", req("a", 1), rpc_counter_t)
+    assert e.value.status == rpc_reply_t.ERROR
+    with pytest.raises(RpcRemoteError) as e:
+        client.call_raw("add", b"\x01\x02")
+    assert e.value.status == rpc_reply_t.BAD_REQUEST
+    assert counters == {}
+
+
+def test_no_server_times_out_within_the_deadline():
+    client = RpcClient(open_bus("memq://"), "nobody", "t")
+    t0 = time.monotonic()
+    with pytest.raises(RpcTimeout, match="no reply on SB_NOBODY_REP within 0.3 s"):
+        client.call("add", req("a", 1), rpc_counter_t, timeout=0.3, retry_interval=0.05)
+    assert 0.29 <= time.monotonic() - t0 < 1.0
+
+
+def test_garbage_requests_are_counted_and_ignored():
+    bus = open_bus("memq://")
+    server, counters = counter_server(bus)
+    for junk in (b"", b"\xde\xad\xbe\xef" * 5, b"x" * 300):
+        bus.publish("SB_COUNTER_REQ", junk)
+    client = RpcClient(bus, "counter", "t")
+    assert client.call("add", req("a", 2), rpc_counter_t).value == 2
+    assert server.bad_input.total == 3
+
+
+def test_server_memory_is_bounded():
+    bus = open_bus("memq://")
+    server = RpcServer(bus, "counter", memory=10)
+    server.add_method("add", lambda r: r, rpc_counter_t, rpc_counter_t)
+    client = RpcClient(bus, "counter", "t")
+    for i in range(50):
+        client.call("add", req("a", i), rpc_counter_t)
+    assert len(server._answered) == 10
