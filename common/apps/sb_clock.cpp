@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
   if (args.flag("demo")) {
     master.subscribe(channel("SB_DEMO_CMD"), [&](const StampedMessage& m) {
       skillbus_msgs::test_sample_t cmd;
-      if (!decode_msg(m.data.data(), m.data.size(), cmd)) return;
+      if (!decode_msg(m.data.data(), m.data.size(), cmd))
+        throw std::runtime_error(m.channel + " from " + m.stamp.sender + " is not a test_sample_t");
       world = apps::demo_mix(world, cmd.i64);
       ++commands;
     });

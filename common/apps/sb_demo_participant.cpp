@@ -67,7 +67,9 @@ int main(int argc, char** argv) {
   long received = 0;
   auto fold = [&](const StampedMessage& m) {
     skillbus_msgs::test_sample_t s;
-    if (!decode_msg(m.data.data(), m.data.size(), s)) return;
+    if (!decode_msg(m.data.data(), m.data.size(), s))  // it passed the lockstep checks: a sender is broken
+      throw std::runtime_error(m.channel + " from " + m.stamp.sender + " in frame " + std::to_string(m.stamp.frame) +
+                               " is not a test_sample_t");
     state = apps::demo_mix(state, s.i64);
     ++received;
   };

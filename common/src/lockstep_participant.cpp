@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <algorithm>
 #include <thread>
 
 #include "skillbus/lockstep.hpp"
@@ -48,6 +49,13 @@ void LockstepParticipant::stop() { stop_requested_ = true; }
 void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string& ch) {
   skillbus_msgs::lockstep_clock_t c{};
   if (!decode_msg(d, n, c)) return bad_.record(ch, "not a lockstep_clock_t", n);
+  // Only the clock of our session counts: it lists us, and comes from the master that
+  // sent the first one we accepted.
+  if (std::find(c.participants.begin(), c.participants.end(), cfg_.name) == c.participants.end())
+    return bad_.record(ch, "a clock from '" + c.header.sender + "' that does not list " + cfg_.name, n);
+  if (master_.empty()) master_ = c.header.sender;
+  if (c.header.sender != master_)
+    return bad_.record(ch, "a clock from '" + c.header.sender + "', not from our master '" + master_ + "'", n);
   if (c.stop) {
     stop_seen_ = true;
     stop_reason_ = c.stop_reason;
@@ -58,7 +66,10 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     return;
   }
   if (c.header.frame <= last_acked_) return;
-  if (have_clock_ && c.header.frame == next_clock_.frame) return;  // a resend we already hold
+  if (c.header.frame != last_acked_ + 1)
+    return bad_.record(ch, "a clock for frame " + std::to_string(c.header.frame) + " while frame " +
+                               std::to_string(last_acked_ + 1) + " is due", n);
+  if (have_clock_) return;  // a resend of the clock we already hold
   have_clock_ = true;
   next_clock_.frame = c.header.frame;
   next_clock_.sim_time_ns = c.header.sim_time_ns;

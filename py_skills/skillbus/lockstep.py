@@ -206,6 +206,7 @@ class LockstepParticipant:
         self.on_frame: FrameCallback | None = None
         self._subs: list[int] = []
         self._next_clock: lockstep_clock_t | None = None
+        self._master = ""  # the master whose clock we follow (from the first clock)
         self._stop_seen, self._stop_reason = False, ""
         self._last_acked, self._last_ack = -1, b""
         self._running = bytes(32)
@@ -256,6 +257,18 @@ class LockstepParticipant:
         if c is None:
             self.bad_input.record(ch, "not a lockstep_clock_t", len(data))
             return
+        # Only the clock of our session counts: it lists us, and comes from the master
+        # that sent the first one we accepted.
+        if self.name not in c.participants:
+            self.bad_input.record(ch, f"a clock from '{c.header.sender}' that does not list {self.name}",
+                                  len(data))
+            return
+        if not self._master:
+            self._master = c.header.sender
+        if c.header.sender != self._master:
+            self.bad_input.record(ch, f"a clock from '{c.header.sender}', not from our master "
+                                      f"'{self._master}'", len(data))
+            return
         if c.stop:
             self._stop_seen, self._stop_reason = True, c.stop_reason
             return
@@ -265,9 +278,12 @@ class LockstepParticipant:
             return
         if frame <= self._last_acked:
             return
-        if self._next_clock is not None and self._next_clock.header.frame == frame:
+        if frame != self._last_acked + 1:
+            self.bad_input.record(ch, f"a clock for frame {frame} while frame {self._last_acked + 1} is due",
+                                  len(data))
             return
-        self._next_clock = c
+        if self._next_clock is None:  # else: a resend of the clock we already hold
+            self._next_clock = c
 
     # -- loops -------------------------------------------------------------
     def _send_ack(self, frame: int, sim_time_ns: int, error: str) -> None:

@@ -42,13 +42,14 @@ class DemoParticipant:
 
     def fold(self, m: StampedMessage) -> None:
         s = decode(test_sample_t, m.data)
-        if s is None:
-            return
+        if s is None:  # it passed the lockstep checks, so a sender is broken: fail the frame
+            raise ValueError(f"{m.channel} from {m.stamp.sender} in frame {m.stamp.frame} is not a test_sample_t")
         self.state = demo_mix(self.state, s.i64)
         self.received += 1
 
     def on_frame(self, frame: int, sim_time_ns: int) -> None:
         out = test_sample_t()
+        out.blob = bytes(4)  # LCM's Python default b"" would encode 4 bytes short
         out.i64 = to_int64(demo_mix(self.state, frame))
         out.text = self.p.name
         if frame == self.drop_at_frame:

@@ -30,8 +30,14 @@ def decode(msg_type, data: bytes):
 
     LCM's generated Python raises ValueError on a wrong fingerprint and struct.error,
     IndexError or UnicodeDecodeError on truncated or corrupt bytes; all mean "bad input".
+    It does not notice a message cut short inside a trailing fixed-size byte array (it
+    reads fewer bytes without complaint), so the result is re-encoded and must give back
+    exactly as many bytes as arrived, as the C++ side demands.
     """
     try:
-        return msg_type.decode(data)
+        msg = msg_type.decode(data)
+        if len(msg.encode()) != len(data):
+            return None
+        return msg
     except Exception:
         return None

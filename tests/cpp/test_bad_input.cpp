@@ -50,3 +50,17 @@ TEST(BadInput, EveryTypeRejectsTruncationsAndSurvivesRandomBytes) {
   hammer(q);
   hammer(skillbus_msgs::rpc_reply_t{});
 }
+
+TEST(BadInput, AHugeClaimedArrayLengthIsRejectedWithoutAllocating) {
+  // A clock claiming 2^31-1 counts in a 50-byte datagram: LCM's generated decode would
+  // resize a vector to that length (gigabytes, a hang) unless the bindings are hardened
+  // (lcmtypes/harden_cpp.cmake).
+  skillbus_msgs::lockstep_clock_t c{};
+  Bytes b = encode_msg(c);
+  const size_t num_counts_at = 8 + (8 + 8 + 5 + 4) + 8 + 4;  // fingerprint, header, period, num_participants
+  ASSERT_EQ(b.size(), num_counts_at + 4 + 1 + 5);            // num_counts, stop, stop_reason
+  b[num_counts_at] = 0x7f;
+  b[num_counts_at + 1] = b[num_counts_at + 2] = b[num_counts_at + 3] = 0xff;
+  skillbus_msgs::lockstep_clock_t out;
+  EXPECT_FALSE(decode_msg(b.data(), b.size(), out));
+}

@@ -141,6 +141,7 @@ class LockstepParticipant {
     bool stop = false;
     std::string stop_reason;
   };
+  std::string master_;  // name of the master whose clock we follow (from the first clock)
   bool have_clock_ = false;
   Clock next_clock_;
   bool stop_seen_ = false;

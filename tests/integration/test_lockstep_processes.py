@@ -1,0 +1,135 @@
+"""Lockstep between real processes: a C++ clock master, Python and C++ participants, over
+LCM in a private network namespace."""
+
+import re
+import time
+
+from conftest import last_json, python_tool
+from skillbus.demo import python_participant_argv, run_session
+from skillbus.netns import Sandbox
+
+
+def start(sandbox, binary, names, frames, clock_args=(), part_args=None):
+    part_args = part_args or {}
+    clock = sandbox.start("clock", [binary("sb_clock"), "--demo", "--frames", str(frames),
+                                    "--participants", ",".join(names), *clock_args])
+    parts = {}
+    for n in names:
+        extra = list(part_args.get(n, ()))
+        argv = (python_participant_argv(n, *extra) if n.startswith("py")
+                else [binary("sb_demo_participant"), "--name", n, *extra])
+        parts[n] = sandbox.start(n, argv)
+    return clock, parts
+
+
+def wait_for_log(proc, pattern, timeout):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if re.search(pattern, proc.stderr()):
+            return
+        time.sleep(0.05)
+    raise TimeoutError(f"{proc.name} never logged {pattern!r}: {proc.stderr()[-1000:]}")
+
+
+def test_10000_frames_twice_give_the_same_digest(tmp_path):
+    runs = []
+    for i in range(2):
+        with Sandbox(log_dir=tmp_path / f"run{i}") as box:  # a fresh namespace per run
+            runs.append(run_session(box, frames=10_000, n_python=3, n_cpp=1, timeout=300))
+    for r in runs:
+        assert r["ok"], r["error"]
+        assert r["frames"] == 10_000 and r["participants"] == 4
+        assert all(p["ok"] and p["frames"] == 10_000 for p in r["participant_results"].values())
+        # everyone heard the state and the three others every frame (minus the first frame)
+        assert all(p["received"] == 10_000 + 3 * 9_999 for p in r["participant_results"].values())
+    assert runs[0]["digest"] == runs[1]["digest"]
+    for name in runs[0]["participant_results"]:
+        assert runs[0]["participant_results"][name]["digest"] == runs[1]["participant_results"][name]["digest"]
+
+
+def test_a_different_world_gives_a_different_digest(tmp_path):
+    # The digest must depend on what was published: a different set of participants
+    # (hence different messages) cannot give the same digest.
+    with Sandbox(log_dir=tmp_path / "a") as box:
+        a = run_session(box, frames=200, n_python=2, n_cpp=1, timeout=60)
+    with Sandbox(log_dir=tmp_path / "b") as box:
+        b = run_session(box, frames=200, n_python=1, n_cpp=1, timeout=60)
+    assert a["ok"] and b["ok"]
+    assert a["digest"] != b["digest"]
+
+
+def test_killing_a_participant_stops_the_master_with_an_error_naming_it(sandbox, binary):
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=10_000_000,
+                         clock_args=["--ack-timeout-ms", "1500"])
+    wait_for_log(clock, "starting frames", 30)
+    time.sleep(0.5)
+    killed_at = time.monotonic()
+    sandbox.kill(parts["py2"])
+    assert sandbox.wait(clock, 30) == 1
+    took = time.monotonic() - killed_at
+    s = last_json(clock.stdout())
+    assert not s["ok"] and s["frames"] > 0
+    assert re.search(r"no ack for frame \d+ from participant\(s\) py2 within 1.5 s", s["error"]), s["error"]
+    assert took < 1.5 + 2.0
+    # the survivors are told to stop and end with the master's reason
+    for n in ("py1", "cpp1"):
+        assert sandbox.wait(parts[n], 15) == 1
+        assert "py2" in last_json(parts[n].stdout()).get("error", "") or n == "cpp1"
+
+
+def test_a_lost_python_message_is_reported_with_channel_sender_and_frame(sandbox, binary):
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=200,
+                         clock_args=["--message-timeout-ms", "500"],
+                         part_args={"py1": ["--drop-at-frame", "50", "--message-timeout", "0.5"],
+                                    "py2": ["--message-timeout", "0.5"],
+                                    "cpp1": ["--message-timeout-ms", "500"]})
+    assert sandbox.wait(clock, 60) == 1
+    error = last_json(clock.stdout())["error"]
+    assert "message lost on channel SB_DEMO_CMD from sender py1 in frame 50: got 0 of 1" in error, error
+
+
+def test_a_lost_cpp_message_is_reported_with_channel_sender_and_frame(sandbox, binary):
+    clock, parts = start(sandbox, binary, ["py1", "cpp1"], frames=200,
+                         clock_args=["--message-timeout-ms", "500"],
+                         part_args={"cpp1": ["--drop-at-frame", "30", "--message-timeout-ms", "500"],
+                                    "py1": ["--message-timeout", "0.5"]})
+    assert sandbox.wait(clock, 60) == 1
+    error = last_json(clock.stdout())["error"]
+    assert "message lost on channel SB_DEMO_CMD from sender cpp1 in frame 30: got 0 of 1" in error, error
+
+
+def test_a_participant_that_never_joins_is_named(sandbox, binary):
+    clock = sandbox.start("clock", [binary("sb_clock"), "--participants", "py1,ghost", "--frames", "10",
+                                    "--join-timeout-ms", "1500"])
+    sandbox.start("py1", python_participant_argv("py1", "--clock-timeout", "5"))
+    assert sandbox.wait(clock, 30) == 1
+    assert "participant(s) ghost never joined within 1.5 s" in last_json(clock.stdout())["error"]
+
+
+def test_bad_input_on_every_channel_is_counted_and_changes_nothing(sandbox, binary, tmp_path):
+    with Sandbox(log_dir=tmp_path / "clean") as box:
+        clean = run_session(box, frames=3000, n_python=2, n_cpp=1, timeout=120)
+    assert clean["ok"]
+    names = ["py1", "py2", "cpp1"]
+    clock, parts = start(sandbox, binary, names, frames=3000)
+    wait_for_log(clock, "starting frames", 30)
+    fuzz = sandbox.start("fuzz", python_tool("fuzz_publisher.py", "3000", "SB_LOCKSTEP_CLOCK", "SB_LOCKSTEP_ACK",
+                                             "SB_LOCKSTEP_JOIN", "SB_DEMO_STATE", "SB_DEMO_CMD"))
+    assert sandbox.wait(fuzz, 60) == 0
+    assert sandbox.wait(clock, 120) == 0, clock.stdout() + clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 3000
+    assert s["digest"] == clean["digest"]  # garbage changed nothing
+    assert s["bad_input"] > 0
+    for n in names:
+        assert sandbox.wait(parts[n], 15) == 0
+        r = last_json(parts[n].stdout())
+        assert r["ok"] and r["bad_input"] > 0, r
+        assert r["digest"] == clean["participant_results"][n]["digest"]
+
+
+def test_wall_clock_mode_runs_the_same_participant_without_a_master(sandbox):
+    p = sandbox.start("py1", python_participant_argv("py1", "--wall-clock", "--frames", "50"))
+    assert sandbox.wait(p, 30) == 0
+    r = last_json(p.stdout())
+    assert r["ok"] and r["frames"] == 50
