@@ -1,26 +1,57 @@
 #include "lcm_bus.hpp"
 
+#include <poll.h>
+
 #include <cerrno>
 #include <cstring>
+#include <regex>
 
 #include "skillbus/log.hpp"
 
 namespace skillbus {
 
-LcmBus::LcmBus(const std::string& url) : url_(url) {
-  lcm_ = lcm_create(url.c_str());
-  if (!lcm_)
-    throw BusError("cannot open LCM at '" + url +
-                   "' (for udpm:// the host needs a multicast route, e.g. `ip route add 224.0.0.0/4 dev lo`)");
+namespace {
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+}  // namespace
+
+int lcm_lane_of(const std::string& channel) {
+  return ends_with(channel, "_ACK") || ends_with(channel, "_JOIN") ? 1 : 0;
+}
+
+std::string lcm_lane1_url(const std::string& url) {
+  static const std::regex udpm(R"(^udpm://([^:/?]*)(?::(\d+))?(\?.*)?$)");
+  std::smatch m;
+  if (!std::regex_match(url, m, udpm)) return "";
+  const int port = m[2].matched ? std::stoi(m[2].str()) : 7667;
+  const std::string addr = m[1].str().empty() ? "239.255.76.67" : m[1].str();
+  return "udpm://" + addr + ":" + std::to_string(port + 1) + m[3].str();
+}
+
+LcmBus::LcmBus(const std::string& url) : url_(url), lane_urls_{url, lcm_lane1_url(url)} {
+  lane(0);  // fail early, with a clear message, on a bad URL or a missing multicast route
 }
 
 LcmBus::~LcmBus() {
-  for (auto& [id, sub] : subs_) lcm_unsubscribe(lcm_, sub->lcm_sub);
-  lcm_destroy(lcm_);
+  for (auto& [id, sub] : subs_) lcm_unsubscribe(lanes_[sub->lane], sub->lcm_sub);
+  for (lcm_t* l : lanes_)
+    if (l) lcm_destroy(l);
+}
+
+lcm_t* LcmBus::lane(int i) {
+  if (lane_urls_[i].empty()) i = 0;  // single-lane URL
+  if (!lanes_[i]) {
+    lanes_[i] = lcm_create(lane_urls_[i].c_str());
+    if (!lanes_[i])
+      throw BusError("cannot open LCM at '" + lane_urls_[i] +
+                     "' (for udpm:// the host needs a multicast route, e.g. `ip route add 224.0.0.0/4 dev lo`)");
+  }
+  return lanes_[i];
 }
 
 void LcmBus::publish(const std::string& channel, const void* data, size_t size) {
-  if (lcm_publish(lcm_, channel.c_str(), data, static_cast<unsigned int>(size)) != 0)
+  if (lcm_publish(lane(lcm_lane_of(channel)), channel.c_str(), data, static_cast<unsigned int>(size)) != 0)
     throw BusError("LCM publish failed on " + channel + " (" + std::to_string(size) + " bytes)");
 }
 
@@ -40,9 +71,11 @@ void LcmBus::on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* u
 int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_capacity) {
   auto sub = std::make_unique<Sub>();
   sub->handler = std::move(handler);
-  sub->lcm_sub = lcm_subscribe(lcm_, channel.c_str(), &LcmBus::on_message, sub.get());
+  sub->lane = lane_urls_[1].empty() ? 0 : lcm_lane_of(channel);
+  sub->lcm_sub = lcm_subscribe(lane(sub->lane), channel.c_str(), &LcmBus::on_message, sub.get());
   if (!sub->lcm_sub) throw BusError("cannot subscribe to " + channel);
   lcm_subscription_set_queue_capacity(sub->lcm_sub, queue_capacity);
+  ++lane_subs_[sub->lane];
   const int id = next_id_++;
   subs_[id] = std::move(sub);
   return id;
@@ -51,17 +84,27 @@ int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_cap
 void LcmBus::unsubscribe(int id) {
   auto it = subs_.find(id);
   if (it == subs_.end()) return;
-  lcm_unsubscribe(lcm_, it->second->lcm_sub);
+  lcm_unsubscribe(lanes_[it->second->lane], it->second->lcm_sub);
+  --lane_subs_[it->second->lane];
   subs_.erase(it);
 }
 
 bool LcmBus::handle(std::chrono::milliseconds timeout) {
   const int ms = static_cast<int>(std::max<int64_t>(0, timeout.count()));
+  auto check = [&](int r) {
+    if (r < 0 && errno == EINTR) return 0;  // a signal (e.g. SIGTERM to stop) is not a bus failure
+    if (r < 0) throw BusError("LCM dispatch failed on " + url_ + ": " + std::strerror(errno));
+    return r;
+  };
   errno = 0;
-  const int r = lcm_handle_timeout(lcm_, ms);
-  if (r < 0 && errno == EINTR) return false;  // a signal (e.g. SIGTERM to stop) is not a bus failure
-  if (r < 0) throw BusError("LCM dispatch failed on " + url_ + ": " + std::strerror(errno));
-  return r > 0;
+  if (lane_subs_[1] == 0) return check(lcm_handle_timeout(lane(0), ms)) > 0;
+  if (lane_subs_[0] == 0) return check(lcm_handle_timeout(lane(1), ms)) > 0;
+  pollfd fds[2] = {{lcm_get_fileno(lane(0)), POLLIN, 0}, {lcm_get_fileno(lane(1)), POLLIN, 0}};
+  if (check(::poll(fds, 2, ms)) <= 0) return false;
+  bool handled = false;
+  for (int i = 0; i < 2; ++i)
+    if (fds[i].revents & POLLIN) handled |= check(lcm_handle_timeout(lanes_[i], 0)) > 0;
+  return handled;
 }
 
 }  // namespace skillbus

@@ -1,8 +1,16 @@
 // The LCM backend of Bus, on LCM's C API (it exposes per-subscription queue capacity).
+//
+// Two lanes. LCM's UDP multicast delivers every datagram of a group and port to every
+// process on it, which then throws away what it did not subscribe to. Many-to-one
+// traffic (lockstep acks and joins: channels ending in _ACK or _JOIN) would so wake
+// every participant for every other participant's ack. Those channels travel on lane 1,
+// the same group on port+1, which only their receiver (the master) listens to; all
+// other channels use lane 0, the URL as given. memq:// has one lane.
 #pragma once
 
 #include <lcm/lcm.h>
 
+#include <array>
 #include <map>
 #include <memory>
 
@@ -23,14 +31,23 @@ class LcmBus : public Bus {
  private:
   struct Sub {
     Handler handler;
+    int lane = 0;
     lcm_subscription_t* lcm_sub = nullptr;
   };
   static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
+  lcm_t* lane(int i);  // opened on first use
 
   std::string url_;
-  lcm_t* lcm_ = nullptr;
+  std::array<std::string, 2> lane_urls_;
+  std::array<lcm_t*, 2> lanes_{nullptr, nullptr};
+  std::array<int, 2> lane_subs_{0, 0};
   int next_id_ = 1;
   std::map<int, std::unique_ptr<Sub>> subs_;
 };
+
+// Lane of a channel: 1 for many-to-one channels (names ending in _ACK or _JOIN), else 0.
+int lcm_lane_of(const std::string& channel);
+// URL of lane 1 for a udpm:// URL (port+1), or "" when the URL has a single lane.
+std::string lcm_lane1_url(const std::string& url);
 
 }  // namespace skillbus

@@ -32,7 +32,7 @@ from typing import Any, Callable
 
 from skillbus.bus import Bus, channel
 from skillbus.log import BadInputCounter
-from skillbus.msgs import channel_count_t, decode, header_t, lockstep_ack_t, lockstep_clock_t, lockstep_join_t
+from skillbus.msgs import channel_count_t, header_t, lockstep_ack_t, lockstep_clock_t, lockstep_join_t
 
 
 def clock_channel() -> str:
@@ -206,6 +206,7 @@ class LockstepParticipant:
         self.on_frame: FrameCallback | None = None
         self._subs: list[int] = []
         self._next_clock: lockstep_clock_t | None = None
+        self._ack_channel, self._join_channel = ack_channel(), join_channel()
         self._master = ""  # the master whose clock we follow (from the first clock)
         self._stop_seen, self._stop_reason = False, ""
         self._last_acked, self._last_ack = -1, b""
@@ -253,7 +254,12 @@ class LockstepParticipant:
             self.handlers[ch](StampedMessage(ch, s, data))  # wall clock: on arrival
 
     def _on_clock(self, ch: str, data: bytes) -> None:
-        c = decode(lockstep_clock_t, data)
+        try:
+            # The plain decode (not msgs.decode, which re-encodes to catch a cut trailing
+            # byte array: a clock has none, and this is the hottest path of a frame).
+            c = lockstep_clock_t.decode(data)
+        except Exception:
+            c = None
         if c is None:
             self.bad_input.record(ch, "not a lockstep_clock_t", len(data))
             return
@@ -274,7 +280,7 @@ class LockstepParticipant:
             return
         frame = c.header.frame
         if frame == self._last_acked and self._last_ack:
-            self.bus.publish(ack_channel(), self._last_ack)  # our ack was lost: resend
+            self.bus.publish(self._ack_channel, self._last_ack)  # our ack was lost: resend
             return
         if frame <= self._last_acked:
             return
@@ -297,7 +303,7 @@ class LockstepParticipant:
         a.digest = digest
         a.error = error
         self._last_ack, self._last_acked = a.encode(), frame
-        self.bus.publish(ack_channel(), self._last_ack)
+        self.bus.publish(self._ack_channel, self._last_ack)
         self._running = hashlib.sha256(self._running + digest).digest()
 
     def _fail(self, r: RunResult, error: str) -> RunResult:
@@ -319,7 +325,7 @@ class LockstepParticipant:
                 return self._fail(r, f"lockstep: no clock from the master within {self.clock_timeout:.1f} s "
                                      f"of joining")
             if now >= next_join:
-                self.bus.publish(join_channel(), join_bytes)
+                self.bus.publish(self._join_channel, join_bytes)
                 next_join = now + self.join_interval
             self.bus.handle(0.01)
         wall_start = time.monotonic()

@@ -86,3 +86,27 @@ TEST(FaultyBus, DropsEveryNthPublish) {
   EXPECT_EQ(got, 6);
   EXPECT_EQ(bus->dropped(), 3);
 }
+
+// Private to the LCM backend, but its rule is part of the wire contract (docs/transport.md).
+namespace skillbus {
+int lcm_lane_of(const std::string& channel);
+std::string lcm_lane1_url(const std::string& url);
+}  // namespace skillbus
+
+TEST(LcmLanes, ManyToOneChannelsUsePortPlusOne) {
+  EXPECT_EQ(lcm_lane_of("SB_LOCKSTEP_ACK"), 1);
+  EXPECT_EQ(lcm_lane_of("R2/SB_LOCKSTEP_JOIN"), 1);
+  EXPECT_EQ(lcm_lane_of("SB_LOCKSTEP_CLOCK"), 0);
+  EXPECT_EQ(lcm_lane1_url("udpm://239.255.76.67:7667?ttl=0"), "udpm://239.255.76.67:7668?ttl=0");
+  EXPECT_EQ(lcm_lane1_url("udpm://239.1.2.3"), "udpm://239.1.2.3:7668");
+  EXPECT_EQ(lcm_lane1_url("memq://"), "");
+}
+
+TEST(LcmLanes, MemqHasOneLaneSoAcksStillArrive) {
+  auto bus = open_bus("memq://");
+  int got = 0;
+  bus->subscribe("SB_LOCKSTEP_ACK", [&](const std::string&, const uint8_t*, size_t) { ++got; });
+  bus->publish("SB_LOCKSTEP_ACK", "a", 1);
+  bus->handle(std::chrono::milliseconds(100));
+  EXPECT_EQ(got, 1);
+}

@@ -79,3 +79,21 @@ def test_drop_every_nth_counts_per_channel():
         bus.publish("B", b"b")
     drain(bus)
     assert len(got) == 8 and bus.dropped == 4
+
+
+def test_many_to_one_channels_use_lane_1_on_port_plus_one():
+    from skillbus.bus import lane1_url, lane_of
+    assert lane_of("SB_LOCKSTEP_ACK") == 1 and lane_of("ROBOT2/SB_LOCKSTEP_JOIN") == 1
+    assert lane_of("SB_LOCKSTEP_CLOCK") == 0 and lane_of("SB_WM_REQ") == 0
+    assert lane1_url("udpm://239.255.76.67:7667?ttl=0") == "udpm://239.255.76.67:7668?ttl=0"
+    assert lane1_url("udpm://239.1.2.3") == "udpm://239.1.2.3:7668"
+    assert lane1_url("memq://") == ""
+
+
+def test_memq_has_one_lane_so_acks_still_arrive():
+    bus = open_bus("memq://")
+    got = []
+    bus.subscribe("SB_LOCKSTEP_ACK", lambda ch, d: got.append(d))
+    bus.publish("SB_LOCKSTEP_ACK", b"a")
+    drain(bus)
+    assert got == [b"a"]
