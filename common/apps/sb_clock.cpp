@@ -14,6 +14,7 @@
 #include "args.hpp"
 #include "demo_mix.hpp"
 #include "skillbus/bus.hpp"
+#include "skillbus/faulty_bus.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus_msgs/test_sample_t.hpp"
 
@@ -36,7 +37,7 @@ std::string json_escape(const std::string& s) {
 int main(int argc, char** argv) {
   apps::Args args(argc, argv,
                   {"url", "name", "participants", "frames", "period-ms", "join-timeout-ms", "ack-timeout-ms",
-                   "message-timeout-ms"},
+                   "message-timeout-ms", "lose-clocks-every"},
                   {"demo"});
   MasterConfig cfg;
   cfg.name = args.str("name", "clock");
@@ -50,7 +51,9 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<Bus> bus;
   try {
-    bus = open_bus(args.str("url"));
+    // --lose-clocks-every N: a test of the clock resend (every N-th clock is lost).
+    bus = std::make_unique<DropEveryNthBus>(open_bus(args.str("url")),
+                                            static_cast<int>(args.num("lose-clocks-every", 0)), clock_channel());
   } catch (const std::exception& e) {
     apps::Args::die(e.what());
   }

@@ -4,6 +4,7 @@
 // order) into its state and publishes SB_DEMO_CMD with the result. Prints a JSON summary.
 // --drop-at-frame N announces but does not send its SB_DEMO_CMD of frame N (to test that
 // a lost message is reported with its channel and frame). --bare: no demo traffic.
+// --slow-at-frame N spends 0.8 s in frame N dispatching the bus (a slow participant).
 //
 // Reads:   SB_LOCKSTEP_CLOCK, SB_DEMO_STATE, SB_DEMO_CMD
 // Writes:  SB_LOCKSTEP_JOIN, SB_LOCKSTEP_ACK, SB_DEMO_CMD
@@ -43,7 +44,7 @@ class DropNextBus : public Bus {
 }  // namespace
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "name", "drop-at-frame", "clock-timeout-ms", "message-timeout-ms", "frames"},
+  apps::Args args(argc, argv, {"url", "name", "drop-at-frame", "slow-at-frame", "clock-timeout-ms", "message-timeout-ms", "frames"},
                   {"wall-clock", "bare"});
   ParticipantConfig cfg;
   cfg.name = args.str("name");
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   cfg.clock_timeout = std::chrono::milliseconds(args.num("clock-timeout-ms", 10000));
   cfg.message_timeout = std::chrono::milliseconds(args.num("message-timeout-ms", 2000));
   const long long drop_at = args.num("drop-at-frame", -1);
+  const long long slow_at = args.num("slow-at-frame", -1);
 
   std::unique_ptr<DropNextBus> bus;
   try {
@@ -79,6 +81,12 @@ int main(int argc, char** argv) {
   }
   p.on_frame = [&](int64_t frame, int64_t sim_time) {
     if (args.flag("bare")) return;
+    if (frame == slow_at) {
+      // Test: a slow frame, longer than the master's clock resend interval, spent
+      // dispatching the bus as a long synchronous RPC call would.
+      const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(800);
+      while (std::chrono::steady_clock::now() < end) bus->handle(std::chrono::milliseconds(50));
+    }
     skillbus_msgs::test_sample_t out{};
     out.i64 = static_cast<int64_t>(apps::demo_mix(state, frame));
     out.text = cfg.name;

@@ -65,7 +65,7 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());  // our ack was lost
     return;
   }
-  if (c.header.frame <= last_acked_) return;
+  if (c.header.frame <= last_acked_ || c.header.frame == current_) return;  // resend of the frame in hand
   if (c.header.frame != last_acked_ + 1)
     return bad_.record(ch, "a clock for frame " + std::to_string(c.header.frame) + " while frame " +
                                std::to_string(last_acked_ + 1) + " is due", n);
@@ -144,6 +144,7 @@ RunResult LockstepParticipant::run_lockstep() {
     if (stop_seen_ && !have_clock_) break;
     Clock clk = std::move(next_clock_);
     have_clock_ = false;
+    current_ = clk.frame;
 
     // Wait until every message announced for this frame on our channels is here.
     const auto expected = expectations_for(clk.counts, stamped_channels_, cfg_.name);

@@ -172,10 +172,11 @@ class LcmBus(Bus):
 
 
 class DropEveryNthBus(Bus):
-    """Drops every n-th message published on each channel (tests of retries and loss)."""
+    """Drops every n-th message published on each channel (tests of retries and loss),
+    or only on the given channels."""
 
-    def __init__(self, inner: Bus, n: int) -> None:
-        self.inner, self.n = inner, n
+    def __init__(self, inner: Bus, n: int, channels: set[str] | None = None) -> None:
+        self.inner, self.n, self.channels = inner, n, channels
         self.published: collections.Counter[str] = collections.Counter()
         self.dropped = 0
 
@@ -185,7 +186,8 @@ class DropEveryNthBus(Bus):
 
     def publish(self, channel: str, data: bytes) -> None:
         self.published[channel] += 1
-        if self.n > 0 and self.published[channel] % self.n == 0:
+        if self.n > 0 and self.published[channel] % self.n == 0 and (
+                self.channels is None or channel in self.channels):
             self.dropped += 1
             return
         self.inner.publish(channel, data)

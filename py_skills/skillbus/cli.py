@@ -26,6 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frames", type=int, default=None, help="wall-clock mode: stop after this many frames")
     p.add_argument("--bare", action="store_true", help="no demo traffic: only the lockstep protocol")
     p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
+    p.add_argument("--slow-at-frame", type=int, default=-1, help="test: take 0.8 s over this frame")
+    p.add_argument("--lose-acks-every", type=int, default=0, help="test: lose every N-th ack")
     p.add_argument("--clock-timeout", type=float, default=10.0)
     p.add_argument("--message-timeout", type=float, default=2.0)
     return ap

@@ -210,6 +210,7 @@ class LockstepParticipant:
         self._master = ""  # the master whose clock we follow (from the first clock)
         self._stop_seen, self._stop_reason = False, ""
         self._last_acked, self._last_ack = -1, b""
+        self._current = -1  # the frame being worked on (its clock may be resent meanwhile)
         self._running = bytes(32)
         self._stop_requested = False
         if not wall_clock:
@@ -282,8 +283,8 @@ class LockstepParticipant:
         if frame == self._last_acked and self._last_ack:
             self.bus.publish(self._ack_channel, self._last_ack)  # our ack was lost: resend
             return
-        if frame <= self._last_acked:
-            return
+        if frame <= self._last_acked or frame == self._current:
+            return  # a resend of the clock of the frame we are working on
         if frame != self._last_acked + 1:
             self.bad_input.record(ch, f"a clock for frame {frame} while frame {self._last_acked + 1} is due",
                                   len(data))
@@ -341,6 +342,7 @@ class LockstepParticipant:
                 break  # stopped
             clk, self._next_clock = self._next_clock, None
             frame, sim_time = clk.header.frame, clk.header.sim_time_ns
+            self._current = frame
             expected = expectations_for(clk.counts, subscribed, self.name)
             deadline = time.monotonic() + self.message_timeout
             miss = self.inbox.missing(expected)

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 
-from skillbus.bus import channel, open_bus
-from skillbus.lockstep import LockstepParticipant, StampedMessage
+from skillbus.bus import DropEveryNthBus, channel, open_bus
+from skillbus.lockstep import LockstepParticipant, StampedMessage, ack_channel
 from skillbus.msgs import decode, test_sample_t
 
 MASK = (1 << 64) - 1
@@ -30,8 +31,10 @@ def to_int64(u: int) -> int:
 
 
 class DemoParticipant:
-    def __init__(self, participant: LockstepParticipant, drop_at_frame: int = -1) -> None:
+    def __init__(self, participant: LockstepParticipant, drop_at_frame: int = -1,
+                 slow_at_frame: int = -1) -> None:
         self.p = participant
+        self.slow_at_frame = slow_at_frame
         self.state = 0
         self.received = 0
         self.drop_at_frame = drop_at_frame
@@ -48,6 +51,12 @@ class DemoParticipant:
         self.received += 1
 
     def on_frame(self, frame: int, sim_time_ns: int) -> None:
+        if frame == self.slow_at_frame:
+            # Test: a slow frame, longer than the master's clock resend interval, spent
+            # dispatching the bus as a long synchronous RPC call would.
+            end = time.monotonic() + 0.8
+            while time.monotonic() < end:
+                self.p.bus.handle(0.05)
         out = test_sample_t()
         out.blob = bytes(4)  # LCM's Python default b"" would encode 4 bytes short
         out.i64 = to_int64(demo_mix(self.state, frame))
@@ -64,10 +73,12 @@ class DemoParticipant:
 
 def main(args) -> int:
     bus = open_bus(args.url)
+    if args.lose_acks_every:
+        bus = DropEveryNthBus(bus, args.lose_acks_every, {ack_channel()})
     p = LockstepParticipant(bus, args.name, kind="python-demo", wall_clock=args.wall_clock,
                             wall_frames=args.frames, clock_timeout=args.clock_timeout,
                             message_timeout=args.message_timeout)
-    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame)
+    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame)
     r = p.run()
     print(json.dumps({"ok": r.ok, "error": r.error, "name": args.name, "frames": r.frames,
                       "received": demo.received if demo else 0, "digest": r.digest_hex,

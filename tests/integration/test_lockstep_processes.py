@@ -4,6 +4,8 @@ LCM in a private network namespace."""
 import re
 import time
 
+import pytest
+
 from conftest import last_json, python_tool
 from skillbus.demo import python_participant_argv, run_session
 from skillbus.netns import Sandbox
@@ -133,3 +135,36 @@ def test_wall_clock_mode_runs_the_same_participant_without_a_master(sandbox):
     assert sandbox.wait(p, 30) == 0
     r = last_json(p.stdout())
     assert r["ok"] and r["frames"] == 50
+
+
+def test_lost_clocks_and_lost_acks_are_recovered_and_change_nothing(sandbox, binary, tmp_path):
+    with Sandbox(log_dir=tmp_path / "clean") as box:
+        clean = run_session(box, frames=300, n_python=2, n_cpp=1, timeout=120)
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=300,
+                         clock_args=["--lose-clocks-every", "97"],
+                         part_args={"py2": ["--lose-acks-every", "89"]})
+    assert sandbox.wait(clock, 120) == 0, clock.stdout() + clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 300
+    assert s["digest"] == clean["digest"]
+    # each loss costs one resend interval (250 ms): 3 lost clocks + 3 lost acks
+    assert s["wall_time_s"] > 6 * 0.25
+
+
+@pytest.mark.parametrize("slow", ["py1", "cpp1"])
+def test_a_slow_participant_is_waited_for_and_no_frame_is_skipped_or_repeated(sandbox, binary, tmp_path, slow):
+    # One participant takes 0.8 s over frame 20 while dispatching the bus, longer than the
+    # master's clock resend interval (0.25 s): the resent clocks must not make it handle
+    # frame 20 twice, and nobody may skip a frame.
+    with Sandbox(log_dir=tmp_path / "clean") as box:
+        clean = run_session(box, frames=100, n_python=2, n_cpp=1, timeout=60)
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=100,
+                         part_args={slow: ["--slow-at-frame", "20"]})
+    assert sandbox.wait(clock, 60) == 0, clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 100 and s["wall_time_s"] >= 0.8
+    assert s["digest"] == clean["digest"]
+    for n, p in parts.items():
+        sandbox.wait(p, 15)
+        r = last_json(p.stdout())
+        assert r["frames"] == 100 and r["received"] == clean["participant_results"][n]["received"]

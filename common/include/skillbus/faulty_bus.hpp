@@ -11,10 +11,12 @@ namespace skillbus {
 
 class DropEveryNthBus : public Bus {
  public:
-  DropEveryNthBus(std::unique_ptr<Bus> inner, int n) : inner_(std::move(inner)), n_(n) {}
+  // With `only_channel` set, only that channel loses messages.
+  DropEveryNthBus(std::unique_ptr<Bus> inner, int n, std::string only_channel = "")
+      : inner_(std::move(inner)), n_(n), only_(std::move(only_channel)) {}
   void publish(const std::string& ch, const void* data, size_t size) override {
     const long k = ++published_[ch];
-    if (n_ > 0 && k % n_ == 0) { ++dropped_; return; }
+    if (n_ > 0 && k % n_ == 0 && (only_.empty() || ch == only_)) { ++dropped_; return; }
     inner_->publish(ch, data, size);
   }
   int subscribe(const std::string& ch, Handler h, int cap = 10000) override { return inner_->subscribe(ch, std::move(h), cap); }
@@ -26,6 +28,7 @@ class DropEveryNthBus : public Bus {
  private:
   std::unique_ptr<Bus> inner_;
   int n_;
+  std::string only_;
   std::map<std::string, long> published_;
   long dropped_ = 0;
 };

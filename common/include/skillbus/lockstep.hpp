@@ -147,6 +147,7 @@ class LockstepParticipant {
   bool stop_seen_ = false;
   std::string stop_reason_;
   int64_t last_acked_ = -1;
+  int64_t current_ = -1;  // the frame being worked on (its clock may be resent meanwhile)
   Bytes last_ack_;
   Sha256 running_;
   Digest running_digest_{};
