@@ -14,7 +14,6 @@ Run: make bench   (or: .venv/bin/python bench/lockstep_overhead.py [--frames N])
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -23,18 +22,16 @@ from pathlib import Path
 
 from skillbus import paths
 from skillbus.demo import python_participant_argv
-from skillbus.netns import Sandbox
+from skillbus.netns import Sandbox, last_json
 
 HERE = Path(__file__).resolve().parent
 
 
-def last_json(text: str) -> dict:
-    for line in reversed(text.strip().splitlines()):
-        try:
-            return json.loads(line)
-        except json.JSONDecodeError:
-            pass
-    raise RuntimeError(f"no JSON in: {text[-500:]}")
+def summary(proc) -> dict:
+    s = last_json(proc.stdout())
+    if s is None:
+        raise RuntimeError(f"{proc.name} printed no summary: {proc.stderr()[-500:]}")
+    return s
 
 
 def raw_round_trip(box: Sandbox, n: int, size: int) -> dict:
@@ -43,7 +40,7 @@ def raw_round_trip(box: Sandbox, n: int, size: int) -> dict:
     box.wait(ping, 120)
     box.kill(pong)
     box.wait(pong, 10)
-    return last_json(ping.stdout())
+    return summary(ping)
 
 
 def lockstep(box: Sandbox, n: int, lang: str, frames: int) -> dict:
@@ -58,7 +55,7 @@ def lockstep(box: Sandbox, n: int, lang: str, frames: int) -> dict:
     box.wait(clock, 300)
     for p in parts:
         box.wait(p, 30)
-    s = last_json(clock.stdout())
+    s = summary(clock)
     if not s["ok"]:
         raise RuntimeError(s["error"])
     return s

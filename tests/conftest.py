@@ -3,13 +3,13 @@ whose processes are always stopped, also when a test fails or times out."""
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 import pytest
 
 from skillbus import paths
+from skillbus import netns
 from skillbus.netns import Sandbox, SandboxError
 
 TESTS = Path(__file__).resolve().parent
@@ -38,9 +38,7 @@ def python_tool(script: str, *args: str) -> list[str]:
 
 
 def last_json(text: str) -> dict:
-    for line in reversed(text.strip().splitlines()):
-        try:
-            return json.loads(line)
-        except json.JSONDecodeError:
-            continue
-    raise AssertionError(f"no JSON summary in output:\n{text[-2000:]}")
+    summary = netns.last_json(text)
+    if summary is None:
+        raise AssertionError(f"no JSON summary in output:\n{text[-2000:]}")
+    return summary

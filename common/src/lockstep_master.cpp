@@ -106,7 +106,7 @@ bool LockstepMaster::wait_for_joins(std::string& error) {
   return true;
 }
 
-void LockstepMaster::publish_stop(int64_t frame, int64_t sim_time, const std::string& reason) {
+skillbus_msgs::lockstep_clock_t LockstepMaster::make_clock(int64_t frame, int64_t sim_time) const {
   skillbus_msgs::lockstep_clock_t c{};
   c.header.frame = frame;
   c.header.sim_time_ns = sim_time;
@@ -114,6 +114,11 @@ void LockstepMaster::publish_stop(int64_t frame, int64_t sim_time, const std::st
   c.frame_period_ns = cfg_.frame_period_ns;
   c.participants = expected_;
   c.num_participants = static_cast<int32_t>(expected_.size());
+  return c;
+}
+
+void LockstepMaster::publish_stop(int64_t frame, int64_t sim_time, const std::string& reason) {
+  skillbus_msgs::lockstep_clock_t c = make_clock(frame, sim_time);
   c.stop = true;
   c.stop_reason = reason;
   // The stop is not acknowledged; send it a few times so a lost datagram does not
@@ -134,13 +139,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
     return false;
   }
 
-  skillbus_msgs::lockstep_clock_t c{};
-  c.header.frame = frame;
-  c.header.sim_time_ns = sim_time;
-  c.header.sender = cfg_.name;
-  c.frame_period_ns = cfg_.frame_period_ns;
-  c.participants = expected_;
-  c.num_participants = static_cast<int32_t>(expected_.size());
+  skillbus_msgs::lockstep_clock_t c = make_clock(frame, sim_time);
   c.counts = carried;
   for (auto& own : outbox_.counts()) c.counts.push_back(own);
   c.num_counts = static_cast<int32_t>(c.counts.size());

@@ -4,11 +4,10 @@ in a private network namespace and prints its summary."""
 
 from __future__ import annotations
 
-import json
 import sys
 
 from skillbus import paths
-from skillbus.netns import Sandbox
+from skillbus.netns import Sandbox, last_json
 
 
 def python_participant_argv(name: str, *extra: str) -> list[str]:
@@ -27,21 +26,12 @@ def run_session(box: Sandbox, frames: int, n_python: int, n_cpp: int, timeout: f
                 else [str(paths.binary("sb_demo_participant")), "--name", n])
         parts.append(box.start(n, argv))
     box.wait(clock, timeout)
-    summary = _last_json(clock.stdout()) or {"ok": False, "error": f"clock printed no summary: {clock.stderr()}"}
+    summary = last_json(clock.stdout()) or {"ok": False, "error": f"clock printed no summary: {clock.stderr()}"}
     summary["participant_results"] = {}
     for p in parts:
         box.wait(p, 15)
-        summary["participant_results"][p.name] = _last_json(p.stdout()) or {"ok": False}
+        summary["participant_results"][p.name] = last_json(p.stdout()) or {"ok": False}
     return summary
-
-
-def _last_json(text: str) -> dict | None:
-    for line in reversed(text.strip().splitlines()):
-        try:
-            return json.loads(line)
-        except json.JSONDecodeError:
-            continue
-    return None
 
 
 def print_summary(s: dict) -> None:

@@ -19,6 +19,7 @@ Example::
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import select
 import shutil
@@ -51,6 +52,18 @@ class Proc:
 
     def stderr(self) -> str:
         return self.stderr_path.read_text(errors="replace")
+
+
+def last_json(text: str) -> dict | None:
+    """The last line of a program's output that is a JSON object (its summary), or None."""
+    for line in reversed(text.strip().splitlines()):
+        try:
+            value = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if isinstance(value, dict):
+            return value
+    return None
 
 
 def _host_routes_multicast_to_lo() -> bool:

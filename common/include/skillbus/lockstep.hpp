@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "skillbus/lockstep_frame.hpp"
+#include "skillbus_msgs/lockstep_clock_t.hpp"
 
 namespace skillbus {
 
@@ -63,6 +64,7 @@ class LockstepMaster {
   bool wait_for_joins(std::string& error);
   bool run_frame(int64_t frame, int64_t sim_time, std::vector<ChannelCount>& carried, std::string& error);
   void publish_stop(int64_t frame, int64_t sim_time, const std::string& reason);
+  skillbus_msgs::lockstep_clock_t make_clock(int64_t frame, int64_t sim_time) const;
   void on_join(const uint8_t* d, size_t n, const std::string& ch);
   void on_ack(const uint8_t* d, size_t n, const std::string& ch);
 
