@@ -9,6 +9,7 @@ cd "$(dirname "$0")/.."
 APT_PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   libgtest-dev libssl-dev libglib2.0-0
+  libserd-dev libeigen3-dev zlib1g-dev
   default-jdk-headless
   python3-venv
   iproute2 util-linux procps

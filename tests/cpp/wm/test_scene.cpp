@@ -1,0 +1,101 @@
+#include <gtest/gtest.h>
+
+#include "scene.hpp"
+#include "wm_test_util.hpp"
+
+using namespace skillbus::wm;
+using namespace skillbus::wm::test;
+
+namespace {
+
+// In the form SkiROS2 writes its scenes (owl/planning_scene.turtle of skiros2_examples).
+const char* kSkirosScene = R"(@prefix owl: <http://www.w3.org/2002/07/owl#> .
+@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .
+@prefix skiros: <http://rvmi.aau.dk/ontologies/skiros.owl#> .
+@prefix xsd: <http://www.w3.org/2001/XMLSchema#> .
+
+skiros:Pick a owl:class ;
+    rdfs:subClassOf skiros:Skill .
+
+skiros:Scene-0 a skiros:Scene,
+        owl:NamedIndividual ;
+    rdfs:label "" ;
+    skiros:FrameId "map"^^xsd:string ;
+    skiros:OrientationW "1.0"^^xsd:float ;
+    skiros:PositionX "0.0"^^xsd:float ;
+    skiros:contain skiros:LargeBox-51 .
+
+skiros:LargeBox-51 a skiros:LargeBox,
+        owl:NamedIndividual ;
+    rdfs:label "start_box" ;
+    skiros:FrameId "skiros:LargeBox-51"^^xsd:string ;
+    skiros:PublishTf true ;
+    skiros:contain skiros:Starter-52 ;
+    skiros:hasTemplate skiros:large_box_test_starter .
+
+skiros:Starter-52 a skiros:Starter,
+        owl:NamedIndividual ;
+    rdfs:label "starter1" ;
+    skiros:Weight "3.0"^^xsd:float ;
+    skiros:Count "7"^^xsd:int .
+)";
+
+}  // namespace
+
+TEST(Scene, ReadsTheSkirosFormAndSaysWhatItSkipped) {
+  Ontology onto = ontology();
+  Prefixes px;
+  Scene s = read_scene(kSkirosScene, onto, px, "planning_scene.turtle");
+  ASSERT_EQ(s.elements.size(), 3u);
+  const Element& box = s.elements[0];
+  EXPECT_EQ(box.id, "skiros:LargeBox-51");
+  EXPECT_EQ(box.type, "skiros:LargeBox");
+  EXPECT_EQ(box.label, "start_box");
+  EXPECT_EQ(box.properties.at("skiros:PublishTf")[0], Value(true));
+  EXPECT_EQ(s.elements[2].properties.at("skiros:Count")[0], Value(int64_t{7}));
+  EXPECT_EQ(s.elements[2].properties.at("skiros:Weight")[0], Value(3.0));
+  ASSERT_EQ(s.relations.size(), 2u);
+  ASSERT_EQ(s.notes.size(), 1u);  // hasTemplate points at no individual of the scene
+  EXPECT_NE(s.notes[0].find("skiros:hasTemplate"), std::string::npos);
+  EXPECT_TRUE(onto.is_subclass("skiros:Pick", "skiros:Skill"));  // axioms in the scene reach the ontology
+}
+
+TEST(Scene, SaveThenLoadGivesTheSameWorld) {
+  Ontology onto = ontology();
+  Prefixes px;
+  Scene s = read_scene(kSkirosScene, onto, px, "scene");
+  WorldStore a(onto);
+  a.reset(s.elements, s.relations, 1, 1);
+  const std::string text = write_scene(a, px);
+  Prefixes px2;
+  Scene s2 = read_scene(text, onto, px2, "saved");
+  WorldStore b(onto);
+  b.reset(s2.elements, s2.relations, 1, 1);
+  EXPECT_EQ(a.elements(), b.elements());
+  EXPECT_EQ(a.all_relations(), b.all_relations());
+  EXPECT_TRUE(s2.notes.empty());
+  EXPECT_EQ(write_scene(b, px2), text);  // and saving is stable
+}
+
+TEST(Scene, ExactFloatsSurviveTheRoundTrip) {
+  Ontology onto = ontology();
+  WorldStore a(onto);
+  a.apply({add(element("", "skiros:Cube", "c", {{"skiros:PositionX", {0.1 + 0.2}}, {"skiros:Size", {1e-300}}}))});
+  Prefixes px;
+  Scene s = read_scene(write_scene(a, px), onto, px, "saved");
+  EXPECT_EQ(s.elements[0].properties, a.get("skiros:Cube-1")->properties);
+}
+
+TEST(Scene, BadValuesAreNamed) {
+  Ontology onto = ontology();
+  Prefixes px;
+  const std::string bad = std::string(kSkirosScene).replace(std::string(kSkirosScene).find("\"3.0\""), 5, "\"heavy\"");
+  try {
+    read_scene(bad, onto, px, "bad.turtle");
+    FAIL();
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.turtle, skiros:Starter-52 skiros:Weight: 'heavy' is not a number"),
+              std::string::npos)
+        << e.what();
+  }
+}

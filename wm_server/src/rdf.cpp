@@ -1,0 +1,178 @@
+#include "rdf.hpp"
+
+#include <serd/serd.h>
+
+#include <cstdarg>
+#include <cstdio>
+
+#include "model.hpp"
+
+namespace skillbus::wm {
+
+const char* const kRdfType = "http://www.w3.org/1999/02/22-rdf-syntax-ns#type";
+const char* const kRdfsLabel = "http://www.w3.org/2000/01/rdf-schema#label";
+const char* const kRdfsSubClassOf = "http://www.w3.org/2000/01/rdf-schema#subClassOf";
+const char* const kRdfsSubPropertyOf = "http://www.w3.org/2000/01/rdf-schema#subPropertyOf";
+const char* const kRdfsRange = "http://www.w3.org/2000/01/rdf-schema#range";
+const char* const kOwlNamedIndividual = "http://www.w3.org/2002/07/owl#NamedIndividual";
+const char* const kOwlClass = "http://www.w3.org/2002/07/owl#Class";
+const char* const kXsd = "http://www.w3.org/2001/XMLSchema#";
+
+Prefixes::Prefixes() {
+  add("rdf", "http://www.w3.org/1999/02/22-rdf-syntax-ns#");
+  add("rdfs", "http://www.w3.org/2000/01/rdf-schema#");
+  add("owl", "http://www.w3.org/2002/07/owl#");
+  add("xsd", kXsd);
+  add("skiros", "http://rvmi.aau.dk/ontologies/skiros.owl#");
+}
+
+void Prefixes::add(const std::string& prefix, const std::string& ns) { by_prefix_[prefix] = ns; }
+
+std::string Prefixes::compact(const std::string& iri) const {
+  const std::pair<const std::string, std::string>* best = nullptr;
+  for (const auto& kv : by_prefix_)
+    if (iri.compare(0, kv.second.size(), kv.second) == 0 && (!best || kv.second.size() > best->second.size()))
+      best = &kv;
+  return best ? best->first + ":" + iri.substr(best->second.size()) : iri;
+}
+
+std::string Prefixes::expand(const std::string& curie) const {
+  const auto colon = curie.find(':');
+  if (colon == std::string::npos) return curie;
+  auto it = by_prefix_.find(curie.substr(0, colon));
+  return it == by_prefix_.end() ? curie : it->second + curie.substr(colon + 1);
+}
+
+namespace {
+
+struct ReadState {
+  SerdEnv* env;
+  Prefixes* prefixes;
+  std::vector<Triple>* out;
+  std::string error;
+};
+
+std::string node_text(const SerdNode* n) { return std::string(reinterpret_cast<const char*>(n->buf), n->n_bytes); }
+
+Term to_term(ReadState& st, const SerdNode* n, const SerdNode* datatype = nullptr, const SerdNode* lang = nullptr) {
+  Term t;
+  switch (n->type) {
+    case SERD_BLANK:
+      t.kind = Term::Blank;
+      t.value = node_text(n);
+      return t;
+    case SERD_LITERAL:
+      t.kind = Term::Literal;
+      t.value = node_text(n);
+      if (datatype && datatype->buf) t.datatype = to_term(st, datatype).value;
+      if (lang && lang->buf) t.lang = node_text(lang);
+      return t;
+    case SERD_CURIE: {
+      SerdNode full = serd_env_expand_node(st.env, n);
+      if (!full.buf) throw WmError("undefined prefix in '" + node_text(n) + "'");
+      t.value = node_text(&full);
+      serd_node_free(&full);
+      return t;
+    }
+    default:
+      t.value = node_text(n);
+      return t;
+  }
+}
+
+SerdStatus on_prefix(void* handle, const SerdNode* name, const SerdNode* uri) {
+  auto* st = static_cast<ReadState*>(handle);
+  st->prefixes->add(node_text(name), node_text(uri));
+  return serd_env_set_prefix(st->env, name, uri);
+}
+
+SerdStatus on_statement(void* handle, SerdStatementFlags, const SerdNode*, const SerdNode* s, const SerdNode* p,
+                        const SerdNode* o, const SerdNode* dt, const SerdNode* lang) {
+  auto* st = static_cast<ReadState*>(handle);
+  try {
+    st->out->push_back(Triple{to_term(*st, s), to_term(*st, p), to_term(*st, o, dt, lang)});
+  } catch (const WmError& e) {
+    st->error = e.what();
+    return SERD_ERR_BAD_CURIE;
+  }
+  return SERD_SUCCESS;
+}
+
+SerdStatus on_error(void* handle, const SerdError* e) {
+  auto* st = static_cast<ReadState*>(handle);
+  char msg[512];
+  va_list args;
+  va_copy(args, *e->args);
+  std::vsnprintf(msg, sizeof msg, e->fmt, args);
+  va_end(args);
+  std::string text = msg;
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  if (st->error.empty())
+    st->error = "line " + std::to_string(e->line) + ", column " + std::to_string(e->col) + ": " + text;
+  return SERD_SUCCESS;
+}
+
+}  // namespace
+
+std::vector<Triple> parse_turtle(const std::string& text, Prefixes& prefixes, const std::string& source) {
+  std::vector<Triple> out;
+  ReadState st{serd_env_new(nullptr), &prefixes, &out, ""};
+  for (const auto& [p, ns] : prefixes.all())
+    serd_env_set_prefix_from_strings(st.env, reinterpret_cast<const uint8_t*>(p.c_str()),
+                                     reinterpret_cast<const uint8_t*>(ns.c_str()));
+  SerdReader* reader = serd_reader_new(SERD_TURTLE, &st, nullptr, nullptr, on_prefix, on_statement, nullptr);
+  serd_reader_set_strict(reader, true);
+  serd_reader_set_error_sink(reader, on_error, &st);
+  const SerdStatus status = serd_reader_read_string(reader, reinterpret_cast<const uint8_t*>(text.c_str()));
+  serd_reader_free(reader);
+  serd_env_free(st.env);
+  if (status != SERD_SUCCESS || !st.error.empty())
+    throw WmError("malformed Turtle in " + source + ": " +
+                  (st.error.empty() ? std::string(reinterpret_cast<const char*>(serd_strerror(status))) : st.error));
+  return out;
+}
+
+namespace {
+
+SerdNode uri_node(const std::string& s) { return serd_node_from_string(SERD_URI, reinterpret_cast<const uint8_t*>(s.c_str())); }
+
+SerdNode term_node(const Term& t) {
+  const auto* b = reinterpret_cast<const uint8_t*>(t.value.c_str());
+  switch (t.kind) {
+    case Term::Blank: return serd_node_from_string(SERD_BLANK, b);
+    case Term::Literal: return serd_node_from_string(SERD_LITERAL, b);
+    default: return serd_node_from_string(SERD_URI, b);
+  }
+}
+
+}  // namespace
+
+std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& prefixes) {
+  SerdEnv* env = serd_env_new(nullptr);
+  SerdChunk chunk{nullptr, 0};
+  SerdWriter* w = serd_writer_new(SERD_TURTLE, static_cast<SerdStyle>(SERD_STYLE_ABBREVIATED | SERD_STYLE_CURIED), env,
+                                  nullptr, serd_chunk_sink, &chunk);
+  for (const auto& [p, ns] : prefixes.all()) {
+    SerdNode name = serd_node_from_string(SERD_LITERAL, reinterpret_cast<const uint8_t*>(p.c_str()));
+    SerdNode uri = uri_node(ns);
+    serd_env_set_prefix(env, &name, &uri);
+    serd_writer_set_prefix(w, &name, &uri);
+  }
+  for (const auto& t : triples) {
+    SerdNode s = term_node(t.s), p = term_node(t.p), o = term_node(t.o);
+    SerdNode dt = t.o.datatype.empty() ? SERD_NODE_NULL : uri_node(t.o.datatype);
+    SerdNode lang =
+        t.o.lang.empty() ? SERD_NODE_NULL : serd_node_from_string(SERD_LITERAL, reinterpret_cast<const uint8_t*>(t.o.lang.c_str()));
+    serd_writer_write_statement(w, 0, nullptr, &s, &p, &o, t.o.datatype.empty() ? nullptr : &dt,
+                                t.o.lang.empty() ? nullptr : &lang);
+  }
+  serd_writer_finish(w);
+  serd_writer_free(w);
+  serd_env_free(env);
+  uint8_t* buf = serd_chunk_sink_finish(&chunk);
+  std::string out(reinterpret_cast<const char*>(buf));
+  serd_free(buf);
+  return out;
+}
+
+}  // namespace skillbus::wm

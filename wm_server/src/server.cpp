@@ -1,0 +1,289 @@
+#include "server.hpp"
+
+#include <fstream>
+#include <iterator>
+
+#include "convert.hpp"
+#include "scene.hpp"
+#include "skillbus_msgs/wm_value_t.hpp"
+#include "transforms.hpp"
+
+namespace skillbus::wm {
+
+using namespace skillbus_msgs;
+
+namespace {
+
+const char* kLog = "wm_server";
+
+std::string read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw WmError("cannot read " + path);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+ParticipantConfig participant_config(const ServerOptions& o) {
+  ParticipantConfig c;
+  c.name = o.name;
+  c.kind = "wm_server";
+  c.mode = o.wall_clock ? ClockMode::WallClock : ClockMode::Lockstep;
+  c.wall_frame_period_ns = o.frame_period_ns;
+  return c;
+}
+
+std::string txn_key(const std::string& client, int64_t request) { return client + "\n" + std::to_string(request); }
+
+}  // namespace
+
+WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
+    : bus_(bus),
+      opt_(std::move(options)),
+      store_(ontology_),
+      journal_(opt_.data_dir),
+      participant_(bus, participant_config(opt_)),
+      rpc_(bus, "WM") {
+  for (const auto& f : opt_.ontology_files) ontology_.load_turtle(read_file(f), prefixes_, f);
+  recover();
+
+  rpc_.add_method<wm_query_t, wm_elements_t>("get", [this](const wm_query_t& q) { return on_get(q); });
+  rpc_.add_method<wm_query_t, wm_elements_t>("query", [this](const wm_query_t& q) { return on_query(q); });
+  rpc_.add_method<wm_query_t, wm_elements_t>("snapshot", [this](const wm_query_t&) {
+    std::vector<const Element*> all;
+    for (const auto& [id, e] : store_.elements()) all.push_back(&e);
+    return elements_reply(all);
+  });
+  rpc_.add_method<wm_txn_t, wm_commit_t>("commit", [this](const wm_txn_t& t) {
+    wm_commit_t c = commit(t);
+    if (!c.error.empty()) throw WmError(c.error);
+    return c;
+  });
+  rpc_.add_method<wm_scene_t, wm_scene_t>("load_scene", [this](const wm_scene_t& r) { return on_load_scene(r); });
+  rpc_.add_method<wm_scene_t, wm_scene_t>("save_scene", [this](const wm_scene_t& r) { return on_save_scene(r); });
+  rpc_.add_method<wm_transform_t, wm_transform_t>("transform", [this](const wm_transform_t& r) { return on_transform(r); });
+  rpc_.add_method<wm_relation_t, wm_value_t>("may_relate", [this](const wm_relation_t& r) {
+    for (const auto* c : {&r.subject, &r.object})
+      if (!ontology_.is_class(*c)) throw WmError("unknown concept '" + *c + "'");
+    wm_value_t v{};
+    v.type = wm_value_t::BOOL;
+    v.b = ontology_.may_relate(r.subject, r.predicate, r.object);
+    return v;
+  });
+
+  participant_.subscribe(channel("SB_WM_TXN"), [this](const StampedMessage& m) { on_txn_message(m); });
+  participant_.on_frame = [this](int64_t f, int64_t t) { on_frame(f, t); };
+}
+
+void WorldModelServer::recover() {
+  Journal::Recovered rec = journal_.recover();
+  std::string report;
+  if (rec.snapshot) {
+    std::vector<Element> elements;
+    std::vector<Relation> relations;
+    for (const auto& e : rec.snapshot->world.elements) elements.push_back(from_msg(e));
+    for (const auto& r : rec.snapshot->world.relations) relations.push_back(from_msg(r));
+    store_.reset(std::move(elements), std::move(relations), rec.snapshot->world.version, rec.snapshot->world.next_id);
+    for (const auto& c : rec.snapshot->recent) remember(c);
+    report += "snapshot at version " + std::to_string(store_.version());
+  } else if (!opt_.scene_file.empty() && rec.txns.empty()) {
+    load_scene_text(read_file(opt_.scene_file), opt_.scene_file, &report);
+    report = "new data directory; loaded scene " + opt_.scene_file + (report.empty() ? "" : " (" + report + ")");
+  }
+  long replayed = 0;
+  for (const auto& txn : rec.txns) {
+    if (txn.expected_version < store_.version()) continue;  // already in the snapshot
+    std::vector<Op> ops;
+    for (const auto& o : txn.ops) ops.push_back(from_msg(o));
+    const TxnResult r = store_.apply(ops, txn.expected_version);  // a failure here is a corrupt journal
+    wm_commit_t c{};
+    c.client_id = txn.client_id;
+    c.request_id = txn.request_id;
+    c.version = r.version;
+    c.ids = r.ids;
+    c.num_ids = static_cast<int32_t>(c.ids.size());
+    if (!txn.client_id.empty()) remember(c);
+    ++replayed;
+  }
+  if (replayed) report += (report.empty() ? "" : "; ") + std::string("replayed ") + std::to_string(replayed) + " journal records";
+  if (!rec.note.empty()) report += "; " + rec.note;
+  startup_report_ = "version " + std::to_string(store_.version()) + ", " + std::to_string(store_.elements().size()) +
+                    " elements" + (report.empty() ? "" : " (" + report + ")");
+}
+
+void WorldModelServer::remember(const wm_commit_t& c) {
+  const std::string key = txn_key(c.client_id, c.request_id);
+  if (recent_.emplace(key, c).second) recent_order_.push_back(key);
+  while (recent_order_.size() > opt_.recent_memory) {
+    recent_.erase(recent_order_.front());
+    recent_order_.pop_front();
+  }
+}
+
+void WorldModelServer::snapshot() {
+  wm_snapshot_t s{};
+  std::vector<const Element*> all;
+  for (const auto& [id, e] : store_.elements()) all.push_back(&e);
+  s.world = elements_reply(all);
+  for (const auto& key : recent_order_) s.recent.push_back(recent_.at(key));
+  s.num_recent = static_cast<int32_t>(s.recent.size());
+  journal_.write_snapshot(s);
+}
+
+wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
+  if (!txn.client_id.empty()) {
+    auto it = recent_.find(txn_key(txn.client_id, txn.request_id));
+    if (it != recent_.end()) return it->second;  // a retry of a committed transaction: once only
+  }
+  wm_commit_t c{};
+  c.client_id = txn.client_id;
+  c.request_id = txn.request_id;
+  TxnResult r;
+  try {
+    std::vector<Op> ops;
+    for (const auto& o : txn.ops) ops.push_back(from_msg(o));
+    r = store_.apply(ops, txn.expected_version);
+    txn.expected_version = r.version - 1;  // the journal records the version it applied to
+    try {
+      journal_.append(txn);
+    } catch (const WmError& e) {
+      store_.undo_last();
+      throw WmError(std::string("not committed, it could not be made durable: ") + e.what());
+    }
+  } catch (const WmError& e) {
+    ++rejected_;
+    c.version = store_.version();
+    c.error = e.what();
+    return c;
+  }
+  c.version = r.version;
+  c.ids = r.ids;
+  c.num_ids = static_cast<int32_t>(c.ids.size());
+  if (!txn.client_id.empty()) remember(c);
+  wm_change_t change{};
+  change.version = r.version;
+  for (const auto& op : r.effect) change.ops.push_back(to_msg(op));
+  change.num_ops = static_cast<int32_t>(change.ops.size());
+  pending_changes_.push_back(std::move(change));
+  if (journal_.records_since_snapshot() >= opt_.snapshot_every) snapshot();
+  if (opt_.wall_clock) on_frame(participant_.frame(), 0);  // publish the change now
+  return c;
+}
+
+void WorldModelServer::on_txn_message(const StampedMessage& m) {
+  wm_txn_t txn;
+  if (!decode_msg(m.data.data(), m.data.size(), txn))
+    throw WmError("SB_WM_TXN from " + m.stamp.sender + " in frame " + std::to_string(m.stamp.frame) +
+                  " is not a wm_txn_t");
+  wm_commit_t c = commit(txn);
+  pending_results_.push_back(std::move(c));
+}
+
+void WorldModelServer::on_frame(int64_t, int64_t) {
+  // Changes and lockstep results go out inside a frame so that they are stamped,
+  // counted and delivered in canonical order (RPC commits between frames wait here).
+  for (auto& c : pending_results_) participant_.publish(channel("SB_WM_TXN_RESULT"), c);
+  for (auto& ch : pending_changes_) participant_.publish(channel("SB_WM_CHANGES"), ch);
+  pending_results_.clear();
+  pending_changes_.clear();
+}
+
+wm_elements_t WorldModelServer::elements_reply(const std::vector<const Element*>& found) const {
+  wm_elements_t out{};
+  out.version = store_.version();
+  out.next_id = store_.next_id();
+  std::set<std::string> ids;
+  for (const Element* e : found) {
+    out.elements.push_back(to_msg(*e));
+    ids.insert(e->id);
+  }
+  out.num_elements = static_cast<int32_t>(out.elements.size());
+  for (const auto& r : store_.relations_touching(ids)) out.relations.push_back(to_msg(r));
+  out.num_relations = static_cast<int32_t>(out.relations.size());
+  return out;
+}
+
+wm_elements_t WorldModelServer::on_get(const wm_query_t& q) const {
+  std::vector<const Element*> found;
+  for (const auto& id : q.ids) {
+    const Element* e = store_.get(id);
+    if (!e) throw WmError("unknown element id '" + id + "'");
+    found.push_back(e);
+  }
+  return elements_reply(found);
+}
+
+wm_elements_t WorldModelServer::on_query(const wm_query_t& m) const {
+  Query q;
+  q.ids = m.ids;
+  q.type = m.type;
+  q.exact_type = m.exact_type;
+  q.label = m.label;
+  if (!q.type.empty() && !ontology_.is_class(q.type)) throw WmError("unknown type '" + q.type + "' in query");
+  q.properties = properties_from_msg(m.properties, "the query");
+  for (const auto& r : m.relations) q.relations.push_back(from_msg(r));
+  return elements_reply(store_.query(q));
+}
+
+void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {
+  Ontology onto = ontology_;  // the live ontology changes only if the whole scene loads
+  Prefixes px = prefixes_;
+  Scene scene = read_scene(text, onto, px, source);
+  WorldStore check(onto);
+  std::vector<Op> ops;
+  for (const auto& e : scene.elements) ops.push_back(Op{Op::AddElement, e, {}});
+  for (const auto& r : scene.relations) ops.push_back(Op{Op::AddRelation, {}, r});
+  if (!ops.empty()) check.apply(ops);  // validates every element and relation
+  ontology_ = onto;
+  prefixes_ = px;
+  store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
+  for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
+  snapshot();  // a scene load is made durable as a snapshot
+}
+
+wm_scene_t WorldModelServer::on_load_scene(const wm_scene_t& req) {
+  const std::string source = req.path.empty() ? "the request" : req.path;
+  const std::string text = req.path.empty() ? req.turtle : read_file(req.path);
+  wm_scene_t out{};
+  load_scene_text(text, source, &out.report);
+  out.version = store_.version();
+  wm_change_t change{};  // replicas resync on a scene load: it replaces everything
+  change.version = store_.version();
+  change.reset = true;
+  pending_changes_.push_back(change);
+  if (opt_.wall_clock) on_frame(participant_.frame(), 0);
+  return out;
+}
+
+wm_scene_t WorldModelServer::on_save_scene(const wm_scene_t& req) const {
+  wm_scene_t out{};
+  out.turtle = write_scene(store_, prefixes_);
+  out.version = store_.version();
+  if (!req.path.empty()) {
+    std::ofstream f(req.path, std::ios::binary | std::ios::trunc);
+    if (!(f << out.turtle)) throw WmError("cannot write " + req.path);
+    out.path = req.path;
+  }
+  return out;
+}
+
+wm_transform_t WorldModelServer::on_transform(const wm_transform_t& req) const {
+  const Eigen::Isometry3d t = transform(store_, req.from, req.to);
+  wm_transform_t out = req;
+  const Eigen::Quaterniond q(t.rotation());
+  for (int i = 0; i < 3; ++i) out.translation[i] = t.translation()[i];
+  out.rotation[0] = q.x();
+  out.rotation[1] = q.y();
+  out.rotation[2] = q.z();
+  out.rotation[3] = q.w();
+  return out;
+}
+
+RunResult WorldModelServer::run_until(std::function<bool()> should_stop) {
+  SB_INFO(kLog, "serving " << rpc_request_channel("WM") << " on " << bus_.url() << ": " << startup_report_);
+  participant_.on_frame = [this, should_stop](int64_t f, int64_t t) {
+    on_frame(f, t);
+    if (should_stop()) participant_.stop();
+  };
+  return participant_.run();
+}
+
+}  // namespace skillbus::wm

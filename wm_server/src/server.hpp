@@ -1,0 +1,77 @@
+// The world model server process (see wm_server/README.md for its channels and RPCs).
+#pragma once
+
+#include <deque>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "journal.hpp"
+#include "ontology.hpp"
+#include "rdf.hpp"
+#include "skillbus/lockstep.hpp"
+#include "skillbus/rpc.hpp"
+#include "skillbus_msgs/wm_change_t.hpp"
+#include "skillbus_msgs/wm_commit_t.hpp"
+#include "skillbus_msgs/wm_elements_t.hpp"
+#include "skillbus_msgs/wm_query_t.hpp"
+#include "skillbus_msgs/wm_scene_t.hpp"
+#include "skillbus_msgs/wm_transform_t.hpp"
+#include "skillbus_msgs/wm_txn_t.hpp"
+#include "store.hpp"
+
+namespace skillbus::wm {
+
+struct ServerOptions {
+  std::string data_dir = "wm_data";
+  std::vector<std::string> ontology_files;  // Turtle/OWL files, loaded in order
+  std::string scene_file;                   // loaded at start when the data directory is empty
+  std::string name = "wm";                  // lockstep participant name
+  bool wall_clock = false;
+  int64_t frame_period_ns = 10'000'000;     // wall-clock mode
+  long snapshot_every = 1000;               // commits between snapshots
+  size_t recent_memory = 4096;              // transactions remembered for exactly-once
+};
+
+class WorldModelServer {
+ public:
+  WorldModelServer(Bus& bus, ServerOptions options);
+  // Runs until the lockstep master ends the run, or `should_stop` says so (checked every frame).
+  RunResult run_until(std::function<bool()> should_stop);
+  const WorldStore& store() const { return store_; }
+  std::string startup_report() const { return startup_report_; }
+  long rejected() const { return rejected_; }
+
+ private:
+  skillbus_msgs::wm_commit_t commit(skillbus_msgs::wm_txn_t txn);
+  skillbus_msgs::wm_elements_t elements_reply(const std::vector<const Element*>& found) const;
+  skillbus_msgs::wm_elements_t on_get(const skillbus_msgs::wm_query_t& q) const;
+  skillbus_msgs::wm_elements_t on_query(const skillbus_msgs::wm_query_t& q) const;
+  skillbus_msgs::wm_scene_t on_load_scene(const skillbus_msgs::wm_scene_t& req);
+  skillbus_msgs::wm_scene_t on_save_scene(const skillbus_msgs::wm_scene_t& req) const;
+  skillbus_msgs::wm_transform_t on_transform(const skillbus_msgs::wm_transform_t& req) const;
+  void on_txn_message(const StampedMessage& m);
+  void on_frame(int64_t frame, int64_t sim_time_ns);
+  void recover();
+  void remember(const skillbus_msgs::wm_commit_t& c);
+  void snapshot();
+  void load_scene_text(const std::string& text, const std::string& source, std::string* report);
+
+  Bus& bus_;
+  ServerOptions opt_;
+  Prefixes prefixes_;
+  Ontology ontology_;
+  WorldStore store_;
+  Journal journal_;
+  LockstepParticipant participant_;
+  RpcServer rpc_;
+  std::map<std::string, skillbus_msgs::wm_commit_t> recent_;  // "client\nrequest" -> result
+  std::deque<std::string> recent_order_;
+  std::vector<skillbus_msgs::wm_change_t> pending_changes_;
+  std::vector<skillbus_msgs::wm_commit_t> pending_results_;
+  std::string startup_report_;
+  long rejected_ = 0;
+};
+
+}  // namespace skillbus::wm
