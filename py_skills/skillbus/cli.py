@@ -30,6 +30,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--lose-acks-every", type=int, default=0, help="test: lose every N-th ack")
     p.add_argument("--clock-timeout", type=float, default=10.0)
     p.add_argument("--message-timeout", type=float, default=2.0)
+    from skillbus.world import cli as wm_cli
+    wm_cli.add_parser(sub)
     return ap
 
 
@@ -39,6 +41,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "demo":
         from skillbus import demo
         return demo.main(args)
+    if args.command == "wm":
+        from skillbus.world import cli as wm_cli
+        return wm_cli.main(args)
     if args.command == "lockstep-participant":
         from skillbus import lockstep_demo
         return lockstep_demo.main(args)

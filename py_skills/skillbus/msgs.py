@@ -7,17 +7,7 @@ get a clear error instead of a bare ModuleNotFoundError when the build has not r
 
 try:
     import skillbus_msgs  # noqa: F401
-    from skillbus_msgs import (  # noqa: F401
-        channel_count_t,
-        header_t,
-        lockstep_ack_t,
-        lockstep_clock_t,
-        lockstep_join_t,
-        rpc_counter_t,
-        rpc_reply_t,
-        rpc_request_t,
-        test_sample_t,
-    )
+    from skillbus_msgs import *  # noqa: F401,F403  (every generated type)
 except ImportError as e:  # pragma: no cover - exercised only on a broken install
     raise ImportError(
         "skillbus_msgs (the generated LCM bindings) is not importable: run `make build`, "

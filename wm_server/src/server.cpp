@@ -266,7 +266,7 @@ wm_scene_t WorldModelServer::on_save_scene(const wm_scene_t& req) const {
 }
 
 wm_transform_t WorldModelServer::on_transform(const wm_transform_t& req) const {
-  const Eigen::Isometry3d t = transform(store_, req.from, req.to);
+  const Eigen::Isometry3d t = transform(store_, req.source, req.target);
   wm_transform_t out = req;
   const Eigen::Quaterniond q(t.rotation());
   for (int i = 0; i < 3; ++i) out.translation[i] = t.translation()[i];

@@ -1,0 +1,103 @@
+"""`skillbus wm ...`: look at and change the world model from a terminal."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from skillbus.bus import open_bus
+from skillbus.world.client import WorldModelError, WorldModelInterface
+from skillbus.world.element import Element
+
+
+def add_parser(sub) -> None:
+    wm = sub.add_parser("wm", help="the world model: get, query, load, save, tree")
+    wm.add_argument("--url", default=None, help="bus URL (default: $SKILLBUS_BUS_URL or the udpm default)")
+    wm.add_argument("--timeout", type=float, default=5.0)
+    wsub = wm.add_subparsers(dest="wm_command", required=True)
+    g = wsub.add_parser("get", help="show one element")
+    g.add_argument("id")
+    g.add_argument("--json", action="store_true")
+    q = wsub.add_parser("query", help="elements of a type (with subclasses), optionally with a label")
+    q.add_argument("--type", default="")
+    q.add_argument("--label", default="")
+    q.add_argument("--json", action="store_true")
+    ld = wsub.add_parser("load", help="replace the world with a Turtle scene")
+    ld.add_argument("file")
+    sv = wsub.add_parser("save", help="write the world as a Turtle scene")
+    sv.add_argument("file")
+    wsub.add_parser("tree", help="the containment tree with poses")
+
+
+def element_dict(e: Element) -> dict:
+    return {"id": e.id, "type": e.type, "label": e.label,
+            "properties": {p.key: p.values for p in e.properties},
+            "relations": [[r["src"], r["type"], r["dst"]] for r in e.getRelations()]}
+
+
+def print_element(e: Element) -> None:
+    print(f"{e.id}  ({e.type})  label={e.label!r}")
+    for p in sorted(e.properties, key=lambda p: p.key):
+        print(f"    {p.key} = {p.values[0] if len(p.values) == 1 else p.values}")
+    for r in e.getRelations():
+        print(f"    {r['src']} {r['type']} {r['dst']}")
+
+
+def pose_text(e: Element) -> str:
+    keys = ["skiros:PositionX", "skiros:PositionY", "skiros:PositionZ"]
+    if not any(e.hasProperty(k) for k in keys):
+        return ""
+    xyz = [e.getProperty(k).value if e.hasProperty(k) else 0.0 for k in keys]
+    return " at ({:.3f}, {:.3f}, {:.3f})".format(*xyz)
+
+
+def print_tree(wmi: WorldModelInterface) -> None:
+    elements = {e.id: e for e in wmi.get_elements()}
+    children: dict[str, list[str]] = {}
+    contained = set()
+    for r in wmi.get_relations(pred="skiros:contain"):
+        children.setdefault(r["src"], []).append(r["dst"])
+        contained.add(r["dst"])
+
+    def show(eid: str, depth: int, seen: set) -> None:
+        e = elements[eid]
+        print("  " * depth + f"{eid} [{e.label}]{pose_text(e)}")
+        if eid in seen:
+            print("  " * (depth + 1) + "(cycle)")
+            return
+        for c in sorted(children.get(eid, [])):
+            show(c, depth + 1, seen | {eid})
+
+    for root in sorted(set(elements) - contained):
+        show(root, 0, set())
+
+
+def main(args: argparse.Namespace) -> int:
+    try:
+        wmi = WorldModelInterface(open_bus(args.url), "cli", timeout=args.timeout)
+        c = args.wm_command
+        if c == "get":
+            e = wmi.get_element(args.id)
+            print(json.dumps(element_dict(e), indent=2)) if args.json else print_element(e)
+        elif c == "query":
+            found = wmi.resolve_elements(Element(args.type or "", args.label))
+            if args.json:
+                print(json.dumps([element_dict(e) for e in found], indent=2))
+            else:
+                for e in found:
+                    print(f"{e.id}  ({e.type})  label={e.label!r}")
+                print(f"{len(found)} element(s) at version {wmi.version}")
+        elif c == "load":
+            report = wmi.load_scene(args.file)
+            print(f"loaded {args.file}: version {wmi.version}, {len(wmi.get_elements())} elements"
+                  + (f"\nnotes: {report}" if report else ""))
+        elif c == "save":
+            wmi.save_scene(args.file)
+            print(f"saved version {wmi.version} to {args.file}")
+        elif c == "tree":
+            print_tree(wmi)
+        return 0
+    except (WorldModelError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1

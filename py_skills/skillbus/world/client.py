@@ -1,0 +1,253 @@
+"""WorldModelInterface: the world-model client a skill uses (SkiROS2's method names).
+
+Reads come from a local replica kept current by the server's change stream
+(SB_WM_CHANGES), so they do not go over the wire; a gap in versions makes the replica
+resync from a snapshot. Writes are transactions:
+
+* outside lockstep they are RPC calls (wm.commit), answered once durable; the call
+  returns when the replica has the change too (read your writes);
+* inside a lockstep participant (``participant=``) they are published on SB_WM_TXN
+  and applied by the server in canonical order in the next frame; their effect reaches
+  the replica two frames later (``commit_async``).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable
+
+from skillbus.bus import Bus, channel
+from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elements_t, wm_op_t, wm_query_t,
+                           wm_relation_t, wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
+from skillbus.rpc import RpcClient, RpcRemoteError
+from skillbus.world.convert import element_from_msg, op, property_msg, relation_msg
+from skillbus.world.element import Element
+
+Relation = tuple[str, str, str]
+
+
+class WorldModelError(RuntimeError):
+    """A request the world model refused; the message says why."""
+
+
+class WorldModelInterface:
+    def __init__(self, bus: Bus, name: str = "wmi", participant: Any = None, timeout: float = 5.0) -> None:
+        self.bus, self.participant, self.timeout = bus, participant, timeout
+        self.rpc = RpcClient(bus, "WM", name)
+        self._elements: dict[str, Element] = {}
+        self._relations: set[Relation] = set()
+        self._by_node: dict[str, set[Relation]] = {}
+        self.version = -1
+        self._txn_ids = 0
+        self.results: dict[int, wm_commit_t] = {}  # lockstep: request id -> result
+        if participant is not None:
+            participant.subscribe(channel("SB_WM_CHANGES"), lambda m: self._on_change(m.data))
+            participant.subscribe(channel("SB_WM_TXN_RESULT"), self._on_result)
+        else:
+            self._sub = bus.subscribe(channel("SB_WM_CHANGES"), lambda ch, data: self._on_change(data))
+        self.resync()
+
+    # -- replica ----------------------------------------------------------
+    def resync(self) -> None:
+        snap = self._call("snapshot", wm_query_t(), wm_elements_t)
+        self._elements = {m.id: element_from_msg(m) for m in snap.elements}
+        self._relations, self._by_node = set(), {}
+        for r in snap.relations:
+            self._add_rel((r.subject, r.predicate, r.object))
+        self.version = snap.version
+
+    def _add_rel(self, r: Relation) -> None:
+        self._relations.add(r)
+        self._by_node.setdefault(r[0], set()).add(r)
+        self._by_node.setdefault(r[2], set()).add(r)
+
+    def _remove_rel(self, r: Relation) -> None:
+        self._relations.discard(r)
+        for n in (r[0], r[2]):
+            self._by_node.get(n, set()).discard(r)
+
+    def _on_change(self, data: bytes) -> None:
+        ch = decode(wm_change_t, data)
+        if ch is None or ch.version <= self.version:
+            return
+        if ch.reset or ch.version != self.version + 1:
+            self.resync()  # a scene load, or we missed a change
+            return
+        for o in ch.ops:
+            rel = (o.relation.subject, o.relation.predicate, o.relation.object)
+            if o.kind in (wm_op_t.ADD_ELEMENT, wm_op_t.UPDATE_ELEMENT):
+                self._elements[o.element.id] = element_from_msg(o.element)
+            elif o.kind == wm_op_t.REMOVE_ELEMENT:
+                self._elements.pop(o.element.id, None)
+            elif o.kind == wm_op_t.ADD_RELATION:
+                self._add_rel(rel)
+            elif o.kind == wm_op_t.REMOVE_RELATION:
+                self._remove_rel(rel)
+        self.version = ch.version
+
+    def _on_result(self, m) -> None:
+        r = decode(wm_commit_t, m.data)
+        if r is not None and r.client_id == self.rpc.client_id:
+            self.results[r.request_id] = r
+
+    def sync(self, version: int | None = None, timeout: float | None = None) -> None:
+        """Dispatches the bus until the replica is at `version` (default: the server's)."""
+        if version is None:
+            version = self._server_version()
+        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
+        while self.version < version:
+            if time.monotonic() >= deadline:
+                self.resync()
+                return
+            self.bus.handle(min(0.05, max(0.0, deadline - time.monotonic())))
+
+    def _server_version(self) -> int:
+        return self._call("get", _query(), wm_elements_t).version  # no ids: just the version
+
+    # -- reads (replica) ----------------------------------------------------
+    def _with_relations(self, e: Element) -> Element:
+        out = e.clone()
+        for (s, p, o) in sorted(self._by_node.get(e.id, ())):
+            out.addRelation(s, p, o)
+        return out
+
+    def get_element(self, eid: str) -> Element:
+        if eid not in self._elements:
+            raise WorldModelError(f"no element {eid} in the world model (version {self.version})")
+        return self._with_relations(self._elements[eid])
+
+    def get_elements(self) -> list[Element]:
+        return [self._with_relations(e) for _, e in sorted(self._elements.items())]
+
+    def get_relations(self, subj: str = "", pred: str = "", obj: str = "") -> list[dict]:
+        pool = self._by_node.get(subj or obj, set()) if (subj or obj) else self._relations
+        return [{"src": s, "type": p, "dst": o, "state": True, "abstract": False} for (s, p, o) in sorted(pool)
+                if subj in ("", s) and pred in ("", p) and obj in ("", o)]
+
+    def resolve_elements(self, e: Element) -> list[Element]:
+        """Elements matching `e`: its type (with subclasses, asked of the server's
+        ontology), its label if set, its properties that have values, and its relations
+        ("-1" stands for the candidate)."""
+        q = _query(type_=e.type if e.type not in ("", "Unknown") else "", label=e.label)
+        q.properties = [property_msg(p) for p in e.properties if p.values]
+        q.num_properties = len(q.properties)
+        for r in e.getRelations():
+            q.relations.append(relation_msg("" if r["src"] == "-1" else r["src"], r["type"],
+                                            "" if r["dst"] == "-1" else r["dst"]))
+        q.num_relations = len(q.relations)
+        found = self._call("query", q, wm_elements_t)
+        return [self._with_relations(self._elements[m.id]) if m.id in self._elements else element_from_msg(m)
+                for m in found.elements]
+
+    # -- writes ----------------------------------------------------------------
+    def commit(self, ops: list[wm_op_t], expected_version: int = -1) -> wm_commit_t:
+        txn = self._txn(ops, expected_version)
+        if self.participant is not None:
+            raise WorldModelError("inside a lockstep participant, write with commit_async()")
+        result = self._call("commit", txn, wm_commit_t)
+        self.sync(result.version)
+        return result
+
+    def commit_async(self, ops: list[wm_op_t], expected_version: int = -1) -> int:
+        """Lockstep: publishes the transaction for this frame; returns its request id
+        (its result appears in `results` when the server's answer arrives)."""
+        if self.participant is None:
+            raise WorldModelError("commit_async needs a lockstep participant")
+        txn = self._txn(ops, expected_version)
+        self.participant.publish(channel("SB_WM_TXN"), txn)
+        return txn.request_id
+
+    def _txn(self, ops: list[wm_op_t], expected_version: int) -> wm_txn_t:
+        txn = wm_txn_t()
+        txn.header = header_t()
+        self._txn_ids += 1
+        txn.client_id, txn.request_id = self.rpc.client_id, self._txn_ids
+        txn.expected_version = expected_version
+        txn.ops, txn.num_ops = ops, len(ops)
+        return txn
+
+    def _relation_ops(self, e: Element, eid: str) -> list[wm_op_t]:
+        want = set(e._resolved_relations() if eid == e.id else
+                   [(eid if s == "-1" else s, p, eid if o == "-1" else o) for (s, p, o) in e._resolved_relations()])
+        have = set(self._by_node.get(eid, ()))
+        return ([op(wm_op_t.REMOVE_RELATION, relation=r) for r in sorted(have - want)] +
+                [op(wm_op_t.ADD_RELATION, relation=r) for r in sorted(want - have)])
+
+    def add_element(self, e: Element) -> Element:
+        """Adds `e` with its relations; returns it with the id the server gave it."""
+        result = self.commit([op(wm_op_t.ADD_ELEMENT, element=e)])
+        eid = result.ids[0]
+        rel_ops = self._relation_ops(e, eid)
+        if rel_ops:
+            self.commit(rel_ops)
+        e._id = eid
+        return self.get_element(eid)
+
+    def update_element(self, e: Element) -> Element:
+        """Writes type, label, properties and relations of `e` (relations touching it are
+        made to match e's)."""
+        if e.isAbstract():
+            raise WorldModelError(f"cannot update {e.printState()}: it has no id (add it first)")
+        self.commit([op(wm_op_t.UPDATE_ELEMENT, element=e)] + self._relation_ops(e, e.id))
+        return self.get_element(e.id)
+
+    def update_properties(self, e: Element) -> Element:
+        """Writes type, label and properties only."""
+        self.commit([op(wm_op_t.UPDATE_ELEMENT, element=e)])
+        return self.get_element(e.id)
+
+    def remove_element(self, e: Element | str) -> None:
+        eid = e if isinstance(e, str) else e.id
+        self.commit([op(wm_op_t.REMOVE_ELEMENT, element=Element("", "", eid))])
+
+    def set_relation(self, subj: str, pred: str, obj: str, value: bool = True) -> None:
+        rel = (subj, pred, obj)
+        if value and rel not in self._relations:
+            self.commit([op(wm_op_t.ADD_RELATION, relation=rel)])
+        elif not value and rel in self._relations:
+            self.commit([op(wm_op_t.REMOVE_RELATION, relation=rel)])
+
+    # -- server-side questions -----------------------------------------------
+    def get_transform(self, source: str, target: str) -> tuple[list[float], list[float]]:
+        """Pose of `source` in `target`: (translation xyz, quaternion xyzw)."""
+        req = wm_transform_t()
+        req.source, req.target = source, target
+        rep = self._call("transform", req, wm_transform_t)
+        return list(rep.translation), list(rep.rotation)
+
+    def may_relate(self, subject_type: str, relation: str, object_type: str) -> bool:
+        """Abstract (concept-level) relation: may a `subject_type` `relation` an `object_type`?"""
+        return self._call("may_relate", relation_msg(subject_type, relation, object_type), wm_value_t).b
+
+    def load_scene(self, path: str | None = None, turtle: str | None = None) -> str:
+        req = wm_scene_t()
+        if path is not None:
+            with open(path, encoding="utf-8") as f:  # read here: the server may be on another host
+                req.turtle = f.read()
+        else:
+            req.turtle = turtle or ""
+        rep = self._call("load_scene", req, wm_scene_t, timeout=max(self.timeout, 30.0))
+        self.sync(rep.version)
+        return rep.report
+
+    def save_scene(self, path: str | None = None) -> str:
+        rep = self._call("save_scene", wm_scene_t(), wm_scene_t, timeout=max(self.timeout, 30.0))
+        if path is not None:
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(rep.turtle)
+        return rep.turtle
+
+    def _call(self, method: str, req: Any, rep_type: type, timeout: float | None = None) -> Any:
+        try:
+            return self.rpc.call(method, req, rep_type, timeout=timeout or self.timeout)
+        except RpcRemoteError as e:
+            raise WorldModelError(str(e)) from None
+
+
+def _query(ids: list[str] | None = None, type_: str = "", label: str = "", exact: bool = False) -> wm_query_t:
+    q = wm_query_t()
+    q.ids = ids or []
+    q.num_ids = len(q.ids)
+    q.type, q.exact_type, q.label = type_, exact, label
+    return q
+
