@@ -135,8 +135,9 @@ class RpcClient:
         self.next_request_id = 1
         self.retries = 0
         self.bad_input = BadInputCounter(f"rpc-client {area}")
-        self._waiting_for = 0
-        self._reply: Any = None
+        # Replies by request id for the calls in progress. A dict, not one slot, so that a
+        # call made from a handler that runs while another call waits does not steal its reply.
+        self._pending: dict[int, Any] = {}
         self._sub = bus.subscribe(reply_channel(area), self._on_reply)
 
     def close(self) -> None:
@@ -147,8 +148,8 @@ class RpcClient:
         if rep is None:
             self.bad_input.record(ch, "not an rpc_reply_t", len(data))
             return
-        if rep.client_id == self.client_id and rep.request_id == self._waiting_for and self._reply is None:
-            self._reply = rep
+        if rep.client_id == self.client_id and self._pending.get(rep.request_id, 0) is None:
+            self._pending[rep.request_id] = rep
 
     def call_raw(self, method: str, payload: bytes, timeout: float = 2.0,
                  retry_interval: float = 0.1) -> bytes:
@@ -158,12 +159,12 @@ class RpcClient:
         req.deadline_ns = time.time_ns() + int(timeout * 1e9)
         req.method, req.payload, req.payload_size = method, payload, len(payload)
         buf = req.encode()
-        self._waiting_for, self._reply = req.request_id, None
-        start = time.monotonic()
-        deadline = start + timeout
+        rid = req.request_id
+        self._pending[rid] = None
+        deadline = time.monotonic() + timeout
         attempts = 0
         try:
-            while self._reply is None:
+            while self._pending[rid] is None:
                 now = time.monotonic()
                 if now >= deadline:
                     break
@@ -172,14 +173,13 @@ class RpcClient:
                     self.retries += 1
                 attempts += 1
                 resend_at = min(deadline, now + retry_interval)
-                while self._reply is None:
+                while self._pending[rid] is None:
                     left = resend_at - time.monotonic()
                     if left <= 0:
                         break
                     self.bus.handle(left)
         finally:
-            self._waiting_for = 0
-        rep = self._reply
+            rep = self._pending.pop(rid)
         if rep is None:
             raise RpcTimeout(f"rpc {self.area}.{method}: no reply on {reply_channel(self.area)} "
                              f"within {timeout:.1f} s ({attempts} attempts)")

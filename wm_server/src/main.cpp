@@ -14,7 +14,7 @@ void on_signal(int) { g_stop = 1; }
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv,
-                  {"url", "data", "ontology", "scene", "name", "period-ms", "snapshot-every"}, {"wall-clock"});
+                  {"url", "data", "ontology", "scene", "name", "period-ms", "snapshot-every", "crash-after-commits"}, {"wall-clock"});
   wm::ServerOptions o;
   o.data_dir = args.str("data", "wm_data");
   o.ontology_files = args.list("ontology");
@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   o.wall_clock = args.flag("wall-clock");
   o.frame_period_ns = static_cast<int64_t>(args.real("period-ms", 10.0) * 1e6);
   o.snapshot_every = args.num("snapshot-every", 1000);
+  o.crash_after_commits = args.num("crash-after-commits", -1);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<wm::WorldModelServer> server;
   try {

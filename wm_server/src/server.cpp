@@ -1,5 +1,6 @@
 #include "server.hpp"
 
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 
@@ -153,6 +154,10 @@ wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
     c.version = store_.version();
     c.error = e.what();
     return c;
+  }
+  if (++commits_ == opt_.crash_after_commits) {
+    SB_ERROR(kLog, "crashing on purpose after " << commits_ << " commits (--crash-after-commits)");
+    std::_Exit(137);  // durable but not acknowledged: the retry after a restart must not apply it again
   }
   c.version = r.version;
   c.ids = r.ids;

@@ -32,6 +32,7 @@ struct ServerOptions {
   int64_t frame_period_ns = 10'000'000;     // wall-clock mode
   long snapshot_every = 1000;               // commits between snapshots
   size_t recent_memory = 4096;              // transactions remembered for exactly-once
+  long crash_after_commits = -1;            // tests: die (_exit) after this many durable commits, before replying
 };
 
 class WorldModelServer {
@@ -72,6 +73,7 @@ class WorldModelServer {
   std::vector<skillbus_msgs::wm_commit_t> pending_results_;
   std::string startup_report_;
   long rejected_ = 0;
+  long commits_ = 0;
 };
 
 }  // namespace skillbus::wm

@@ -40,6 +40,10 @@ class WorldModelInterface:
         self.version = -1
         self._txn_ids = 0
         self.results: dict[int, wm_commit_t] = {}  # lockstep: request id -> result
+        # Transactions are named (client id, request id) for exactly-once. Under lockstep the
+        # name must not vary between runs (it is in the digest): the participant's name.
+        self._txn_client_id = f"lockstep:{participant.name}" if participant is not None else self.rpc.client_id
+        self._stale = False
         if participant is not None:
             participant.subscribe(channel("SB_WM_CHANGES"), lambda m: self._on_change(m.data))
             participant.subscribe(channel("SB_WM_TXN_RESULT"), self._on_result)
@@ -55,6 +59,11 @@ class WorldModelInterface:
         for r in snap.relations:
             self._add_rel((r.subject, r.predicate, r.object))
         self.version = snap.version
+        self._stale = False
+
+    def _fresh(self) -> None:
+        if self._stale:
+            self.resync()
 
     def _add_rel(self, r: Relation) -> None:
         self._relations.add(r)
@@ -68,10 +77,12 @@ class WorldModelInterface:
 
     def _on_change(self, data: bytes) -> None:
         ch = decode(wm_change_t, data)
-        if ch is None or ch.version <= self.version:
+        if ch is None or ch.version <= self.version or self._stale:
             return
         if ch.reset or ch.version != self.version + 1:
-            self.resync()  # a scene load, or we missed a change
+            # A scene load, or we missed a change: resync before the next read. Not here:
+            # this handler may run inside another call's wait.
+            self._stale = True
             return
         for o in ch.ops:
             rel = (o.relation.subject, o.relation.predicate, o.relation.object)
@@ -87,7 +98,7 @@ class WorldModelInterface:
 
     def _on_result(self, m) -> None:
         r = decode(wm_commit_t, m.data)
-        if r is not None and r.client_id == self.rpc.client_id:
+        if r is not None and r.client_id == self._txn_client_id:
             self.results[r.request_id] = r
 
     def sync(self, version: int | None = None, timeout: float | None = None) -> None:
@@ -95,11 +106,12 @@ class WorldModelInterface:
         if version is None:
             version = self._server_version()
         deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
-        while self.version < version:
+        while self.version < version and not self._stale:
             if time.monotonic() >= deadline:
-                self.resync()
-                return
+                break
             self.bus.handle(min(0.05, max(0.0, deadline - time.monotonic())))
+        if self.version < version:
+            self.resync()
 
     def _server_version(self) -> int:
         return self._call("get", _query(), wm_elements_t).version  # no ids: just the version
@@ -112,14 +124,17 @@ class WorldModelInterface:
         return out
 
     def get_element(self, eid: str) -> Element:
+        self._fresh()
         if eid not in self._elements:
             raise WorldModelError(f"no element {eid} in the world model (version {self.version})")
         return self._with_relations(self._elements[eid])
 
     def get_elements(self) -> list[Element]:
+        self._fresh()
         return [self._with_relations(e) for _, e in sorted(self._elements.items())]
 
     def get_relations(self, subj: str = "", pred: str = "", obj: str = "") -> list[dict]:
+        self._fresh()
         pool = self._by_node.get(subj or obj, set()) if (subj or obj) else self._relations
         return [{"src": s, "type": p, "dst": o, "state": True, "abstract": False} for (s, p, o) in sorted(pool)
                 if subj in ("", s) and pred in ("", p) and obj in ("", o)]
@@ -161,7 +176,7 @@ class WorldModelInterface:
         txn = wm_txn_t()
         txn.header = header_t()
         self._txn_ids += 1
-        txn.client_id, txn.request_id = self.rpc.client_id, self._txn_ids
+        txn.client_id, txn.request_id = self._txn_client_id, self._txn_ids
         txn.expected_version = expected_version
         txn.ops, txn.num_ops = ops, len(ops)
         return txn

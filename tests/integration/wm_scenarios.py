@@ -1,0 +1,177 @@
+"""World-model scenarios that run inside the test sandbox, next to a running wm_server.
+Each asserts what it checks and exits non-zero with the failing line when a check fails.
+Usage: wm_scenarios.py api | bad_input | writer N | lockstep_writer FRAMES"""
+
+from __future__ import annotations
+
+import json
+import random
+import sys
+
+from skillbus.bus import channel, open_bus
+from skillbus.msgs import rpc_reply_t, wm_elements_t, wm_op_t
+from skillbus.rpc import RpcClient, RpcRemoteError
+from skillbus.world import Element, WorldModelError, WorldModelInterface
+from skillbus.world.client import _query
+from skillbus.world.convert import op
+
+
+def expect_error(fn, needle: str) -> str:
+    try:
+        fn()
+    except WorldModelError as e:
+        assert needle in str(e), f"expected {needle!r} in {e}"
+        return str(e)
+    raise AssertionError(f"expected an error with {needle!r}")
+
+
+def api() -> None:
+    wmi = WorldModelInterface(open_bus(), "api-test")
+    v0 = wmi.version
+    # get and query (subclasses)
+    assert wmi.get_element("skiros:Cube-2").label == "red"
+    assert [e.id for e in wmi.resolve_elements(Element("skiros:Product"))] == \
+        ["skiros:Cube-2", "skiros:Cube-3", "skiros:Cube-4"]
+    assert [e.id for e in wmi.resolve_elements(Element("skiros:Location"))] == \
+        ["skiros:Bin-5", "skiros:Scene-0", "skiros:Table-1"]
+    assert [e.label for e in wmi.resolve_elements(Element("skiros:Cube", "green"))] == ["green"]
+    on_table = Element("skiros:Cube")
+    on_table.addRelation("skiros:Table-1", "skiros:contain", "-1")
+    assert len(wmi.resolve_elements(on_table)) == 3
+    # add with relations; the server gives the id
+    new = Element("skiros:Cylinder", "can")
+    new.setProperty("skiros:PositionX", 0.2)
+    new.addRelation("skiros:Table-1", "skiros:contain", "-1")
+    new = wmi.add_element(new)
+    assert new.id == "skiros:Cylinder-9", new.id
+    assert wmi.get_relations("skiros:Table-1", "skiros:contain", new.id)
+    # update properties and relations
+    new.setProperty("skiros:PositionX", 0.3)
+    new.setRelation("skiros:Bin-5", "skiros:contain", "-1")
+    new.removeRelations(new.getRelations(subj="skiros:Table-1"))
+    wmi.update_element(new)
+    assert wmi.get_element(new.id).getProperty("skiros:PositionX").value == 0.3
+    assert wmi.get_relations(subj="skiros:Bin-5", obj=new.id) and not wmi.get_relations("skiros:Table-1", "", new.id)
+    # set_relation both ways
+    wmi.set_relation("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2")
+    assert wmi.get_element("skiros:Cube-2").hasRelation("skiros:Gripper-7", "skiros:contain", "-1")
+    wmi.set_relation("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2", False)
+    assert not wmi.get_relations("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2")
+    # transactions: all or nothing, and version conflicts
+    before = (wmi.version, [e.printState(True) for e in wmi.get_elements()])
+    expect_error(lambda: wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "ok")),
+                                     op(wm_op_t.ADD_RELATION, relation=("skiros:Table-1", "skiros:contain",
+                                                                        "skiros:Ghost-1"))]),
+                 "operation 2: relation (skiros:Table-1 skiros:contain skiros:Ghost-1): no element skiros:Ghost-1")
+    wmi.sync()
+    assert (wmi.version, [e.printState(True) for e in wmi.get_elements()]) == before
+    expect_error(lambda: wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube"))], wmi.version - 1),
+                 "version conflict")
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "expected"))], wmi.version)
+    # remove takes relations along
+    wmi.remove_element(new)
+    assert not wmi.get_relations(obj=new.id)
+    expect_error(lambda: wmi.get_element(new.id), "no element")
+    # transforms through the tree: Scene-0 > Table-1 (x 0.5) > Cube-2 (-0.1, 0.15, 0.425)
+    t, q = wmi.get_transform("skiros:Cube-2", "map")
+    assert [round(x, 9) for x in t] == [0.4, 0.15, 0.425] and q == [0.0, 0.0, 0.0, 1.0], (t, q)
+    t, _ = wmi.get_transform("skiros:Cube-2", "skiros:Cube-3")
+    assert [round(x, 9) for x in t] == [-0.1, 0.25, 0.0], t
+    # abstract relations
+    assert wmi.may_relate("skiros:Table", "skiros:contain", "skiros:Cube")
+    assert not wmi.may_relate("skiros:Cube", "skiros:contain", "skiros:Table")
+    # save, change, load: back to the saved world
+    saved = wmi.save_scene()
+    snapshot = [e.printState(True) for e in wmi.get_elements()]
+    wmi.remove_element("skiros:Cube-3")
+    wmi.load_scene(turtle=saved)
+    assert [e.printState(True) for e in wmi.get_elements()] == snapshot
+    assert wmi.version > v0
+    print(json.dumps({"ok": True, "version": wmi.version}))
+
+
+def bad_input() -> None:
+    wmi = WorldModelInterface(open_bus(), "bad-input-test")
+    before = (wmi.version, [e.printState(True) for e in wmi.get_elements()])
+    expect_error(lambda: wmi.get_element("skiros:Nope-1"), "no element skiros:Nope-1")
+    expect_error(lambda: wmi._call("get", _query(ids=["skiros:Nope-1"]), wm_elements_t),
+                 "unknown element id 'skiros:Nope-1'")
+    bad = Element("skiros:Cube", "bad")
+    bad.setProperty("skiros:PositionX", "left")
+    expect_error(lambda: wmi.add_element(bad), "skiros:PositionX of skiros:Cube-")
+    expect_error(lambda: wmi.add_element(Element("skiros:Unicorn")), "unknown type 'skiros:Unicorn'")
+    expect_error(lambda: wmi.set_relation("skiros:Table-1", "skiros:contain", "skiros:Ghost-3"),
+                 "no element skiros:Ghost-3")
+    expect_error(lambda: wmi.set_relation("skiros:Table-1", "skiros:likes", "skiros:Cube-2"),
+                 "unknown relation type skiros:likes")
+    expect_error(lambda: wmi.load_scene(turtle="@prefix x: <http://x#> .\nx:a x:b \"unterminated .\n"),
+                 "malformed Turtle")
+    expect_error(lambda: wmi.get_transform("skiros:Cube-2", "nowhere"), "unknown frame 'nowhere'")
+    # a truncated and a garbage request: no reply can be matched, the server must live on
+    bus = open_bus()
+    raw = RpcClient(bus, "WM", "raw")
+    for payload in (b"\x00\x01", b"garbage" * 10):
+        try:
+            raw.call_raw("commit", payload, timeout=1.0)
+            raise AssertionError("a garbage commit was accepted")
+        except RpcRemoteError as e:
+            assert e.status == rpc_reply_t.BAD_REQUEST and "does not decode" in str(e), e
+    for junk in (b"", b"\xff" * 40, b"\x12\x34" * 300):
+        bus.publish(channel("SB_WM_REQ"), junk)
+        bus.publish(channel("SB_WM_TXN"), junk)
+    wmi.sync()
+    assert (wmi.version, [e.printState(True) for e in wmi.get_elements()]) == before
+    print(json.dumps({"ok": True}))
+
+
+def writer(n: int) -> None:
+    """Adds n elements labelled w0..w{n-1}, one transaction each; prints each acknowledged
+    index. Retries ride through a server restart (RPC timeout 20 s)."""
+    wmi = WorldModelInterface(open_bus(), "crash-writer", timeout=20.0)
+    for i in range(n):
+        wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", f"w{i}"))])
+        print(f"ack {i}", flush=True)
+    print(json.dumps({"ok": True, "written": n}), flush=True)
+
+
+def lockstep_writer(frames: int) -> None:
+    """A lockstep participant that writes a scripted sequence of transactions."""
+    from skillbus.lockstep import LockstepParticipant
+    bus = open_bus()
+    p = LockstepParticipant(bus, "writer")
+    wmi = WorldModelInterface(bus, "writer", participant=p)
+    rng = random.Random(7)  # seeded: the same script every run
+
+    def on_frame(frame: int, t: int) -> None:
+        if frame % 3 == 0:
+            c = Element("skiros:Cube", f"c{frame}")
+            c.setProperty("skiros:PositionX", rng.uniform(-0.2, 0.2))
+            wmi.commit_async([op(wm_op_t.ADD_ELEMENT, element=c)])
+        cubes = [e for e in wmi.get_elements() if e.type == "skiros:Cube"]
+        if cubes and frame % 3 == 1:
+            e = cubes[rng.randrange(len(cubes))]
+            e.setProperty("skiros:PositionY", rng.uniform(-0.2, 0.2))
+            wmi.commit_async([op(wm_op_t.UPDATE_ELEMENT, element=e)])
+        if cubes and frame % 5 == 2:
+            e = cubes[rng.randrange(len(cubes))]
+            wmi.commit_async([op(wm_op_t.ADD_RELATION, relation=("skiros:Table-1", "skiros:contain", e.id))])
+
+    p.on_frame = on_frame
+    r = p.run()
+    print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "version": wmi.version,
+                      "digest": r.digest_hex, "elements": len(wmi.get_elements())}), flush=True)
+    sys.exit(0 if r.ok else 1)
+
+
+if __name__ == "__main__":
+    what = sys.argv[1]
+    if what == "api":
+        api()
+    elif what == "bad_input":
+        bad_input()
+    elif what == "writer":
+        writer(int(sys.argv[2]))
+    elif what == "lockstep_writer":
+        lockstep_writer(int(sys.argv[2]))
+    else:
+        sys.exit(f"unknown scenario {what}")
