@@ -33,6 +33,7 @@ demo: build
 
 bench: build
 	$(PY) bench/lockstep_overhead.py
+	$(PY) bench/wm_query.py
 
 clean:
 	rm -rf $(BUILD)

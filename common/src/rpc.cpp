@@ -145,7 +145,11 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
     if (now >= deadline) break;
     bus_.publish(req_channel_, buf.data(), buf.size());
     if (attempts++ > 0) ++retries_;
-    const auto resend_at = std::min(deadline, now + opts.retry_interval);
+    // Back off (x2 per attempt, to 1 s) so that a reply lost to an overrun receiver is
+    // not followed by a flood of resent large replies.
+    const auto backoff = std::min<std::chrono::milliseconds>(std::chrono::milliseconds(1000),
+                                                             opts.retry_interval * (1 << std::min(attempts - 1, 10)));
+    const auto resend_at = std::min(deadline, now + backoff);
     while (!got_reply_) {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(resend_at - clock::now());
       if (left.count() <= 0) break;

@@ -172,7 +172,9 @@ class RpcClient:
                 if attempts:
                     self.retries += 1
                 attempts += 1
-                resend_at = min(deadline, now + retry_interval)
+                # Back off (x2 per attempt, to 1 s) so that a reply lost to an overrun
+                # receiver is not followed by a flood of resent large replies.
+                resend_at = min(deadline, now + min(1.0, retry_interval * 2 ** (attempts - 1)))
                 while self._pending[rid] is None:
                     left = resend_at - time.monotonic()
                     if left <= 0:

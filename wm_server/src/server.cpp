@@ -48,10 +48,18 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
 
   rpc_.add_method<wm_query_t, wm_elements_t>("get", [this](const wm_query_t& q) { return on_get(q); });
   rpc_.add_method<wm_query_t, wm_elements_t>("query", [this](const wm_query_t& q) { return on_query(q); });
-  rpc_.add_method<wm_query_t, wm_elements_t>("snapshot", [this](const wm_query_t&) {
-    std::vector<const Element*> all;
-    for (const auto& [id, e] : store_.elements()) all.push_back(&e);
-    return elements_reply(all);
+  // Pages keep each reply small: one lost UDP fragment loses a whole LCM message, and a
+  // multi-megabyte reply overruns a default socket buffer.
+  rpc_.add_method<wm_query_t, wm_elements_t>("snapshot", [this](const wm_query_t& q) {
+    if (q.offset < 0 || q.limit < 0) throw WmError("snapshot: offset and limit must not be negative");
+    std::vector<const Element*> page;
+    int32_t i = 0;
+    for (const auto& [id, e] : store_.elements()) {
+      if (i++ < q.offset) continue;
+      if (q.limit > 0 && static_cast<int32_t>(page.size()) >= q.limit) break;
+      page.push_back(&e);
+    }
+    return elements_reply(page);
   });
   rpc_.add_method<wm_txn_t, wm_commit_t>("commit", [this](const wm_txn_t& t) {
     wm_commit_t c = commit(t);
@@ -191,16 +199,18 @@ void WorldModelServer::on_frame(int64_t, int64_t) {
   pending_changes_.clear();
 }
 
-wm_elements_t WorldModelServer::elements_reply(const std::vector<const Element*>& found) const {
+wm_elements_t WorldModelServer::elements_reply(const std::vector<const Element*>& found, bool ids_only) const {
   wm_elements_t out{};
   out.version = store_.version();
   out.next_id = store_.next_id();
+  out.total = static_cast<int64_t>(store_.elements().size());
   std::set<std::string> ids;
   for (const Element* e : found) {
-    out.elements.push_back(to_msg(*e));
+    out.elements.push_back(ids_only ? to_msg(Element{e->id, e->type, e->label, {}}) : to_msg(*e));
     ids.insert(e->id);
   }
   out.num_elements = static_cast<int32_t>(out.elements.size());
+  if (ids_only) return out;
   for (const auto& r : store_.relations_touching(ids)) out.relations.push_back(to_msg(r));
   out.num_relations = static_cast<int32_t>(out.relations.size());
   return out;
@@ -225,7 +235,7 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m) const {
   if (!q.type.empty() && !ontology_.is_class(q.type)) throw WmError("unknown type '" + q.type + "' in query");
   q.properties = properties_from_msg(m.properties, "the query");
   for (const auto& r : m.relations) q.relations.push_back(from_msg(r));
-  return elements_reply(store_.query(q));
+  return elements_reply(store_.query(q), m.ids_only);
 }
 
 void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {

@@ -46,7 +46,7 @@ class WorldModelServer {
 
  private:
   skillbus_msgs::wm_commit_t commit(skillbus_msgs::wm_txn_t txn);
-  skillbus_msgs::wm_elements_t elements_reply(const std::vector<const Element*>& found) const;
+  skillbus_msgs::wm_elements_t elements_reply(const std::vector<const Element*>& found, bool ids_only = false) const;
   skillbus_msgs::wm_elements_t on_get(const skillbus_msgs::wm_query_t& q) const;
   skillbus_msgs::wm_elements_t on_query(const skillbus_msgs::wm_query_t& q) const;
   skillbus_msgs::wm_scene_t on_load_scene(const skillbus_msgs::wm_scene_t& req);

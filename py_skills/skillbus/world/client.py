@@ -52,13 +52,36 @@ class WorldModelInterface:
         self.resync()
 
     # -- replica ----------------------------------------------------------
+    SNAPSHOT_PAGE = 200  # elements per snapshot reply: small messages survive UDP
+
     def resync(self) -> None:
-        snap = self._call("snapshot", wm_query_t(), wm_elements_t)
-        self._elements = {m.id: element_from_msg(m) for m in snap.elements}
+        """Replaces the replica with the server's world, read in pages of one version."""
+        for _attempt in range(10):
+            elements: dict[str, Element] = {}
+            relations: set[Relation] = set()
+            version, offset = None, 0
+            while True:
+                q = wm_query_t()
+                q.offset, q.limit = offset, self.SNAPSHOT_PAGE
+                page = self._call("snapshot", q, wm_elements_t)
+                if version is None:
+                    version = page.version
+                elif page.version != version:
+                    break  # the world changed while we read: start over
+                elements.update((m.id, element_from_msg(m)) for m in page.elements)
+                relations.update((r.subject, r.predicate, r.object) for r in page.relations)
+                offset += len(page.elements)
+                if not page.elements or offset >= page.total:
+                    break
+            if version is not None and (offset >= page.total or not page.elements) and page.version == version:
+                break
+        else:
+            raise WorldModelError("could not read a consistent snapshot: the world kept changing")
+        self._elements = elements
         self._relations, self._by_node = set(), {}
-        for r in snap.relations:
-            self._add_rel((r.subject, r.predicate, r.object))
-        self.version = snap.version
+        for r in relations:
+            self._add_rel(r)
+        self.version = version
         self._stale = False
 
     def _fresh(self) -> None:
@@ -150,7 +173,9 @@ class WorldModelInterface:
             q.relations.append(relation_msg("" if r["src"] == "-1" else r["src"], r["type"],
                                             "" if r["dst"] == "-1" else r["dst"]))
         q.num_relations = len(q.relations)
+        q.ids_only = True  # the elements themselves come from the replica
         found = self._call("query", q, wm_elements_t)
+        self._fresh()
         return [self._with_relations(self._elements[m.id]) if m.id in self._elements else element_from_msg(m)
                 for m in found.elements]
 
