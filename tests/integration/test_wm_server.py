@@ -113,3 +113,30 @@ def test_two_lockstep_runs_of_the_same_writes_give_the_same_world_and_digest(tmp
     assert a[1]["version"] == b[1]["version"] and a[1]["elements"] == b[1]["elements"]
     assert a[0]["digest"] == b[0]["digest"]
     assert a[2]["version"] == a[1]["version"] - 0 or a[2]["version"] <= a[1]["version"]
+
+
+def test_cli_get_query_tree_save_load(sandbox, tmp_path):
+    import sys
+    start_server(sandbox, wm_binary(), tmp_path / "data")
+
+    def cli(*args):
+        p = sandbox.start(f"cli-{args[0]}-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", "wm", *map(str, args)])
+        rc = sandbox.wait(p, 60)
+        return rc, p.stdout(), p.stderr()
+
+    rc, out, _ = cli("get", "skiros:Cube-2")
+    assert rc == 0 and "label='red'" in out and "skiros:PositionZ = 0.425" in out
+    rc, out, _ = cli("query", "--type", "skiros:Product")
+    assert rc == 0 and "3 element(s)" in out
+    rc, out, _ = cli("tree")
+    assert rc == 0 and "  skiros:Table-1 [table] at (0.500, 0.000, 0.000)" in out
+    assert "    skiros:Cube-2 [red] at (-0.100, 0.150, 0.425)" in out
+    rc, out, _ = cli("save", tmp_path / "saved.ttl")
+    assert rc == 0 and (tmp_path / "saved.ttl").read_text().count("owl:NamedIndividual") == 9
+    rc, out, _ = cli("load", tmp_path / "saved.ttl")
+    assert rc == 0 and "9 elements" in out
+    rc, _, err = cli("get", "skiros:Nope-1")
+    assert rc == 1 and "no element skiros:Nope-1" in err
+    (tmp_path / "broken.ttl").write_text("this is not turtle")
+    rc, _, err = cli("load", tmp_path / "broken.ttl")
+    assert rc == 1 and "malformed Turtle" in err

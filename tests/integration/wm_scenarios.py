@@ -9,7 +9,7 @@ import random
 import sys
 
 from skillbus.bus import channel, open_bus
-from skillbus.msgs import rpc_reply_t, wm_elements_t, wm_op_t
+from skillbus.msgs import rpc_reply_t, wm_change_t, wm_elements_t, wm_op_t
 from skillbus.rpc import RpcClient, RpcRemoteError
 from skillbus.world import Element, WorldModelError, WorldModelInterface
 from skillbus.world.client import _query
@@ -87,6 +87,15 @@ def api() -> None:
     wmi.load_scene(turtle=saved)
     assert [e.printState(True) for e in wmi.get_elements()] == snapshot
     assert wmi.version > v0
+    # a replica that sees a gap in versions resyncs before its next read
+    other = WorldModelInterface(open_bus(), "other-writer")
+    other.add_element(Element("skiros:Cube", "behind-your-back"))
+    gap = wm_change_t()
+    gap.version = wmi.version + 5  # as if changes had been lost
+    wmi._on_change(gap.encode())
+    assert wmi._stale
+    assert any(e.label == "behind-your-back" for e in wmi.get_elements())
+    assert wmi.version == other.version
     print(json.dumps({"ok": True, "version": wmi.version}))
 
 
