@@ -207,9 +207,10 @@ class Element:
         self.addRelation(subj, predicate, obj)
 
     def hasRelation(self, subj: str, predicate: str, obj: str, value: bool = True, abstract: bool = False) -> bool:
-        return any(_rel_key(r) == _rel_key({"src": subj, "type": predicate, "dst": obj}, self._id)
-                   and r["state"] == value for r in self._relations) or \
-            {"src": subj, "type": predicate, "dst": obj, "state": value, "abstract": abstract} in self._relations
+        """True if the element has the relation; "-1" (in it or in the query) is this element."""
+        want = _rel_key({"src": subj, "type": predicate, "dst": obj}, self._id or "-1")
+        return any(_rel_key(r, self._id or "-1") == want and r["state"] == value and r["abstract"] == abstract
+                   for r in self._relations)
 
     def removeRelation(self, relation: dict) -> None:
         self._relations.remove(relation)
