@@ -1,0 +1,21 @@
+#include "compound.hpp"
+
+namespace skillbus::skills {
+
+State CompoundNode::step() {
+  if (children_.empty()) {
+    set_result("no children");
+    return State::Success;
+  }
+  const State s = processor_->process(children_);
+  set_result(processor_->message());
+  return s;
+}
+
+State CompoundNode::on_preempt() {
+  for (const auto& c : children_) c->preempt();
+  set_result("preempted", -1);
+  return State::Failure;
+}
+
+}  // namespace skillbus::skills

@@ -1,0 +1,27 @@
+// Selector: ticks the children in order until one succeeds. Returns at the first child
+// that runs or succeeds, preempting the later children that still run; fails when all
+// fail. Failed children are tried again (restarted) on the next tick.
+#pragma once
+
+#include "../processor.hpp"
+
+namespace skillbus::skills {
+
+class Selector : public Processor {
+ public:
+  State process(const Children& children) override {
+    for (size_t i = 0; i < children.size(); ++i) {
+      const State s = children[i]->tick();
+      if (s != State::Failure) {
+        preempt_from(children, i + 1);
+        say(children[i]->type() + (s == State::Running ? " running" : " succeeded"));
+        return s;
+      }
+    }
+    say("all children failed");
+    return State::Failure;
+  }
+  std::string name() const override { return "Selector"; }
+};
+
+}  // namespace skillbus::skills
