@@ -1,0 +1,25 @@
+"""Everything the skill model names, in one import (SkiROS2's API; port a SkiROS2 skill
+library by changing its imports to ``from skillbus.skill import ...``).
+
+Descriptions:  SkillDescription, ParamTypes, Element, the Condition* classes
+Primitives:    PrimitiveBase (step / success / fail), State
+Compounds:     SkillBase (expand, self.skill), the processors
+"""
+
+from skillbus.skill.conditions import (ConditionAbstractRelation, ConditionBase, ConditionGenerate,
+                                       ConditionHasProperty, ConditionIsSpecified, ConditionOnType, ConditionOr,
+                                       ConditionProperty, ConditionRelation)
+from skillbus.skill.description import SkillDescription
+from skillbus.skill.params import Param, ParamHandler, ParamTypes
+from skillbus.skill.processors import (InferInvalid, Loop, NoFail, ParallelFf, ParallelFs, Processor,
+                                       RetryOnFail, Selector, SelectorStar, Sequential, Serial, SerialStar)
+from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, SkillWrapper, State
+from skillbus.world.element import Element
+
+__all__ = [
+    "ConditionAbstractRelation", "ConditionBase", "ConditionGenerate", "ConditionHasProperty",
+    "ConditionIsSpecified", "ConditionOnType", "ConditionOr", "ConditionProperty", "ConditionRelation",
+    "Element", "InferInvalid", "Loop", "NoFail", "ParallelFf", "ParallelFs", "Param", "ParamHandler",
+    "ParamTypes", "PrimitiveBase", "Processor", "RetryOnFail", "Selector", "SelectorStar", "Sequential",
+    "Serial", "SerialStar", "SkillBase", "SkillCore", "SkillDescription", "SkillWrapper", "State",
+]
