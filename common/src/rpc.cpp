@@ -117,11 +117,13 @@ void RpcClient::on_reply(const std::string& ch, const uint8_t* data, size_t size
     bad_.record(ch, "not an rpc_reply_t", size);
     return;
   }
-  if (rep.client_id != client_id_ || rep.request_id != waiting_for_ || got_reply_) return;
-  got_reply_ = true;
-  reply_status_ = rep.status;
-  reply_error_ = rep.error;
-  reply_payload_.assign(rep.payload.begin(), rep.payload.end());
+  if (rep.client_id != client_id_) return;
+  auto it = pending_.find(rep.request_id);
+  if (it == pending_.end() || it->second.done) return;
+  it->second.done = true;
+  it->second.status = rep.status;
+  it->second.error = rep.error;
+  it->second.payload.assign(rep.payload.begin(), rep.payload.end());
 }
 
 Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const CallOptions& opts) {
@@ -137,10 +139,11 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
   req.payload_size = static_cast<int32_t>(req.payload.size());
   const Bytes buf = encode_msg(req);
 
-  waiting_for_ = req.request_id;
-  got_reply_ = false;
+  const int64_t rid = req.request_id;
+  pending_[rid] = Pending{};
+  auto done = [this, rid] { return pending_[rid].done; };
   int attempts = 0;
-  while (!got_reply_) {
+  while (!done()) {
     const auto now = clock::now();
     if (now >= deadline) break;
     bus_.publish(req_channel_, buf.data(), buf.size());
@@ -150,20 +153,21 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
     const auto backoff = std::min<std::chrono::milliseconds>(std::chrono::milliseconds(1000),
                                                              opts.retry_interval * (1 << std::min(attempts - 1, 10)));
     const auto resend_at = std::min(deadline, now + backoff);
-    while (!got_reply_) {
+    while (!done()) {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(resend_at - clock::now());
       if (left.count() <= 0) break;
       bus_.handle(left);
     }
   }
-  waiting_for_ = 0;
-  if (!got_reply_) {
+  Pending result = std::move(pending_[rid]);
+  pending_.erase(rid);
+  if (!result.done) {
     const double secs = std::chrono::duration<double>(opts.timeout).count();
     throw RpcTimeout("rpc " + area_ + "." + method + ": no reply on " + rpc_reply_channel(area_) + " within " +
                      std::to_string(secs).substr(0, 5) + " s (" + std::to_string(attempts) + " attempts)");
   }
-  if (reply_status_ != rpc_reply_t::OK) throw RpcRemoteError(reply_status_, reply_error_);
-  return reply_payload_;
+  if (result.status != rpc_reply_t::OK) throw RpcRemoteError(result.status, result.error);
+  return result.payload;
 }
 
 }  // namespace skillbus

@@ -32,6 +32,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--message-timeout", type=float, default=2.0)
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
+    from skillbus.skill import cli as skill_cli
+    skill_cli.add_parsers(sub)
     return ap
 
 
@@ -41,6 +43,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "demo":
         from skillbus import demo
         return demo.main(args)
+    if args.command in ("skills-process", "skills", "run", "stop"):
+        from skillbus.skill import cli as skill_cli
+        return skill_cli.main(args)
     if args.command == "wm":
         from skillbus.world import cli as wm_cli
         return wm_cli.main(args)

@@ -92,6 +92,8 @@ def test_parameter_kinds():
         p["Width"].value = "wide"
     with pytest.raises(KeyError, match="no parameter 'Nope'"):
         p["Nope"]
+    p["Waypoints"].value = [1, 2]  # a list-typed parameter holds the list as one value
+    assert p["Waypoints"].values == [[1, 2]] and p["Waypoints"].value == [1, 2]
 
 
 def test_conditions_and_planning():

@@ -118,11 +118,15 @@ class RpcClient {
   std::string area_, req_channel_, client_id_;
   int sub_ = -1;
   int64_t next_request_id_ = 1;
-  int64_t waiting_for_ = 0;
-  bool got_reply_ = false;
-  int8_t reply_status_ = 0;
-  std::string reply_error_;
-  Bytes reply_payload_;
+  struct Pending {
+    bool done = false;
+    int8_t status = 0;
+    std::string error;
+    Bytes payload;
+  };
+  // By request id: a call made from a handler that runs while another call waits must
+  // not take its reply.
+  std::map<int64_t, Pending> pending_;
   long retries_ = 0;
   BadInputCounter bad_;
 };

@@ -60,7 +60,8 @@ class Param:
 
     @value.setter
     def value(self, v: Any) -> None:
-        self.setValues([v])
+        self._check(v)
+        self._values = [v]
 
     @property
     def values(self) -> list:

@@ -19,6 +19,11 @@ class CompoundNode : public Node {
   State on_preempt() override;
   void finish() override { processor_->reset(); }
   void on_reset() override { processor_->reset(); }
+  // For nodes that learn their children when they start (a compound skill's expansion).
+  void install(std::unique_ptr<Processor> processor, Children children) {
+    processor_ = std::move(processor);
+    children_ = std::move(children);
+  }
 
  private:
   std::unique_ptr<Processor> processor_;

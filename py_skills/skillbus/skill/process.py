@@ -1,0 +1,172 @@
+"""A skill process: loads skill libraries, announces their skills to a skill manager,
+and serves the manager's ticks for its primitives and expansions for its compounds.
+
+    skillbus skills-process --name arm --library my_skills.arm --library my_skills.gripper
+
+Channels: RPC `SB_SKPROC_<NAME>_REQ/REP` (methods tick, expand); calls SKILL.register.
+Under lockstep it is a participant (its world-model replica follows the frames).
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import json
+import logging
+import os
+import sys
+import time
+import traceback
+from typing import Any
+
+from skillbus.bus import Bus, open_bus
+from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t
+from skillbus.rpc import RpcClient, RpcError, RpcServer
+from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
+from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
+
+log = logging.getLogger("skills-process")
+
+
+def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
+    """Imports each module and instantiates each skill class it defines, to check it.
+    Returns implementations by label, and the errors (each naming its library or skill);
+    a library or skill that fails is left out and the rest still load."""
+    found: dict[str, type] = {}
+    errors: list[str] = []
+    for mod_name in modules:
+        try:
+            mod = importlib.import_module(mod_name)
+        except Exception as e:
+            errors.append(f"library {mod_name}: {type(e).__name__}: {e}")
+            continue
+        for name, cls in inspect.getmembers(mod, inspect.isclass):
+            if cls.__module__ != mod.__name__ or not issubclass(cls, (PrimitiveBase, SkillBase)):
+                continue
+            try:
+                skill = cls()
+                if isinstance(skill, PrimitiveBase) and skill.onInit() is False:
+                    raise RuntimeError("onInit() returned False")
+            except Exception as e:
+                errors.append(f"skill {mod_name}.{name}: {type(e).__name__}: {e}")
+                continue
+            if skill.label in found:
+                errors.append(f"skill {mod_name}.{name}: label {skill.label!r} is taken by another skill")
+                continue
+            found[skill.label] = cls
+    return found, errors
+
+
+class SkillProcess:
+    def __init__(self, bus: Bus, name: str, libraries: list[str], wmi: Any = None) -> None:
+        self.bus, self.name, self.wmi = bus, name, wmi
+        self.classes, self.errors = load_libraries(libraries)
+        for e in self.errors:
+            log.error("%s", e)
+        self.area = "SKPROC_" + name.upper()
+        self.instances: dict[int, PrimitiveBase] = {}
+        self.server = RpcServer(bus, self.area)
+        self.server.add_method("tick", self.on_tick, skill_tick_t, skill_tick_reply_t)
+        self.server.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
+        self.incarnation = time.time_ns()  # identity of this run of the process, not behaviour
+
+    def registration(self) -> skill_register_t:
+        m = skill_register_t()
+        m.process, m.rpc_area, m.incarnation = self.name, self.area, self.incarnation
+        m.skills = [description_msg(cls()) for _, cls in sorted(self.classes.items())]
+        m.num_skills = len(m.skills)
+        m.errors, m.num_errors = list(self.errors), len(self.errors)
+        return m
+
+    def register(self, timeout: float = 30.0) -> skill_register_t:
+        """Announces the skills to the manager; retries until it answers or `timeout`."""
+        client = RpcClient(self.bus, "SKILL", self.name)
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                reply = client.call("register", self.registration(), skill_register_t, timeout=2.0)
+                for e in reply.errors:
+                    log.error("the manager refused: %s", e)
+                return reply
+            except RpcError:
+                if time.monotonic() >= deadline:
+                    raise
+
+    # -- RPC methods ------------------------------------------------------------
+    def _reply(self, skill: SkillCore | None, state: State, message: str, code: int = 0) -> skill_tick_reply_t:
+        r = skill_tick_reply_t()
+        r.state, r.message, r.code = int(state), message, code
+        if skill is not None:
+            r.progress = float(getattr(skill, "progress", 0.0))
+            r.params = [param_msg(p) for _, p in skill.params.items()]
+            r.num_params = len(r.params)
+        return r
+
+    def on_tick(self, t: skill_tick_t) -> skill_tick_reply_t:
+        cls = self.classes.get(t.label)
+        if cls is None or not issubclass(cls, PrimitiveBase):
+            return self._reply(None, State.Failure, f"{self.name} has no primitive {t.label!r}", -1)
+        skill = self.instances.get(t.instance)
+        hook = "onStart"
+        try:
+            if t.action == skill_tick_t.START:
+                skill = cls()
+                skill.wmi = self.wmi
+                apply_param_msgs(skill, t.params)
+                self.instances[t.instance] = skill
+                if skill.onStart() is False:
+                    return self._reply(skill, State.Failure, skill.message or f"{t.label}: onStart() returned False", -1)
+                hook = "execute"
+                state = skill.execute()
+            elif skill is None:
+                return self._reply(None, State.Failure, f"{t.label}: no running instance {t.instance}", -1)
+            elif t.action == skill_tick_t.EXECUTE:
+                hook = "execute"
+                apply_param_msgs(skill, t.params)
+                state = skill.execute()
+            elif t.action == skill_tick_t.PREEMPT:
+                hook = "onPreempt"
+                state = skill.onPreempt()
+            elif t.action == skill_tick_t.END:
+                hook = "onEnd"
+                skill.onEnd()
+                self.instances.pop(t.instance, None)
+                return self._reply(skill, skill.state, skill.message, skill.code)
+            else:
+                return self._reply(skill, State.Failure, f"unknown tick action {t.action}", -1)
+            if not isinstance(state, State):
+                return self._reply(skill, State.Failure,
+                                   f"{t.label}.{hook}() returned {state!r}; return self.step/success/fail(...)", -1)
+            return self._reply(skill, state, skill.message, skill.code)
+        except Exception as e:  # a skill's bug fails the skill, never the process
+            log.error("%s.%s failed:\n%s", t.label, hook, traceback.format_exc())
+            if skill is not None and t.action != skill_tick_t.START:
+                self.instances.pop(t.instance, None)
+            return self._reply(skill, State.Failure, f"{t.label}.{hook}() raised {type(e).__name__}: {e}", -1)
+
+    def on_expand(self, t: skill_tick_t) -> skill_tree_t:
+        cls = self.classes.get(t.label)
+        if cls is None or not issubclass(cls, SkillBase):
+            out = skill_tree_t()
+            out.error = f"{self.name} has no compound skill {t.label!r}"
+            return out
+        try:
+            skill = cls()
+            skill.wmi = self.wmi
+            apply_param_msgs(skill, t.params)
+            return tree_msg(skill.tree())
+        except Exception as e:
+            out = skill_tree_t()
+            out.error = f"{t.label}.expand() raised {type(e).__name__}: {e}"
+            return out
+
+
+def main(args) -> int:
+    sys.path.insert(0, os.getcwd())  # libraries next to where the user runs it
+    bus = open_bus(args.url)
+    proc = SkillProcess(bus, args.name, args.library)
+    print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
+    reply = proc.register(timeout=args.register_timeout)
+    log.info("registered %d skill(s) with the manager (%d refused)", len(proc.classes), len(reply.errors))
+    while True:
+        bus.handle(1.0)

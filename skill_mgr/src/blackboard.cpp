@@ -1,0 +1,67 @@
+#include "blackboard.hpp"
+
+#include <sstream>
+
+namespace skillbus::skills {
+
+bool Blackboard::has(const std::string& key) const {
+  auto it = values_.find(key);
+  return it != values_.end() && !it->second.values.empty();
+}
+
+const Param* Blackboard::get(const std::string& key) const {
+  auto it = values_.find(key);
+  return it == values_.end() ? nullptr : &it->second;
+}
+
+void Blackboard::set(const std::string& key, const Param& p) {
+  Param copy = p;
+  copy.key = key;
+  values_[key] = std::move(copy);
+}
+
+std::shared_ptr<Scope> Scope::child(std::map<std::string, std::string> remap, std::map<std::string, Param> specify) const {
+  auto s = std::make_shared<Scope>();
+  s->parent_ = std::make_shared<Scope>(*this);
+  s->remap_ = std::move(remap);
+  s->specify_ = std::move(specify);
+  return s;
+}
+
+std::string Scope::key(const std::string& own) const {
+  auto it = remap_.find(own);
+  const std::string mine = it == remap_.end() ? own : it->second;
+  return parent_ ? parent_->key(mine) : mine;
+}
+
+const Param* Scope::specified(const std::string& own) const {
+  auto it = specify_.find(own);
+  return it == specify_.end() ? nullptr : &it->second;
+}
+
+std::string value_text(const skillbus_msgs::skill_value_t& v) {
+  using skillbus_msgs::skill_value_t;
+  std::ostringstream os;
+  switch (v.type) {
+    case skill_value_t::STRING: os << v.s; break;
+    case skill_value_t::INT: os << v.i; break;
+    case skill_value_t::FLOAT: os << v.f; break;
+    case skill_value_t::BOOL: os << (v.b ? "true" : "false"); break;
+    case skill_value_t::ELEMENT: os << (v.element.id.empty() ? v.element.type : v.element.id); break;
+    case skill_value_t::JSON: os << v.s; break;
+    default: os << "?";
+  }
+  return os.str();
+}
+
+std::string params_text(const std::vector<Param>& params) {
+  std::string out;
+  for (const auto& p : params) {
+    out += p.key + "=";
+    for (size_t i = 0; i < p.values.size(); ++i) out += (i ? "," : "") + value_text(p.values[i]);
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace skillbus::skills

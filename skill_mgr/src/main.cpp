@@ -1,0 +1,42 @@
+// skill_mgr: the skill manager. See skill_mgr/README.md.
+#include <csignal>
+#include <cstdio>
+
+#include "../../common/apps/args.hpp"
+#include "manager.hpp"
+
+using namespace skillbus;
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+}  // namespace
+
+int main(int argc, char** argv) {
+  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms"}, {"wall-clock"});
+  skills::ManagerOptions o;
+  o.name = args.str("name", "skill_mgr");
+  o.wall_clock = args.flag("wall-clock");
+  o.frame_period_ns = static_cast<int64_t>(args.real("period-ms", 10.0) * 1e6);
+  const double hz = args.real("tick-hz", 25.0);
+  if (hz <= 0) apps::Args::die("--tick-hz must be positive");
+  o.tick_period_ns = static_cast<int64_t>(1e9 / hz);
+  if (o.tick_period_ns % o.frame_period_ns != 0)
+    apps::Args::die("the tick period (1/--tick-hz) must be a whole number of frames (--period-ms)");
+  o.tick_timeout = std::chrono::milliseconds(args.num("tick-timeout-ms", 1000));
+  std::unique_ptr<Bus> bus;
+  std::unique_ptr<skills::Manager> mgr;
+  try {
+    bus = open_bus(args.str("url"));
+    mgr = std::make_unique<skills::Manager>(*bus, o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "skill_mgr: cannot start: %s\n", e.what());
+    return 2;
+  }
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGINT, on_signal);
+  const RunResult r = mgr->run_until([] { return g_stop != 0; });
+  std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"digest\": \"%s\"}\n", r.ok ? "true" : "false",
+              r.error.c_str(), static_cast<long long>(r.frames), r.digest_hex().c_str());
+  return r.ok ? 0 : 1;
+}

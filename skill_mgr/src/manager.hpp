@@ -1,0 +1,61 @@
+// The skill manager process (see skill_mgr/README.md for its RPCs and channels).
+#pragma once
+
+#include <deque>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "registry.hpp"
+#include "remote_nodes.hpp"
+#include "skillbus/lockstep.hpp"
+#include "skillbus/rpc.hpp"
+#include "skillbus_msgs/skill_progress_t.hpp"
+#include "skillbus_msgs/skill_start_t.hpp"
+#include "skillbus_msgs/skill_task_t.hpp"
+
+namespace skillbus::skills {
+
+struct ManagerOptions {
+  std::string name = "skill_mgr";         // lockstep participant name
+  bool wall_clock = false;
+  int64_t frame_period_ns = 10'000'000;   // wall-clock mode
+  int64_t tick_period_ns = 40'000'000;    // skill ticks: 25 Hz of (sim) time
+  std::chrono::milliseconds tick_timeout{1000};
+};
+
+struct Task {
+  int64_t id = 0;
+  std::string type, label;
+  Blackboard blackboard;
+  std::unique_ptr<TaskContext> ctx;
+  std::unique_ptr<Node> root;
+  int64_t ticks = 0;
+  bool stop_requested = false;
+};
+
+class Manager {
+ public:
+  Manager(Bus& bus, ManagerOptions options);
+  RunResult run_until(std::function<bool()> should_stop);
+  const Registry& registry() const { return registry_; }
+
+ private:
+  void on_frame(int64_t frame, int64_t sim_time_ns);
+  void begin(const skillbus_msgs::skill_start_t& req, int64_t id);
+  void tick(Task& t);
+  void publish_progress(const Task& t);
+  RpcClient& client(const std::string& area);
+
+  Bus& bus_;
+  ManagerOptions opt_;
+  Registry registry_;
+  LockstepParticipant participant_;
+  RpcServer rpc_;
+  std::map<std::string, std::unique_ptr<RpcClient>> clients_;
+  std::map<int64_t, std::unique_ptr<Task>> tasks_;
+  std::deque<std::pair<int64_t, skillbus_msgs::skill_start_t>> starts_;  // applied at the next tick
+  int64_t next_task_ = 1;
+};
+
+}  // namespace skillbus::skills

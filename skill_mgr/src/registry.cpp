@@ -1,0 +1,44 @@
+#include "registry.hpp"
+
+#include <set>
+
+namespace skillbus::skills {
+
+std::vector<std::string> Registry::add(const skillbus_msgs::skill_register_t& reg) {
+  std::vector<std::string> refused;
+  for (auto it = by_label_.begin(); it != by_label_.end();)
+    it = it->second.process == reg.process ? by_label_.erase(it) : std::next(it);
+  for (const auto& d : reg.skills) {
+    if (d.type.empty() || d.label.empty()) {
+      refused.push_back("a skill of " + reg.process + " has no type or label");
+      continue;
+    }
+    auto it = by_label_.find(d.label);
+    if (it != by_label_.end()) {
+      refused.push_back("skill " + d.label + " of " + reg.process + ": the label is served by " + it->second.process);
+      continue;
+    }
+    by_label_[d.label] = Implementation{d, reg.process, reg.rpc_area};
+  }
+  return refused;
+}
+
+std::vector<const Implementation*> Registry::find(const std::string& type, const std::string& label) const {
+  std::vector<const Implementation*> out;
+  for (const auto& [l, impl] : by_label_)
+    if (impl.description.type == type && (label.empty() || l == label)) out.push_back(&impl);
+  return out;
+}
+
+const Implementation* Registry::by_label(const std::string& label) const {
+  auto it = by_label_.find(label);
+  return it == by_label_.end() ? nullptr : &it->second;
+}
+
+std::vector<std::string> Registry::types() const {
+  std::set<std::string> t;
+  for (const auto& [l, impl] : by_label_) t.insert(impl.description.type);
+  return {t.begin(), t.end()};
+}
+
+}  // namespace skillbus::skills

@@ -1,0 +1,35 @@
+// The skills the manager knows: implementations (by label) announced by skill
+// processes, grouped by type (the description), with the process that serves each.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "skillbus_msgs/skill_description_t.hpp"
+#include "skillbus_msgs/skill_register_t.hpp"
+
+namespace skillbus::skills {
+
+struct Implementation {
+  skillbus_msgs::skill_description_t description;
+  std::string process;
+  std::string rpc_area;
+};
+
+class Registry {
+ public:
+  // Takes a process's announcement (replacing what it announced before); returns what
+  // was refused, each naming the skill and why.
+  std::vector<std::string> add(const skillbus_msgs::skill_register_t& reg);
+  // Implementations of a type, in label order; with a label, only that one.
+  std::vector<const Implementation*> find(const std::string& type, const std::string& label = "") const;
+  const Implementation* by_label(const std::string& label) const;
+  const std::map<std::string, Implementation>& all() const { return by_label_; }
+  std::vector<std::string> types() const;
+
+ private:
+  std::map<std::string, Implementation> by_label_;
+};
+
+}  // namespace skillbus::skills

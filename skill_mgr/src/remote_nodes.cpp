@@ -1,0 +1,217 @@
+#include "remote_nodes.hpp"
+
+#include <cstdio>
+
+#include "skillbus_msgs/skill_tree_t.hpp"
+
+namespace skillbus::skills {
+
+using skillbus_msgs::skill_param_t;
+using skillbus_msgs::skill_tick_t;
+
+namespace {
+
+State to_state(int8_t s) {
+  switch (s) {
+    case 2: return State::Running;
+    case 3: return State::Success;
+    default: return State::Failure;
+  }
+}
+
+std::string seconds(std::chrono::milliseconds d) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", static_cast<double>(d.count()) / 1000.0);
+  return buf;
+}
+
+}  // namespace
+
+std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb,
+                                 std::string* missing) {
+  std::vector<Param> out;
+  for (const auto& decl : d.params) {
+    Param p = decl;
+    const std::string key = scope.key(decl.key);
+    if (const Param* fixed = scope.specified(decl.key)) {
+      p.values = fixed->values;
+    } else if (decl.param_type == skill_param_t::REQUIRED && decl.num_defaults > 0 && decl.data_type != "element") {
+      p.values = decl.defaults;  // static: overwrites the blackboard every run
+      bb.set(key, p);
+    } else if (bb.has(key)) {
+      p.values = bb.get(key)->values;
+    } else if (decl.num_defaults > 0) {
+      p.values = decl.defaults;  // a default, or (for now) an abstract element to ground
+    } else {
+      p.values.clear();
+    }
+    p.num_values = static_cast<int32_t>(p.values.size());
+    if (missing && missing->empty() && decl.param_type == skill_param_t::REQUIRED && p.values.empty())
+      *missing = "missing parameter " + decl.key + (key != decl.key ? " (blackboard key " + key + ")" : "") + " of " +
+                 d.type;
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& impl, std::shared_ptr<Scope> scope) {
+  if (impl.description.compound) return std::make_unique<RemoteCompound>(ctx, impl, std::move(scope));
+  return std::make_unique<RemotePrimitive>(ctx, impl, std::move(scope));
+}
+
+// ---------------------------------------------------------------- primitive
+
+RemotePrimitive::RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope)
+    : Node(impl.description.type, impl.description.label), ctx_(ctx), impl_(std::move(impl)), scope_(std::move(scope)) {}
+
+bool RemotePrimitive::start() {
+  std::string missing;
+  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, &missing);
+  if (!missing.empty()) {
+    set_result(missing, -1);
+    return false;
+  }
+  instance_ = ctx_.next_instance++;
+  first_ = true;
+  return true;
+}
+
+State RemotePrimitive::call(int8_t action) {
+  skill_tick_t t{};
+  t.label = impl_.description.label;
+  t.instance = instance_;
+  t.action = action;
+  t.params = params_;
+  t.num_params = static_cast<int32_t>(params_.size());
+  CallOptions opts;
+  opts.timeout = ctx_.tick_timeout;
+  opts.retry_interval = std::chrono::milliseconds(100);
+  try {
+    const auto reply = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tick_reply_t>("tick", t, opts);
+    set_result(reply.message, reply.code, reply.progress);
+    for (const auto& p : reply.params) {
+      if (scope_->specified(p.key) || p.values.empty()) continue;
+      ctx_.blackboard.set(scope_->key(p.key), p);
+    }
+    if (!reply.params.empty()) params_ = reply.params;
+    return to_state(reply.state);
+  } catch (const RpcTimeout&) {
+    set_result("skill process " + impl_.process + " did not answer the tick of " + impl_.description.label +
+                   " within " + seconds(ctx_.tick_timeout),
+               -1);
+  } catch (const RpcError& e) {
+    set_result("skill process " + impl_.process + " failed the tick of " + impl_.description.label + ": " + e.what(),
+               -1);
+  }
+  return State::Failure;
+}
+
+State RemotePrimitive::step() {
+  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr);
+  const int8_t action = first_ ? skill_tick_t::START : skill_tick_t::EXECUTE;
+  first_ = false;
+  return call(action);
+}
+
+State RemotePrimitive::on_preempt() {
+  const State s = call(skill_tick_t::PREEMPT);
+  return s == State::Running ? State::Failure : s;
+}
+
+void RemotePrimitive::finish() {
+  if (instance_ == 0) return;
+  const std::string msg = message();
+  const int c = code();
+  call(skill_tick_t::END);
+  set_result(msg, c);  // the end does not overwrite the result
+  instance_ = 0;
+}
+
+// ---------------------------------------------------------------- compound
+
+RemoteCompound::RemoteCompound(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope)
+    : CompoundNode(impl.description.type, impl.description.label, make_processor("SerialStar")),
+      ctx_(ctx),
+      impl_(std::move(impl)),
+      scope_(std::move(scope)) {}
+
+bool RemoteCompound::start() {
+  std::string missing;
+  const auto params = gather_params(impl_.description, *scope_, ctx_.blackboard, &missing);
+  if (!missing.empty()) {
+    set_result(missing, -1);
+    return false;
+  }
+  skill_tick_t t{};
+  t.label = impl_.description.label;
+  t.action = skill_tick_t::EXPAND;
+  t.params = params;
+  t.num_params = static_cast<int32_t>(params.size());
+  CallOptions opts;
+  opts.timeout = ctx_.tick_timeout;
+  skillbus_msgs::skill_tree_t tree;
+  try {
+    tree = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tree_t>("expand", t, opts);
+  } catch (const RpcError& e) {
+    set_result("cannot expand " + impl_.description.label + " (process " + impl_.process + "): " + e.what(), -1);
+    return false;
+  }
+  if (!tree.error.empty() || tree.nodes.empty()) {
+    set_result(tree.error.empty() ? "expand of " + impl_.description.label + " gave no tree" : tree.error, -1);
+    return false;
+  }
+  // Build the nodes in preorder; each non-root node goes under its parent.
+  std::vector<CompoundNode*> groups(tree.nodes.size(), nullptr);
+  std::vector<std::shared_ptr<Scope>> scopes(tree.nodes.size());
+  scopes[0] = scope_;
+  Children top;
+  for (size_t i = 1; i < tree.nodes.size(); ++i) {
+    const auto& n = tree.nodes[i];
+    if (n.parent < 0 || static_cast<size_t>(n.parent) >= i) {
+      set_result("expand of " + impl_.description.label + ": node " + std::to_string(i) + " has no valid parent", -1);
+      return false;
+    }
+    std::map<std::string, std::string> remap;
+    for (int r = 0; r < n.num_remaps && r < static_cast<int>(n.remap_to.size()); ++r) remap[n.remap_from[r]] = n.remap_to[r];
+    std::map<std::string, Param> specify;
+    for (const auto& sp : n.specify) specify[sp.key] = sp;
+    scopes[i] = scopes[n.parent]->child(std::move(remap), std::move(specify));
+    std::unique_ptr<Node> node;
+    try {
+      if (n.type.empty()) {
+        auto group = std::make_unique<CompoundNode>("", "", make_processor(n.processor));
+        groups[i] = group.get();
+        node = std::move(group);
+      } else {
+        auto impls = ctx_.registry.find(n.type, n.label);
+        if (impls.empty()) {
+          set_result("no skill of type " + n.type + (n.label.empty() ? "" : " with label " + n.label) +
+                         " is available (in " + impl_.description.label + ")",
+                     -1);
+          return false;
+        }
+        node = make_skill_node(ctx_, *impls.front(), scopes[i]);
+      }
+    } catch (const std::invalid_argument& e) {
+      set_result("expand of " + impl_.description.label + ": " + e.what(), -1);
+      return false;
+    }
+    if (n.parent == 0)
+      top.push_back(std::move(node));
+    else if (groups[n.parent])
+      groups[n.parent]->add(std::move(node));
+    else {
+      set_result("expand of " + impl_.description.label + ": node " + std::to_string(i) + " has a skill as parent", -1);
+      return false;
+    }
+  }
+  try {
+    install(make_processor(tree.nodes[0].processor), std::move(top));
+  } catch (const std::invalid_argument& e) {
+    set_result("expand of " + impl_.description.label + ": " + e.what(), -1);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace skillbus::skills

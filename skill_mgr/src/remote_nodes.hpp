@@ -1,0 +1,76 @@
+// Tree nodes that are skills of skill processes:
+//  * RemotePrimitive: each lifecycle step is an RPC tick to the process that serves it
+//    (START, EXECUTE, PREEMPT, END), with the node's parameters from the blackboard;
+//    the parameters it returns go back to the blackboard.
+//  * RemoteCompound: when it starts, asks its process to expand it (RPC expand) and
+//    builds its children: placeholders resolve to registered implementations (by type,
+//    or type and label), anonymous groups become plain compound nodes.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "blackboard.hpp"
+#include "registry.hpp"
+#include "skillbus/rpc.hpp"
+#include "skillbus_msgs/skill_tick_reply_t.hpp"
+#include "skillbus_msgs/skill_tick_t.hpp"
+#include "tree/compound.hpp"
+
+namespace skillbus::skills {
+
+// What the nodes of one task share.
+struct TaskContext {
+  const Registry& registry;
+  Blackboard& blackboard;
+  std::function<RpcClient&(const std::string& area)> client;  // one RPC client per skill process
+  std::chrono::milliseconds tick_timeout{1000};
+  int64_t next_instance = 1;
+};
+
+// A node's parameters, gathered for a tick: specified by a parent, else static (a
+// required parameter with a value in the description), else from the blackboard, else
+// an optional parameter's default. `missing` names required parameters without a value.
+std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope,
+                                 Blackboard& bb, std::string* missing);
+// Builds the node for an implementation (primitive or compound).
+std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& impl, std::shared_ptr<Scope> scope);
+
+class RemotePrimitive : public Node {
+ public:
+  RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope);
+  const std::vector<Param>& last_params() const { return params_; }
+
+ protected:
+  bool start() override;
+  State step() override;
+  State on_preempt() override;
+  void finish() override;
+
+ private:
+  State call(int8_t action);
+  TaskContext& ctx_;
+  Implementation impl_;
+  std::shared_ptr<Scope> scope_;
+  std::vector<Param> params_;
+  int64_t instance_ = 0;
+  bool first_ = true;
+};
+
+class RemoteCompound : public CompoundNode {
+ public:
+  RemoteCompound(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope);
+
+ protected:
+  bool start() override;
+
+ private:
+  TaskContext& ctx_;
+  Implementation impl_;
+  std::shared_ptr<Scope> scope_;
+};
+
+}  // namespace skillbus::skills

@@ -1,0 +1,81 @@
+"""Skills across processes: a skill manager (C++), skill processes (Python) and the CLI."""
+
+import sys
+import time
+from pathlib import Path
+
+from conftest import last_json
+
+LIBS = Path(__file__).resolve().parent / "skill_libs"
+
+
+def mgr_binary():
+    from skillbus import paths
+    return paths.build_dir() / "skill_mgr" / "skill_mgr"
+
+
+def cli(sandbox, *args, timeout=60):
+    p = sandbox.start(f"cli-{args[0]}-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", *map(str, args)],
+                      env={"PYTHONPATH": str(LIBS)})
+    rc = sandbox.wait(p, timeout)
+    return rc, p.stdout(), p.stderr()
+
+
+def start_system(sandbox, *libraries, name="proc1"):
+    mgr = sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    proc = sandbox.start(name, [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
+                                *[x for lib in libraries for x in ("--library", lib)]], env={"PYTHONPATH": str(LIBS)})
+    deadline = time.monotonic() + 30
+    while "registered" not in proc.stderr():
+        assert time.monotonic() < deadline, proc.stderr()[-2000:]
+        assert proc.returncode is None, proc.stderr()[-2000:]
+        time.sleep(0.05)
+    return mgr, proc
+
+
+def test_parameters_flow_through_a_compound(sandbox):
+    start_system(sandbox, "flow_skills")
+    rc, out, err = cli(sandbox, "run", "Chain", "--watch", "--verbose", "--timeout", "30")
+    assert rc == 0, out + err
+    assert "task 1: Success" in out
+    # Produce wrote Object; Consume read it by remap; the second got the specified value;
+    # Mode used its static value; the Selector fell back past Fails to a Consume.
+    assert 'Log=["widget-7", "fixed", "mode=open", "widget-7"]' in out, out
+    assert "Item=widget-7" in out and "Item=fixed" in out and "Mode=open" in out
+    assert "Fails Failure: always fails (code -3)" in out
+
+
+def test_skills_lists_descriptions_and_a_broken_skill_does_not_stop_the_rest(sandbox):
+    mgr, proc = start_system(sandbox, "flow_skills", "broken_skills", "no_such_module")
+    loaded = last_json(proc.stdout())
+    assert "fine" in loaded["skills"] and "broken" not in loaded["skills"]
+    assert any("broken_skills.broken" in e and "'Missing'" in e for e in loaded["errors"])
+    assert any("library no_such_module: ModuleNotFoundError" in e for e in loaded["errors"])
+    rc, out, _ = cli(sandbox, "skills")
+    assert rc == 0
+    assert "Chain (chain, compound, process proc1)" in out
+    assert "    Mode: str, Required, = open" in out
+    assert "Fine (fine, primitive, process proc1)" in out
+
+
+def test_start_errors_name_the_problem(sandbox):
+    start_system(sandbox, "flow_skills")
+    rc, _, err = cli(sandbox, "run", "NoSuchSkill")
+    assert rc == 2 and "unknown skill 'NoSuchSkill'" in err
+    rc, out, _ = cli(sandbox, "run", "Consume", "--timeout", "20")  # Item is required
+    assert rc == 1 and "missing parameter Item of Consume" in out
+    rc, out, _ = cli(sandbox, "run", "Consume", "-p", "Item=apple", "--timeout", "20")
+    assert rc == 0 and "consumed apple" in out
+    rc, _, err = cli(sandbox, "run", "Produce", "-p", "Ticks=many")
+    assert rc == 2 and "'many' is not a int" in err
+
+
+def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):
+    mgr, proc = start_system(sandbox, "flow_skills")
+    sandbox.kill(proc)
+    sandbox.wait(proc, 10)
+    t0 = time.monotonic()
+    rc, out, _ = cli(sandbox, "run", "Consume", "-p", "Item=x", "--timeout", "20")
+    assert rc == 1
+    assert "skill process proc1 did not answer the tick of consume within 1.0 s" in out, out
+    assert time.monotonic() - t0 < 2 + 3  # within 2 s of the first tick, plus CLI start-up
