@@ -13,7 +13,7 @@ void on_signal(int) { g_stop = 1; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms"}, {"wall-clock"});
+  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology"}, {"wall-clock"});
   skills::ManagerOptions o;
   o.name = args.str("name", "skill_mgr");
   o.wall_clock = args.flag("wall-clock");
@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   if (o.tick_period_ns % o.frame_period_ns != 0)
     apps::Args::die("the tick period (1/--tick-hz) must be a whole number of frames (--period-ms)");
   o.tick_timeout = std::chrono::milliseconds(args.num("tick-timeout-ms", 1000));
+  o.ontology_files = args.list("ontology");
+  if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<skills::Manager> mgr;
   try {

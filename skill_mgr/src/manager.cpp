@@ -25,7 +25,11 @@ int8_t state_code(State s) { return static_cast<int8_t>(s); }
 }  // namespace
 
 Manager::Manager(Bus& bus, ManagerOptions options)
-    : bus_(bus), opt_(std::move(options)), participant_(bus, participant_config(opt_)), rpc_(bus, "SKILL") {
+    : bus_(bus),
+      opt_(std::move(options)),
+      participant_(bus, participant_config(opt_)),
+      world_(bus, participant_, opt_.ontology_files),
+      rpc_(bus, "SKILL") {
   // RPC handlers only record requests: they can run while a tick waits for a skill
   // process, so they must not touch running trees.
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
@@ -93,7 +97,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
   for (const auto& p : req.params) t->blackboard.set(p.key, p);  // a fresh blackboard per task
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
-                                                        opt_.tick_timeout, 1});
+                                                        opt_.tick_timeout, 1, &world_});
   auto impls = registry_.find(req.type, req.label);
   if (impls.empty()) {
     SB_WARN(kLog, "task " << id << ": skill " << req.type << " is gone");

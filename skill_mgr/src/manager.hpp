@@ -22,6 +22,7 @@ struct ManagerOptions {
   int64_t frame_period_ns = 10'000'000;   // wall-clock mode
   int64_t tick_period_ns = 40'000'000;    // skill ticks: 25 Hz of (sim) time
   std::chrono::milliseconds tick_timeout{1000};
+  std::vector<std::string> ontology_files;  // for the world replica (conditions, grounding)
 };
 
 struct Task {
@@ -51,6 +52,7 @@ class Manager {
   ManagerOptions opt_;
   Registry registry_;
   LockstepParticipant participant_;
+  WorldReplica world_;
   RpcServer rpc_;
   std::map<std::string, std::unique_ptr<RpcClient>> clients_;
   std::map<int64_t, std::unique_ptr<Task>> tasks_;

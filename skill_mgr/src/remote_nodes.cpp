@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "convert.hpp"
+#include "grounding.hpp"
 #include "skillbus_msgs/skill_tree_t.hpp"
 
 namespace skillbus::skills {
@@ -28,7 +30,7 @@ std::string seconds(std::chrono::milliseconds d) {
 }  // namespace
 
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb,
-                                 std::string* missing) {
+                                 std::string* missing, const wm::WorldStore* world) {
   std::vector<Param> out;
   for (const auto& decl : d.params) {
     Param p = decl;
@@ -45,6 +47,18 @@ std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, co
     } else {
       p.values.clear();
     }
+    if (world) {  // element parameters are re-read from the world model; a deleted one is dropped
+      std::vector<skillbus_msgs::skill_value_t> kept;
+      for (auto& v : p.values) {
+        if (v.type != skillbus_msgs::skill_value_t::ELEMENT || v.element.id.empty()) {
+          kept.push_back(v);
+        } else if (const wm::Element* e = world->get(v.element.id)) {
+          v.element = wm::to_msg(*e);
+          kept.push_back(v);
+        }
+      }
+      p.values = std::move(kept);
+    }
     p.num_values = static_cast<int32_t>(p.values.size());
     if (missing && missing->empty() && decl.param_type == skill_param_t::REQUIRED && p.values.empty())
       *missing = "missing parameter " + decl.key + (key != decl.key ? " (blackboard key " + key + ")" : "") + " of " +
@@ -52,6 +66,59 @@ std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, co
     out.push_back(std::move(p));
   }
   return out;
+}
+
+namespace {
+
+const wm::WorldStore* world_if_ready(TaskContext& ctx) {
+  return ctx.world && ctx.world->ready() ? &ctx.world->store() : nullptr;
+}
+
+// The world, fetched when the conditions or grounding need it; null, with `why`, without one.
+const wm::WorldStore* world_for(TaskContext& ctx, std::string* why) {
+  if (!ctx.world) {
+    *why = "the manager has no world model";
+    return nullptr;
+  }
+  if (!ctx.world->ensure(std::chrono::milliseconds(1000), why)) return nullptr;
+  return &ctx.world->store();
+}
+
+std::string conditions_error(const char* kind, const std::vector<Condition>& conds, const std::vector<Param>& params,
+                             TaskContext& ctx) {
+  if (conds.empty()) return "";
+  std::string why;
+  const wm::WorldStore* world = conditions_need_world(conds) ? world_for(ctx, &why) : world_if_ready(ctx);
+  const ConditionResult r = check_conditions(conds, params, world);
+  return r.ok ? "" : std::string(kind) + "-condition " + r.failed + " failed" + (why.empty() ? "" : " (" + why + ")");
+}
+
+}  // namespace
+
+std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params) {
+  std::string missing;
+  params = gather_params(impl.description, scope, ctx.blackboard, &missing, world_if_ready(ctx));
+  if (needs_grounding(params)) {
+    std::string why;
+    const wm::WorldStore* world = world_for(ctx, &why);
+    if (!world) return "cannot ground the parameters of " + impl.description.type + ": " + why;
+    const std::string err = ground(params, impl.description.pre, *world);
+    if (!err.empty()) return err;
+    for (const auto& p : params)  // what grounding found is on the blackboard for the next skills
+      if (!scope.specified(p.key) && !p.values.empty()) ctx.blackboard.set(scope.key(p.key), p);
+    missing.clear();
+    gather_params(impl.description, scope, ctx.blackboard, &missing, nullptr);
+  }
+  if (!missing.empty()) return missing;
+  return conditions_error("pre", impl.description.pre, params, ctx);
+}
+
+std::string check_hold(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params) {
+  return conditions_error("hold", impl.description.hold, params, ctx);
+}
+
+std::string check_post(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params) {
+  return conditions_error("post", impl.description.post, params, ctx);
 }
 
 std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& impl, std::shared_ptr<Scope> scope) {
@@ -65,10 +132,9 @@ RemotePrimitive::RemotePrimitive(TaskContext& ctx, Implementation impl, std::sha
     : Node(impl.description.type, impl.description.label), ctx_(ctx), impl_(std::move(impl)), scope_(std::move(scope)) {}
 
 bool RemotePrimitive::start() {
-  std::string missing;
-  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, &missing);
-  if (!missing.empty()) {
-    set_result(missing, -1);
+  const std::string err = prepare_start(ctx_, impl_, *scope_, params_);
+  if (!err.empty()) {
+    set_result(err, -1);
     return false;
   }
   instance_ = ctx_.next_instance++;
@@ -107,10 +173,26 @@ State RemotePrimitive::call(int8_t action) {
 }
 
 State RemotePrimitive::step() {
-  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr);
+  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
+  if (!first_) {  // hold-conditions, checked on every tick of a running skill
+    const std::string broken = check_hold(ctx_, impl_, params_);
+    if (!broken.empty()) {
+      call(skill_tick_t::PREEMPT);
+      set_result(broken, -1);
+      return State::Failure;
+    }
+  }
   const int8_t action = first_ ? skill_tick_t::START : skill_tick_t::EXECUTE;
   first_ = false;
-  return call(action);
+  const State s = call(action);
+  if (s == State::Success) {
+    const std::string unmet = check_post(ctx_, impl_, params_);
+    if (!unmet.empty()) {
+      set_result(unmet, -1);
+      return State::Failure;
+    }
+  }
+  return s;
 }
 
 State RemotePrimitive::on_preempt() {
@@ -135,11 +217,30 @@ RemoteCompound::RemoteCompound(TaskContext& ctx, Implementation impl, std::share
       impl_(std::move(impl)),
       scope_(std::move(scope)) {}
 
+State RemoteCompound::step() {
+  const auto params = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
+  const std::string broken = check_hold(ctx_, impl_, params);
+  if (!broken.empty()) {
+    for (const auto& c : children()) c->preempt();
+    set_result(broken, -1);
+    return State::Failure;
+  }
+  const State s = CompoundNode::step();
+  if (s == State::Success) {
+    const std::string unmet = check_post(ctx_, impl_, params);
+    if (!unmet.empty()) {
+      set_result(unmet, -1);
+      return State::Failure;
+    }
+  }
+  return s;
+}
+
 bool RemoteCompound::start() {
-  std::string missing;
-  const auto params = gather_params(impl_.description, *scope_, ctx_.blackboard, &missing);
-  if (!missing.empty()) {
-    set_result(missing, -1);
+  std::vector<Param> params;
+  const std::string err = prepare_start(ctx_, impl_, *scope_, params);
+  if (!err.empty()) {
+    set_result(err, -1);
     return false;
   }
   skill_tick_t t{};

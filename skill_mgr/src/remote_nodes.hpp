@@ -19,6 +19,7 @@
 #include "skillbus_msgs/skill_tick_reply_t.hpp"
 #include "skillbus_msgs/skill_tick_t.hpp"
 #include "tree/compound.hpp"
+#include "world_replica.hpp"
 
 namespace skillbus::skills {
 
@@ -29,13 +30,20 @@ struct TaskContext {
   std::function<RpcClient&(const std::string& area)> client;  // one RPC client per skill process
   std::chrono::milliseconds tick_timeout{1000};
   int64_t next_instance = 1;
+  WorldReplica* world = nullptr;  // for conditions and grounding
 };
 
 // A node's parameters, gathered for a tick: specified by a parent, else static (a
 // required parameter with a value in the description), else from the blackboard, else
 // an optional parameter's default. `missing` names required parameters without a value.
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope,
-                                 Blackboard& bb, std::string* missing);
+                                 Blackboard& bb, std::string* missing, const wm::WorldStore* world = nullptr);
+// At a skill's start: gather, ground abstract element parameters, check pre-conditions.
+// Returns "" or why the skill cannot start.
+std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params);
+// "" or which condition does not hold.
+std::string check_hold(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params);
+std::string check_post(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params);
 // Builds the node for an implementation (primitive or compound).
 std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& impl, std::shared_ptr<Scope> scope);
 
@@ -66,6 +74,7 @@ class RemoteCompound : public CompoundNode {
 
  protected:
   bool start() override;
+  State step() override;
 
  private:
   TaskContext& ctx_;

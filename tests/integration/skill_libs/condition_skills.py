@@ -1,0 +1,108 @@
+"""A test library: one skill per condition class, grounding, and a hold-condition."""
+
+from skillbus.skill import (ConditionAbstractRelation, ConditionGenerate, ConditionHasProperty, ConditionIsSpecified,
+                            ConditionOnType, ConditionProperty, ConditionRelation, Element, ParamTypes,
+                            PrimitiveBase, SkillDescription)
+
+
+def two(self):
+    self.addParam("Subject", Element("skiros:PhysicalObject"), ParamTypes.Optional)
+    self.addParam("Object", Element("skiros:PhysicalObject"), ParamTypes.Optional)
+
+
+class CheckHasProperty(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionHasProperty("HasSize", "skiros:Size", "Subject", True))
+
+
+class CheckProperty(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionProperty("High", "skiros:PositionZ", "Subject", ">", 0.4, True))
+
+
+class CheckRelation(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionRelation("Contains", "skiros:contain", "Subject", "Object", True))
+
+
+class CheckAbstractRelation(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionAbstractRelation("MayContain", "skiros:contain", "Subject", "Object", True))
+
+
+class CheckIsSpecified(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionIsSpecified("Given", "Subject", True))
+
+
+class CheckGenerate(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionGenerate("Made", "Subject", True))
+
+
+class CheckOnType(SkillDescription):
+    def createDescription(self):
+        two(self)
+        self.addPreCondition(ConditionOnType("IsProduct", "Subject", "skiros:Product"))
+
+
+class GroundMe(SkillDescription):
+    """Gripper is inferred; Object must be on the table (grounded jointly)."""
+
+    def createDescription(self):
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Inferred)
+        self.addParam("Table", Element("skiros:Table"), ParamTypes.Inferred)
+        self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+        self.addPreCondition(ConditionRelation("OnTable", "skiros:contain", "Table", "Object", True))
+
+
+class Hold(SkillDescription):
+    def createDescription(self):
+        self.addParam("Table", Element("skiros:Table"), ParamTypes.Inferred)
+        self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+        self.addHoldCondition(ConditionRelation("StillOnTable", "skiros:contain", "Table", "Object", True))
+
+
+def _prim(desc):
+    class P(PrimitiveBase):
+        def createDescription(self):
+            self.setDescription(desc(), desc.__name__.lower())
+
+        def execute(self):
+            got = ", ".join(f"{k}={p.value.id if isinstance(p.value, Element) else p.value}"
+                            for k, p in sorted(self.params.items()) if p.value is not None)
+            return self.success(got)
+    P.__name__ = desc.__name__.lower()
+    P.__qualname__ = P.__name__
+    return P
+
+
+checkhasproperty = _prim(CheckHasProperty)
+checkproperty = _prim(CheckProperty)
+checkrelation = _prim(CheckRelation)
+checkabstractrelation = _prim(CheckAbstractRelation)
+checkisspecified = _prim(CheckIsSpecified)
+checkgenerate = _prim(CheckGenerate)
+checkontype = _prim(CheckOnType)
+groundme = _prim(GroundMe)
+
+
+class hold(PrimitiveBase):
+    """Runs for 100 ticks (4 s) unless its hold-condition breaks first."""
+
+    def createDescription(self):
+        self.setDescription(Hold(), "hold")
+
+    def onStart(self):
+        self.n = 0
+        return True
+
+    def execute(self):
+        self.n += 1
+        return self.step(f"holding {self.n}") if self.n < 100 else self.success("held")

@@ -1,0 +1,83 @@
+"""Conditions and grounding against a live world model (wm_server with the demo scene)."""
+
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from test_skills import LIBS, cli, mgr_binary
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def system(sandbox, tmp_path):
+    from skillbus import paths
+    sandbox.start("wm", [paths.build_dir() / "wm_server" / "wm_server", "--wall-clock", "--data", tmp_path / "wm",
+                         "--scene", REPO / "deploy" / "scenes" / "demo.ttl"])
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
+                                   "--library", "condition_skills"], env={"PYTHONPATH": str(LIBS)})
+    deadline = time.monotonic() + 30
+    while "registered" not in proc.stderr():
+        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
+        time.sleep(0.05)
+    return sandbox
+
+
+CASES = [
+    # skill, params that make it hold, params that do not, label
+    ("CheckHasProperty", ["Subject=skiros:Cube-2"], ["Subject=skiros:Table-1"], "HasSize"),
+    ("CheckProperty", ["Subject=skiros:Cube-2"], ["Subject=skiros:Bin-5"], "High"),
+    ("CheckRelation", ["Subject=skiros:Table-1", "Object=skiros:Cube-2"],
+     ["Subject=skiros:Bin-5", "Object=skiros:Cube-2"], "Contains"),
+    ("CheckAbstractRelation", ["Subject=skiros:Table-1", "Object=skiros:Cube-2"],
+     ["Subject=skiros:Cube-2", "Object=skiros:Table-1"], "MayContain"),
+    ("CheckIsSpecified", ["Subject=skiros:Cube-2"], [], "Given"),
+    ("CheckGenerate", ["Subject=skiros:Cube-2"], [], "Made"),
+    ("CheckOnType", ["Subject=skiros:Cube-3"], ["Subject=skiros:Table-1"], "IsProduct"),
+]
+
+
+@pytest.mark.parametrize("skill,good,bad,label", CASES, ids=[c[0] for c in CASES])
+def test_each_condition_true_and_false(system, skill, good, bad, label):
+    rc, out, err = cli(system, "run", skill, *[x for p in good for x in ("-p", p)], "--timeout", "20")
+    assert rc == 0, out + err
+    rc, out, err = cli(system, "run", skill, *[x for p in bad for x in ("-p", p)], "--timeout", "20")
+    assert rc == 1 and f"pre-condition {label}" in out and "failed" in out, out + err
+
+
+def test_grounding_fills_inferred_and_abstract_parameters_jointly(system):
+    rc, out, _ = cli(system, "run", "GroundMe", "--timeout", "20")
+    assert rc == 0, out
+    assert "Gripper=skiros:Gripper-7" in out and "Object=skiros:Cube-2" in out and "Table=skiros:Table-1" in out
+
+
+def test_grounding_that_finds_nothing_names_the_parameter(system):
+    # Cube-2 moves into the bin and the others are removed: nothing on the table any more.
+    code = ("from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface as W; "
+            "w = W(open_bus(), 't'); w.set_relation('skiros:Table-1','skiros:contain','skiros:Cube-2', False); "
+            "w.remove_element('skiros:Cube-3'); w.remove_element('skiros:Cube-4')")
+    p = system.start("edit", [sys.executable, "-c", code])
+    assert system.wait(p, 30) == 0, p.stderr()
+    rc, out, _ = cli(system, "run", "GroundMe", "--timeout", "20")
+    assert rc == 1 and "cannot ground parameter Object (skiros:Product)" in out, out
+
+
+def test_a_broken_hold_condition_stops_a_running_primitive(system):
+    run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "-p", "Object=skiros:Cube-3",
+                               "--timeout", "30"], env={"PYTHONPATH": str(LIBS)})
+    deadline = time.monotonic() + 20
+    while "started" not in run.stdout():
+        assert time.monotonic() < deadline, run.stderr()
+        time.sleep(0.05)
+    time.sleep(0.5)
+    code = ("from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface as W; "
+            "W(open_bus(), 't').set_relation('skiros:Table-1','skiros:contain','skiros:Cube-3', False)")
+    edit = system.start("edit", [sys.executable, "-c", code])
+    assert system.wait(edit, 30) == 0
+    assert system.wait(run, 30) == 1
+    out = run.stdout()
+    assert "hold-condition StillOnTable failed" in out, out
+    assert "held" not in out
