@@ -26,20 +26,21 @@ std::set<std::string> keys_of(const Condition& c) {
 
 }  // namespace
 
-bool needs_grounding(const std::vector<Param>& params) {
+bool needs_grounding(const std::vector<Param>& params, const std::set<std::string>& skip) {
   for (const auto& p : params)
-    if (abstract_element(p)) return true;
+    if (abstract_element(p) && !skip.count(p.key)) return true;
   return false;
 }
 
-std::string ground(std::vector<Param>& params, const std::vector<Condition>& pre, const wm::WorldStore& world) {
+std::string ground(std::vector<Param>& params, const std::vector<Condition>& pre, const wm::WorldStore& world,
+                   const std::set<std::string>& skip) {
   std::vector<size_t> todo;
   for (size_t i = 0; i < params.size(); ++i)
-    if (abstract_element(params[i])) todo.push_back(i);
+    if (abstract_element(params[i]) && !skip.count(params[i].key)) todo.push_back(i);
   if (todo.empty()) return "";
   std::set<std::string> assigned;
   for (size_t i = 0; i < params.size(); ++i)
-    if (!abstract_element(params[i])) assigned.insert(params[i].key);
+    if (!abstract_element(params[i]) || skip.count(params[i].key)) assigned.insert(params[i].key);
 
   // Pre-conditions whose parameters are all assigned once `key` is (checked right then).
   auto ready_conditions = [&](const std::string& key) {

@@ -5,6 +5,7 @@
 // in declaration order). If nothing fits: "cannot ground parameter X".
 #pragma once
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -12,9 +13,10 @@
 
 namespace skillbus::skills {
 
-// Fills `params` in place; returns "" or the error.
-std::string ground(std::vector<Param>& params, const std::vector<Condition>& pre, const wm::WorldStore& world);
-// True if some parameter needs grounding.
-bool needs_grounding(const std::vector<Param>& params);
+// Fills `params` in place (except the keys in `skip`); returns "" or the error.
+std::string ground(std::vector<Param>& params, const std::vector<Condition>& pre, const wm::WorldStore& world,
+                   const std::set<std::string>& skip = {});
+// True if some parameter (not in `skip`) needs grounding.
+bool needs_grounding(const std::vector<Param>& params, const std::set<std::string>& skip = {});
 
 }  // namespace skillbus::skills

@@ -8,12 +8,20 @@
 using namespace skillbus;
 
 namespace {
+std::string json_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += (static_cast<unsigned char>(c) < 0x20) ? ' ' : c;
+  }
+  return out;
+}
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology"}, {"wall-clock"});
+  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology", "start", "robot"}, {"wall-clock"});
   skills::ManagerOptions o;
   o.name = args.str("name", "skill_mgr");
   o.wall_clock = args.flag("wall-clock");
@@ -25,6 +33,8 @@ int main(int argc, char** argv) {
     apps::Args::die("the tick period (1/--tick-hz) must be a whole number of frames (--period-ms)");
   o.tick_timeout = std::chrono::milliseconds(args.num("tick-timeout-ms", 1000));
   o.ontology_files = args.list("ontology");
+  o.start_at_first_tick = args.str("start");
+  o.robot = args.str("robot");
   if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<skills::Manager> mgr;
@@ -38,7 +48,11 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   std::signal(SIGINT, on_signal);
   const RunResult r = mgr->run_until([] { return g_stop != 0; });
-  std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"digest\": \"%s\"}\n", r.ok ? "true" : "false",
-              r.error.c_str(), static_cast<long long>(r.frames), r.digest_hex().c_str());
+  std::string tasks;
+  for (const auto& [id, result] : mgr->results())
+    tasks += (tasks.empty() ? "" : ", ") + std::string("\"") + std::to_string(id) + "\": \"" + json_escape(result) + "\"";
+  std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"digest\": \"%s\", \"tasks\": {%s}}\n",
+              r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.digest_hex().c_str(),
+              tasks.c_str());
   return r.ok ? 0 : 1;
 }

@@ -30,6 +30,13 @@ Manager::Manager(Bus& bus, ManagerOptions options)
       participant_(bus, participant_config(opt_)),
       world_(bus, participant_, opt_.ontology_files),
       rpc_(bus, "SKILL") {
+  if (!opt_.start_at_first_tick.empty()) {
+    skill_start_t req{};
+    const auto colon = opt_.start_at_first_tick.find(':');
+    req.type = opt_.start_at_first_tick.substr(0, colon);
+    if (colon != std::string::npos) req.label = opt_.start_at_first_tick.substr(colon + 1);
+    starts_.emplace_back(next_task_++, req);
+  }
   // RPC handlers only record requests: they can run while a tick waits for a skill
   // process, so they must not touch running trees.
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
@@ -97,10 +104,11 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
   for (const auto& p : req.params) t->blackboard.set(p.key, p);  // a fresh blackboard per task
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
-                                                        opt_.tick_timeout, 1, &world_});
+                                                        opt_.tick_timeout, 1, &world_, opt_.robot});
   auto impls = registry_.find(req.type, req.label);
   if (impls.empty()) {
-    SB_WARN(kLog, "task " << id << ": skill " << req.type << " is gone");
+    SB_WARN(kLog, "task " << id << ": skill " << req.type << " is not available");
+    results_[id] = "Failure: skill " + req.type + " is not available";
     return;
   }
   t->root = make_skill_node(*t->ctx, *impls.front(), std::make_shared<Scope>());
@@ -156,6 +164,7 @@ void Manager::on_frame(int64_t, int64_t sim_time_ns) {
     publish_progress(t);
     if (finished(t.root->state())) {
       SB_INFO(kLog, "task " << t.id << ": " << t.type << " " << to_string(t.root->state()) << ": " << t.root->message());
+      results_[t.id] = std::string(to_string(t.root->state())) + ": " + t.root->message();
       it = tasks_.erase(it);
     } else {
       ++it;
@@ -169,7 +178,15 @@ RunResult Manager::run_until(std::function<bool()> should_stop) {
     on_frame(f, t);
     if (should_stop()) participant_.stop();
   };
-  return participant_.run();
+  const RunResult r = participant_.run();
+  // A lockstep session that ends in an error (a participant died) ends the tasks with it.
+  for (auto& [id, t] : tasks_) {
+    const std::string why = r.ok ? "the manager stopped" : r.error;
+    SB_ERROR(kLog, "task " << id << ": " << t->type << " Failure: " << why);
+    results_[id] = "Failure: " + why;
+  }
+  tasks_.clear();
+  return r;
 }
 
 }  // namespace skillbus::skills

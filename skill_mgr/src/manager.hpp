@@ -23,6 +23,8 @@ struct ManagerOptions {
   int64_t tick_period_ns = 40'000'000;    // skill ticks: 25 Hz of (sim) time
   std::chrono::milliseconds tick_timeout{1000};
   std::vector<std::string> ontology_files;  // for the world replica (conditions, grounding)
+  std::string start_at_first_tick;           // "TYPE" or "TYPE:LABEL": a task started at the first tick
+  std::string robot;                         // element id of the agent this manager drives
 };
 
 struct Task {
@@ -40,6 +42,8 @@ class Manager {
   Manager(Bus& bus, ManagerOptions options);
   RunResult run_until(std::function<bool()> should_stop);
   const Registry& registry() const { return registry_; }
+  // How each finished task ended: id -> "Success: message" / "Failure: message".
+  const std::map<int64_t, std::string>& results() const { return results_; }
 
  private:
   void on_frame(int64_t frame, int64_t sim_time_ns);
@@ -58,6 +62,7 @@ class Manager {
   std::map<int64_t, std::unique_ptr<Task>> tasks_;
   std::deque<std::pair<int64_t, skillbus_msgs::skill_start_t>> starts_;  // applied at the next tick
   int64_t next_task_ = 1;
+  std::map<int64_t, std::string> results_;
 };
 
 }  // namespace skillbus::skills

@@ -98,11 +98,28 @@ std::string conditions_error(const char* kind, const std::vector<Condition>& con
 std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params) {
   std::string missing;
   params = gather_params(impl.description, scope, ctx.blackboard, &missing, world_if_ready(ctx));
-  if (needs_grounding(params)) {
+  // Robot (added to every description): the manager's own agent when it was given one;
+  // else grounded like the rest, but only from a world model that is already there, so
+  // that skills run without a world model when nothing else needs one.
+  std::set<std::string> skip;
+  for (auto& p : params) {
+    if (p.key != "Robot" || p.data_type != "element" || (!p.values.empty() && !p.values[0].element.id.empty())) continue;
+    if (!ctx.robot.empty()) {
+      skillbus_msgs::skill_value_t v{};
+      v.type = skillbus_msgs::skill_value_t::ELEMENT;
+      v.element.id = ctx.robot;
+      v.element.type = p.concept;
+      p.values = {v};
+      p.num_values = 1;
+    } else if (!world_if_ready(ctx)) {
+      skip.insert(p.key);
+    }
+  }
+  if (needs_grounding(params, skip)) {
     std::string why;
     const wm::WorldStore* world = world_for(ctx, &why);
     if (!world) return "cannot ground the parameters of " + impl.description.type + ": " + why;
-    const std::string err = ground(params, impl.description.pre, *world);
+    const std::string err = ground(params, impl.description.pre, *world, skip);
     if (!err.empty()) return err;
     for (const auto& p : params)  // what grounding found is on the blackboard for the next skills
       if (!scope.specified(p.key) && !p.values.empty()) ctx.blackboard.set(scope.key(p.key), p);

@@ -31,6 +31,7 @@ struct TaskContext {
   std::chrono::milliseconds tick_timeout{1000};
   int64_t next_instance = 1;
   WorldReplica* world = nullptr;  // for conditions and grounding
+  std::string robot;              // the agent this manager drives: every skill's Robot parameter
 };
 
 // A node's parameters, gathered for a tick: specified by a parent, else static (a

@@ -23,6 +23,8 @@ def add_parsers(sub) -> None:
     sp.add_argument("--library", action="append", required=True, help="a Python module of skills (repeatable)")
     sp.add_argument("--url", default=None)
     sp.add_argument("--register-timeout", type=float, default=30.0)
+    sp.add_argument("--lockstep", action="store_true", help="be a lockstep participant named --name")
+    sp.add_argument("--world-model", action="store_true", help="give skills a world-model client (self.wmi)")
     ls = sub.add_parser("skills", help="the skills the manager knows, with parameters and conditions")
     ls.add_argument("--url", default=None)
     ls.add_argument("--json", action="store_true")

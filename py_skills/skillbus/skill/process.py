@@ -164,9 +164,23 @@ class SkillProcess:
 def main(args) -> int:
     sys.path.insert(0, os.getcwd())  # libraries next to where the user runs it
     bus = open_bus(args.url)
-    proc = SkillProcess(bus, args.name, args.library)
+    participant = None
+    if args.lockstep:
+        from skillbus.lockstep import LockstepParticipant
+        participant = LockstepParticipant(bus, args.name, kind="skills-process")
+    wmi = None
+    if args.world_model:
+        from skillbus.world import WorldModelInterface
+        wmi = WorldModelInterface(bus, args.name, participant=participant)
+    proc = SkillProcess(bus, args.name, args.library, wmi)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
     reply = proc.register(timeout=args.register_timeout)
     log.info("registered %d skill(s) with the manager (%d refused)", len(proc.classes), len(reply.errors))
+    if participant is not None:
+        # Under lockstep the process follows the frames (its world-model replica changes
+        # only at frame boundaries); RPC ticks are answered while it waits for a clock.
+        r = participant.run()
+        print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex}), flush=True)
+        return 0 if r.ok else 1
     while True:
         bus.handle(1.0)

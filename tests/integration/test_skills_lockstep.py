@@ -1,0 +1,65 @@
+"""A compound skill whose primitives live in two skill processes, in lockstep."""
+
+import re
+import sys
+import time
+
+from conftest import last_json
+from skillbus import paths
+from skillbus.netns import Sandbox
+from test_skills import LIBS, mgr_binary
+
+FRAMES = 1200  # 12 s of sim time; the task needs 20 + 30 + 5 ticks of 40 ms (2.2 s)
+
+
+def session(box, frames=FRAMES, ack_timeout_ms=5000):
+    clock = box.start("clock", [paths.binary("sb_clock"), "--frames", str(frames), "--participants",
+                                "skill_mgr,proc_a,proc_b", "--ack-timeout-ms", str(ack_timeout_ms)])
+    mgr = box.start("skill_mgr", [mgr_binary(), "--start", "Both"])
+    procs = {n: box.start(n, [sys.executable, "-m", "skillbus.cli", "skills-process", "--lockstep", "--name", n,
+                              "--library", lib], env={"PYTHONPATH": str(LIBS)})
+             for n, lib in (("proc_a", "lockstep_a"), ("proc_b", "lockstep_b"))}
+    return clock, mgr, procs
+
+
+def test_runs_to_success_twice_with_the_same_digest(tmp_path):
+    runs = []
+    for i in range(2):
+        with Sandbox(log_dir=tmp_path / f"run{i}") as box:
+            clock, mgr, procs = session(box)
+            assert box.wait(clock, 120) == 0, clock.stdout() + clock.stderr()[-2000:]
+            assert box.wait(mgr, 30) == 0, mgr.stderr()[-2000:]
+            runs.append((last_json(clock.stdout()), last_json(mgr.stdout())))
+    for clock, mgr in runs:
+        assert mgr["tasks"] == {"1": "Success: all succeeded"}, mgr
+    assert runs[0][0]["digest"] == runs[1][0]["digest"]
+    assert runs[0][1]["digest"] == runs[1][1]["digest"]
+
+
+def test_killing_a_skill_process_fails_the_task_by_name_and_a_restart_succeeds(tmp_path):
+    with Sandbox(log_dir=tmp_path / "killed") as box:
+        clock, mgr, procs = session(box, frames=100_000, ack_timeout_ms=1500)
+        deadline = time.monotonic() + 60
+        while "other started" not in procs["proc_b"].stderr():
+            assert time.monotonic() < deadline, procs["proc_b"].stderr()[-2000:]
+            time.sleep(0.01)
+        box.kill(procs["proc_b"])
+        killed = time.monotonic()
+        failed_at = None
+        while failed_at is None and time.monotonic() < killed + 10:
+            # Either the manager's tick of `other` times out, or the master stops the session
+            # because proc_b stopped acknowledging frames: both name proc_b.
+            if re.search(r"task 1: Both Failure: .*(skill process proc_b did not answer the tick of other within 1\.0 s"
+                         r"|no ack for frame \d+ from participant\(s\) proc_b within 1\.5 s)", mgr.stderr()):
+                failed_at = time.monotonic()
+            time.sleep(0.01)
+        assert failed_at is not None, mgr.stderr()[-3000:]
+        assert failed_at - killed < 2.0
+        # the dead participant also stops the lockstep session, named
+        assert box.wait(clock, 30) == 1
+        assert "proc_b" in last_json(clock.stdout())["error"]
+    with Sandbox(log_dir=tmp_path / "restarted") as box:  # the supervisor's restart: the same task succeeds
+        clock, mgr, procs = session(box)
+        assert box.wait(clock, 120) == 0
+        box.wait(mgr, 30)
+        assert last_json(mgr.stdout())["tasks"] == {"1": "Success: all succeeded"}
