@@ -156,6 +156,7 @@ bool RemotePrimitive::start() {
   }
   instance_ = ctx_.next_instance++;
   first_ = true;
+  unresponsive_ = false;
   return true;
 }
 
@@ -179,6 +180,7 @@ State RemotePrimitive::call(int8_t action) {
     if (!reply.params.empty()) params_ = reply.params;
     return to_state(reply.state);
   } catch (const RpcTimeout&) {
+    unresponsive_ = true;
     set_result("skill process " + impl_.process + " did not answer the tick of " + impl_.description.label +
                    " within " + seconds(ctx_.tick_timeout),
                -1);
@@ -213,12 +215,13 @@ State RemotePrimitive::step() {
 }
 
 State RemotePrimitive::on_preempt() {
+  if (unresponsive_) return State::Failure;
   const State s = call(skill_tick_t::PREEMPT);
   return s == State::Running ? State::Failure : s;
 }
 
 void RemotePrimitive::finish() {
-  if (instance_ == 0) return;
+  if (instance_ == 0 || unresponsive_) return;
   const std::string msg = message();
   const int c = code();
   call(skill_tick_t::END);

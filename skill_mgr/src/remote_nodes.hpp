@@ -67,6 +67,7 @@ class RemotePrimitive : public Node {
   std::vector<Param> params_;
   int64_t instance_ = 0;
   bool first_ = true;
+  bool unresponsive_ = false;  // its process did not answer: do not wait for it again
 };
 
 class RemoteCompound : public CompoundNode {
