@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "demo":
         from skillbus import demo
         return demo.main(args)
-    if args.command in ("skills-process", "skills", "run", "stop"):
+    if args.command in ("skills-process", "skills", "run", "stop", "pause", "resume", "step"):
         from skillbus.skill import cli as skill_cli
         return skill_cli.main(args)
     if args.command == "wm":

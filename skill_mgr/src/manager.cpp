@@ -71,6 +71,26 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     starts_.emplace_back(out.task, req);
     return out;
   });
+  // pause / resume / step: a paused task is not ticked; step ticks it once.
+  for (const char* verb : {"pause", "resume", "step"}) {
+    const std::string v = verb;
+    rpc_.add_method<skill_start_t, skill_task_t>(v, [this, v](const skill_start_t& req) {
+      auto it = tasks_.find(req.task);
+      if (it == tasks_.end()) throw RpcError("no running task " + std::to_string(req.task));
+      Task& t = *it->second;
+      if (v == "pause") t.paused = true;
+      if (v == "resume") t.paused = false;
+      if (v == "step") {
+        if (!t.paused) throw RpcError("task " + std::to_string(req.task) + " is not paused");
+        t.step_once = true;
+      }
+      skill_task_t out{};
+      out.task = req.task;
+      out.state = state_code(t.root->state());
+      out.message = t.paused ? (t.step_once ? "paused, stepping once" : "paused") : "running";
+      return out;
+    });
+  }
   rpc_.add_method<skill_start_t, skill_task_t>("stop", [this](const skill_start_t& req) {
     auto it = tasks_.find(req.task);
     bool queued = false;
@@ -160,6 +180,11 @@ void Manager::on_frame(int64_t, int64_t sim_time_ns) {
   }
   for (auto it = tasks_.begin(); it != tasks_.end();) {
     Task& t = *it->second;
+    if (t.paused && !t.step_once && !t.stop_requested) {
+      ++it;
+      continue;
+    }
+    t.step_once = false;
     tick(t);
     publish_progress(t);
     if (finished(t.root->state())) {

@@ -35,6 +35,8 @@ struct Task {
   std::unique_ptr<Node> root;
   int64_t ticks = 0;
   bool stop_requested = false;
+  bool paused = false;
+  bool step_once = false;  // while paused: tick once at the next tick time
 };
 
 class Manager {

@@ -70,6 +70,46 @@ def test_start_errors_name_the_problem(sandbox):
     assert rc == 2 and "'many' is not a int" in err
 
 
+def test_each_run_gets_a_fresh_blackboard(sandbox):
+    start_system(sandbox, "flow_skills")
+    for _ in range(2):  # the second run's Log starts empty again
+        rc, out, _ = cli(sandbox, "run", "Chain", "--verbose", "--timeout", "30")
+        assert rc == 0 and 'Log=["widget-7", "fixed", "mode=open", "widget-7"]' in out, out
+
+
+def test_pause_step_resume_and_stop(sandbox):
+    import re
+    start_system(sandbox, "flow_skills")
+    run = sandbox.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Wait", "--watch", "--timeout", "60"])
+
+    def last_tick():
+        ticks = re.findall(r"Wait Running: tick (\d+)", run.stdout())
+        return int(ticks[-1]) if ticks else 0
+
+    deadline = time.monotonic() + 20
+    while last_tick() < 3:
+        assert time.monotonic() < deadline, run.stdout() + run.stderr()
+        time.sleep(0.02)
+    assert cli(sandbox, "pause", "1")[0] == 0
+    time.sleep(0.3)
+    paused_at = last_tick()
+    time.sleep(0.5)
+    assert last_tick() == paused_at  # not ticked while paused
+    rc, out, _ = cli(sandbox, "step", "1")
+    assert rc == 0 and "stepping once" in out
+    time.sleep(0.3)
+    assert last_tick() == paused_at + 1
+    assert cli(sandbox, "resume", "1")[0] == 0
+    time.sleep(0.3)
+    assert last_tick() > paused_at + 2
+    rc, out, _ = cli(sandbox, "stop", "1")
+    assert rc == 0 and "stopping" in out
+    assert sandbox.wait(run, 20) == 1
+    assert re.search(r"Wait Failure: preempted at tick \d+", run.stdout())
+    rc, _, err = cli(sandbox, "stop", "99")
+    assert rc == 1 and "no running task 99" in err
+
+
 def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):
     mgr, proc = start_system(sandbox, "flow_skills")
     sandbox.kill(proc)
@@ -79,3 +119,12 @@ def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):
     assert rc == 1
     assert "skill process proc1 did not answer the tick of consume within 1.0 s" in out, out
     assert time.monotonic() - t0 < 2 + 3  # within 2 s of the first tick, plus CLI start-up
+    # the supervisor restarts it; it registers again and the skill runs
+    restarted = sandbox.start("proc1-again", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
+                                              "--library", "flow_skills"], env={"PYTHONPATH": str(LIBS)})
+    deadline = time.monotonic() + 30
+    while "registered" not in restarted.stderr():
+        assert time.monotonic() < deadline, restarted.stderr()[-2000:]
+        time.sleep(0.05)
+    rc, out, _ = cli(sandbox, "run", "Consume", "-p", "Item=x", "--timeout", "20")
+    assert rc == 0 and "consumed x" in out, out

@@ -36,9 +36,11 @@ def add_parsers(sub) -> None:
     run.add_argument("-v", "--verbose", action="store_true", help="show each primitive's parameters")
     run.add_argument("--timeout", type=float, default=0.0, help="give up after this many seconds (0: never)")
     run.add_argument("--url", default=None)
-    st = sub.add_parser("stop", help="preempt a running task")
-    st.add_argument("task", type=int)
-    st.add_argument("--url", default=None)
+    for verb, text in (("stop", "preempt a running task"), ("pause", "stop ticking a task"),
+                       ("resume", "tick a paused task again"), ("step", "tick a paused task once")):
+        st = sub.add_parser(verb, help=text)
+        st.add_argument("task", type=int)
+        st.add_argument("--url", default=None)
 
 
 def skill_list(client: RpcClient) -> skill_list_t:
@@ -186,12 +188,12 @@ def main(args: argparse.Namespace) -> int:
         return 0
     if args.command == "run":
         return run(args)
-    if args.command == "stop":
+    if args.command in ("stop", "pause", "resume", "step"):
         client = RpcClient(open_bus(args.url), "SKILL", "cli")
         req = skill_start_t()
         req.task = args.task
         try:
-            print(client.call("stop", req, skill_task_t).message)
+            print(f"task {args.task}: {client.call(args.command, req, skill_task_t).message}")
         except RpcError as e:
             print(f"error: {e}", file=sys.stderr)
             return 1

@@ -97,3 +97,26 @@ class chain(SkillBase):
                 self.skill("Consume", "", remap={"Item": "Object"}),
             ),
         )
+
+
+class Wait(SkillDescription):
+    def createDescription(self):
+        self.addParam("Ticks", 1000, ParamTypes.Optional)
+
+
+class wait(PrimitiveBase):
+    """Counts ticks in its message, for pause, step, resume and stop."""
+
+    def createDescription(self):
+        self.setDescription(Wait(), "wait")
+
+    def onStart(self):
+        self.n = 0
+        return True
+
+    def execute(self):
+        self.n += 1
+        return self.step(f"tick {self.n}") if self.n < self.params["Ticks"].value else self.success("waited")
+
+    def onPreempt(self):
+        return self.fail(f"preempted at tick {self.n}", -1)
