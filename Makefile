@@ -34,6 +34,7 @@ demo: build
 bench: build
 	$(PY) bench/lockstep_overhead.py
 	$(PY) bench/wm_query.py
+	$(PY) bench/skill_ticks.py
 
 clean:
 	rm -rf $(BUILD)
