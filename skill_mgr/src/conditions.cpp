@@ -95,7 +95,23 @@ bool conditions_need_world(const std::vector<Condition>& conditions) {
 
 ConditionResult check_conditions(const std::vector<Condition>& conditions, const std::vector<Param>& params,
                                  const wm::WorldStore* world) {
+  // A condition about an optional parameter that has no value is not judged (it holds):
+  // the skill runs without it (IsSpecified is the way to ask for one).
+  auto unset_optional = [&](const Condition& c) {
+    if (c.kind == "IsSpecified" || c.kind == "Generate") return false;
+    for (const auto* k : {&c.subject, &c.object}) {
+      const Param* p = k->empty() ? nullptr : find(params, *k);
+      if (p && p->param_type == skillbus_msgs::skill_param_t::OPTIONAL &&
+          (p->values.empty() || (p->values[0].type == skill_value_t::ELEMENT && p->values[0].element.id.empty())))
+        return true;
+    }
+    return false;
+  };
   for (size_t i = 0; i < conditions.size();) {
+    if (conditions[i].or_label.empty() && unset_optional(conditions[i])) {
+      ++i;
+      continue;
+    }
     // A ConditionOr: the run of conditions with the same non-empty or_label.
     size_t j = i + 1;
     while (!conditions[i].or_label.empty() && j < conditions.size() && conditions[j].or_label == conditions[i].or_label)

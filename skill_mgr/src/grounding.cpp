@@ -38,9 +38,14 @@ std::string ground(std::vector<Param>& params, const std::vector<Condition>& pre
   for (size_t i = 0; i < params.size(); ++i)
     if (abstract_element(params[i]) && !skip.count(params[i].key)) todo.push_back(i);
   if (todo.empty()) return "";
+  // Assigned: parameters with a concrete value (an unset optional one is not: conditions
+  // about it cannot be judged while grounding).
   std::set<std::string> assigned;
-  for (size_t i = 0; i < params.size(); ++i)
-    if (!abstract_element(params[i]) || skip.count(params[i].key)) assigned.insert(params[i].key);
+  for (size_t i = 0; i < params.size(); ++i) {
+    const Param& p = params[i];
+    const bool concrete = !p.values.empty() && (p.data_type != "element" || !p.values[0].element.id.empty());
+    if ((concrete && !abstract_element(p)) || skip.count(p.key)) assigned.insert(p.key);
+  }
 
   // Pre-conditions whose parameters are all assigned once `key` is (checked right then).
   auto ready_conditions = [&](const std::string& key) {

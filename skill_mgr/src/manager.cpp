@@ -28,7 +28,7 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     : bus_(bus),
       opt_(std::move(options)),
       participant_(bus, participant_config(opt_)),
-      world_(bus, participant_, opt_.ontology_files),
+      world_(bus, participant_, opt_.ontology_files, opt_.wall_clock),
       rpc_(bus, "SKILL") {
   if (!opt_.start_at_first_tick.empty()) {
     skill_start_t req{};
@@ -131,7 +131,13 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
     results_[id] = "Failure: skill " + req.type + " is not available";
     return;
   }
-  t->root = make_skill_node(*t->ctx, *impls.front(), std::make_shared<Scope>());
+  if (impls.size() > 1 && req.label.empty()) {  // by type only: the first implementation that can start
+    std::vector<Implementation> copies;
+    for (const auto* x : impls) copies.push_back(*x);
+    t->root = std::make_unique<Alternatives>(*t->ctx, std::move(copies), std::make_shared<Scope>());
+  } else {
+    t->root = make_skill_node(*t->ctx, *impls.front(), std::make_shared<Scope>());
+  }
   SB_INFO(kLog, "task " << id << ": " << req.type << " (" << impls.front()->description.label << ") started");
   tasks_[id] = std::move(t);
 }

@@ -95,9 +95,12 @@ std::string conditions_error(const char* kind, const std::vector<Condition>& con
 
 }  // namespace
 
-std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params) {
+std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params,
+                          bool dry_run) {
+  Blackboard scratch = ctx.blackboard;  // a dry run must leave the task's blackboard alone
+  Blackboard& bb = dry_run ? scratch : ctx.blackboard;
   std::string missing;
-  params = gather_params(impl.description, scope, ctx.blackboard, &missing, world_if_ready(ctx));
+  params = gather_params(impl.description, scope, bb, &missing, world_if_ready(ctx));
   // Robot (added to every description): the manager's own agent when it was given one;
   // else grounded like the rest, but only from a world model that is already there, so
   // that skills run without a world model when nothing else needs one.
@@ -122,12 +125,53 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
     const std::string err = ground(params, impl.description.pre, *world, skip);
     if (!err.empty()) return err;
     for (const auto& p : params)  // what grounding found is on the blackboard for the next skills
-      if (!scope.specified(p.key) && !p.values.empty()) ctx.blackboard.set(scope.key(p.key), p);
+      if (!scope.specified(p.key) && !p.values.empty()) bb.set(scope.key(p.key), p);
     missing.clear();
-    gather_params(impl.description, scope, ctx.blackboard, &missing, nullptr);
+    gather_params(impl.description, scope, bb, &missing, nullptr);
   }
   if (!missing.empty()) return missing;
   return conditions_error("pre", impl.description.pre, params, ctx);
+}
+
+std::string infer_invalid(TaskContext& ctx, const Implementation& impl, const Scope& scope) {
+  std::string why;
+  const wm::WorldStore* world = world_for(ctx, &why);
+  if (!world) return "InferInvalid: " + why;
+  std::vector<Param> params = gather_params(impl.description, scope, ctx.blackboard, nullptr, nullptr);
+  // Invalid: an element that is gone (or was never concrete), or one that a failing
+  // pre-condition is about (e.g. the cube of the last round, now in the bin).
+  std::set<std::string> suspect;
+  for (const auto& c : impl.description.pre)
+    if (!check_conditions({c}, params, world).ok)
+      for (const auto* k : {&c.subject, &c.object})
+        if (!k->empty() && !scope.specified(*k)) suspect.insert(*k);
+  std::set<std::string> valid;
+  for (auto& p : params) {
+    if (p.data_type != "element") {
+      valid.insert(p.key);
+      continue;
+    }
+    const bool ok = !p.values.empty() && !p.values[0].element.id.empty() && world->get(p.values[0].element.id) &&
+                    !suspect.count(p.key);
+    if (ok) {
+      valid.insert(p.key);
+    } else {
+      skillbus_msgs::skill_value_t v{};  // forget the stale element: ground it like a new one
+      v.type = skillbus_msgs::skill_value_t::ELEMENT;
+      v.element.type = p.concept;
+      for (const auto& decl : impl.description.params)  // the description's label, not the stale element's
+        if (decl.key == p.key && !decl.defaults.empty()) v.element.label = decl.defaults[0].element.label;
+      p.values = {v};
+      p.num_values = 1;
+      p.param_type = skill_param_t::REQUIRED;
+    }
+  }
+  if (valid.size() == params.size()) return "";
+  const std::string err = ground(params, impl.description.pre, *world, valid);
+  if (!err.empty()) return "InferInvalid: " + err;
+  for (const auto& p : params)
+    if (!valid.count(p.key) && !scope.specified(p.key)) ctx.blackboard.set(scope.key(p.key), p);
+  return "";
 }
 
 std::string check_hold(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params) {
@@ -173,6 +217,7 @@ State RemotePrimitive::call(int8_t action) {
   try {
     const auto reply = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tick_reply_t>("tick", t, opts);
     set_result(reply.message, reply.code, reply.progress);
+    wm_version_ = reply.wm_version;
     for (const auto& p : reply.params) {
       if (scope_->specified(p.key) || p.values.empty()) continue;
       ctx_.blackboard.set(scope_->key(p.key), p);
@@ -205,6 +250,10 @@ State RemotePrimitive::step() {
   first_ = false;
   const State s = call(action);
   if (s == State::Success) {
+    // The skill's own last writes must be in the replica before its post-conditions are
+    // judged (outside lockstep the change stream may lag the skill's commit reply).
+    if (ctx_.world && wm_version_ >= 0 && !impl_.description.post.empty())
+      ctx_.world->wait_for(wm_version_, std::chrono::milliseconds(1000));
     const std::string unmet = check_post(ctx_, impl_, params_);
     if (!unmet.empty()) {
       set_result(unmet, -1);
@@ -227,6 +276,47 @@ void RemotePrimitive::finish() {
   call(skill_tick_t::END);
   set_result(msg, c);  // the end does not overwrite the result
   instance_ = 0;
+}
+
+// ---------------------------------------------------------------- alternatives
+
+Alternatives::Alternatives(TaskContext& ctx, std::vector<Implementation> impls, std::shared_ptr<Scope> scope)
+    : Node(impls.front().description.type, ""), ctx_(ctx), impls_(std::move(impls)), scope_(std::move(scope)) {}
+
+bool Alternatives::start() {
+  std::string first_error;
+  for (const auto& impl : impls_) {
+    std::vector<Param> params;
+    const std::string err = prepare_start(ctx_, impl, *scope_, params, true);
+    if (err.empty()) {
+      chosen_.clear();
+      chosen_.push_back(make_skill_node(ctx_, impl, scope_));
+      set_result("chose " + impl.description.label);
+      return true;
+    }
+    if (first_error.empty()) first_error = impl.description.label + ": " + err;
+  }
+  set_result(first_error + " (none of " + std::to_string(impls_.size()) + " implementations of " + type() + " can start)",
+             -1);
+  return false;
+}
+
+State Alternatives::on_preempt() {
+  for (const auto& c : chosen_) c->preempt();
+  set_result("preempted", -1);
+  return State::Failure;
+}
+
+InferGroup::InferGroup(TaskContext& ctx, Implementation owner, std::shared_ptr<Scope> scope)
+    : CompoundNode("", "", make_processor("SerialStar")), ctx_(ctx), owner_(std::move(owner)), scope_(std::move(scope)) {}
+
+bool InferGroup::start() {
+  const std::string err = infer_invalid(ctx_, owner_, *scope_);
+  if (!err.empty()) {
+    set_result(err, -1);
+    return false;
+  }
+  return true;
 }
 
 // ---------------------------------------------------------------- compound
@@ -300,7 +390,11 @@ bool RemoteCompound::start() {
     std::unique_ptr<Node> node;
     try {
       if (n.type.empty()) {
-        auto group = std::make_unique<CompoundNode>("", "", make_processor(n.processor));
+        std::unique_ptr<CompoundNode> group;
+        if (n.processor == "InferInvalid")
+          group = std::make_unique<InferGroup>(ctx_, impl_, scopes[i]);
+        else
+          group = std::make_unique<CompoundNode>("", "", make_processor(n.processor));
         groups[i] = group.get();
         node = std::move(group);
       } else {
@@ -311,7 +405,13 @@ bool RemoteCompound::start() {
                      -1);
           return false;
         }
-        node = make_skill_node(ctx_, *impls.front(), scopes[i]);
+        if (impls.size() > 1 && n.label.empty()) {
+          std::vector<Implementation> copies;
+          for (const auto* x : impls) copies.push_back(*x);
+          node = std::make_unique<Alternatives>(ctx_, std::move(copies), scopes[i]);
+        } else {
+          node = make_skill_node(ctx_, *impls.front(), scopes[i]);
+        }
       }
     } catch (const std::invalid_argument& e) {
       set_result("expand of " + impl_.description.label + ": " + e.what(), -1);
@@ -327,7 +427,16 @@ bool RemoteCompound::start() {
     }
   }
   try {
-    install(make_processor(tree.nodes[0].processor), std::move(top));
+    std::string proc = tree.nodes[0].processor;
+    if (proc == "InferInvalid") {  // infer the compound's invalid parameters, then run in sequence
+      const std::string inferred = infer_invalid(ctx_, impl_, *scope_);
+      if (!inferred.empty()) {
+        set_result(inferred, -1);
+        return false;
+      }
+      proc = "SerialStar";
+    }
+    install(make_processor(proc), std::move(top));
   } catch (const std::invalid_argument& e) {
     set_result("expand of " + impl_.description.label + ": " + e.what(), -1);
     return false;

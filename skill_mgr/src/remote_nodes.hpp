@@ -40,8 +40,13 @@ struct TaskContext {
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope,
                                  Blackboard& bb, std::string* missing, const wm::WorldStore* world = nullptr);
 // At a skill's start: gather, ground abstract element parameters, check pre-conditions.
-// Returns "" or why the skill cannot start.
-std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params);
+// Returns "" or why the skill cannot start. With `dry_run` the blackboard is not written
+// (choosing among implementations).
+std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params,
+                          bool dry_run = false);
+// InferInvalid: element parameters of `impl` whose element is gone from the world model
+// (or never was concrete) are grounded again and written to the blackboard.
+std::string infer_invalid(TaskContext& ctx, const Implementation& impl, const Scope& scope);
 // "" or which condition does not hold.
 std::string check_hold(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params);
 std::string check_post(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params);
@@ -68,6 +73,43 @@ class RemotePrimitive : public Node {
   int64_t instance_ = 0;
   bool first_ = true;
   bool unresponsive_ = false;  // its process did not answer: do not wait for it again
+  int64_t wm_version_ = -1;    // the world version the skill has seen (from its last reply)
+};
+
+// A placeholder without a label whose type has several implementations: at start it
+// takes the first (label order) that can start (its parameters ground and its
+// pre-conditions hold), and runs it.
+class Alternatives : public Node {
+ public:
+  Alternatives(TaskContext& ctx, std::vector<Implementation> impls, std::shared_ptr<Scope> scope);
+  const Children& children() const override { return chosen_; }
+
+ protected:
+  bool start() override;
+  State step() override { return chosen_.front()->tick(); }
+  State on_preempt() override;
+  void on_reset() override { chosen_.clear(); }
+
+ private:
+  TaskContext& ctx_;
+  std::vector<Implementation> impls_;
+  std::shared_ptr<Scope> scope_;
+  Children chosen_;
+};
+
+// An anonymous group under InferInvalid: infers its compound's invalid parameters when it
+// starts, then runs its children in sequence.
+class InferGroup : public CompoundNode {
+ public:
+  InferGroup(TaskContext& ctx, Implementation owner, std::shared_ptr<Scope> scope);
+
+ protected:
+  bool start() override;
+
+ private:
+  TaskContext& ctx_;
+  Implementation owner_;
+  std::shared_ptr<Scope> scope_;
 };
 
 class RemoteCompound : public CompoundNode {

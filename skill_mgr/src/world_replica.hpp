@@ -20,11 +20,13 @@ namespace skillbus::skills {
 class WorldReplica {
  public:
   // Subscribes to the change stream through `participant`.
-  WorldReplica(Bus& bus, LockstepParticipant& participant, const std::vector<std::string>& ontology_files);
+  WorldReplica(Bus& bus, LockstepParticipant& participant, const std::vector<std::string>& ontology_files,
+               bool wall_clock);
   // Makes sure the replica has been filled once (tries the server for `timeout`).
   // Returns false, with `why`, when no world model server answers.
   bool ensure(std::chrono::milliseconds timeout, std::string* why);
-  // Dispatches the bus until the replica has `version` (bounded by `timeout`).
+  // Dispatches the bus until the replica has `version` (bounded by `timeout`). Only in
+  // wall-clock mode: under lockstep changes arrive at frame boundaries, for everyone alike.
   void wait_for(int64_t version, std::chrono::milliseconds timeout);
   const wm::WorldStore& store() const { return store_; }
   const wm::Ontology& ontology() const { return ontology_; }
@@ -41,6 +43,7 @@ class WorldReplica {
   wm::WorldStore store_;
   bool ready_ = false;
   bool stale_ = false;
+  bool wall_clock_ = false;
 };
 
 }  // namespace skillbus::skills

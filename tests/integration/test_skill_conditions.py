@@ -18,7 +18,7 @@ def system(sandbox, tmp_path):
                          "--scene", REPO / "deploy" / "scenes" / "demo.ttl"])
     sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
     proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
-                                   "--library", "condition_skills"], env={"PYTHONPATH": str(LIBS)})
+                                   "--library", "condition_skills", "--world-model"], env={"PYTHONPATH": str(LIBS)})
     deadline = time.monotonic() + 30
     while "registered" not in proc.stderr():
         assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
@@ -81,3 +81,18 @@ def test_a_broken_hold_condition_stops_a_running_primitive(system):
     out = run.stdout()
     assert "hold-condition StillOnTable failed" in out, out
     assert "held" not in out
+
+
+def test_without_a_label_the_implementation_that_can_start_is_taken(system):
+    rc, out, _ = cli(system, "run", "PickUp", "--timeout", "20")
+    assert rc == 0 and "cube skiros:Cube-2" in out, out  # a_pickup_cylinder cannot ground a cylinder
+    rc, out, _ = cli(system, "run", "PickUp", "--label", "a_pickup_cylinder", "--timeout", "20")
+    assert rc == 1 and "cannot ground parameter Object" in out, out
+
+
+def test_infer_invalid_re_grounds_what_a_round_made_invalid(system):
+    # Each round moves Object to the bin; its OnTable pre-condition then fails, so
+    # InferInvalid grounds Object again: the next cube on the table.
+    rc, out, _ = cli(system, "run", "Clear", "--verbose", "--timeout", "30")
+    assert rc == 0, out
+    assert 'Moved=["skiros:Cube-2", "skiros:Cube-3", "skiros:Cube-4"]' in out, out

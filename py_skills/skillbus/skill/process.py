@@ -96,6 +96,7 @@ class SkillProcess:
     def _reply(self, skill: SkillCore | None, state: State, message: str, code: int = 0) -> skill_tick_reply_t:
         r = skill_tick_reply_t()
         r.state, r.message, r.code = int(state), message, code
+        r.wm_version = self.wmi.version if self.wmi is not None else -1
         if skill is not None:
             r.progress = float(getattr(skill, "progress", 0.0))
             r.params = [param_msg(p) for _, p in skill.params.items()]

@@ -1,7 +1,8 @@
 """A test library: one skill per condition class, grounding, and a hold-condition."""
 
 from skillbus.skill import (ConditionAbstractRelation, ConditionGenerate, ConditionHasProperty, ConditionIsSpecified,
-                            ConditionOnType, ConditionProperty, ConditionRelation, Element, ParamTypes,
+                            ConditionOnType, ConditionProperty, ConditionRelation, Element, InferInvalid, Loop,
+                            ParamTypes, SkillBase,
                             PrimitiveBase, SkillDescription)
 
 
@@ -106,3 +107,70 @@ class hold(PrimitiveBase):
     def execute(self):
         self.n += 1
         return self.step(f"holding {self.n}") if self.n < 100 else self.success("held")
+
+
+# ---- alternatives and InferInvalid -------------------------------------------------
+class PickUp(SkillDescription):
+    """Two implementations: one needs a cylinder (none in the demo scene), one a cube."""
+
+    def createDescription(self):
+        self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+
+
+class pickup_cylinder(PrimitiveBase):
+    def createDescription(self):
+        self.setDescription(PickUp(), "a_pickup_cylinder")  # first in label order
+        self.description.addPreCondition(ConditionOnType("IsCylinder", "Object", "skiros:Cylinder"))
+
+    def execute(self):
+        return self.success(f"cylinder {self.params['Object'].value.id}")
+
+
+class pickup_cube(PrimitiveBase):
+    def createDescription(self):
+        self.setDescription(PickUp(), "b_pickup_cube")
+        self.description.addPreCondition(ConditionOnType("IsCube", "Object", "skiros:Cube"))
+
+    def execute(self):
+        return self.success(f"cube {self.params['Object'].value.id}")
+
+
+class Clear(SkillDescription):
+    """Moves every cube from the table to the bin, re-inferring Object each round."""
+
+    def createDescription(self):
+        self.addParam("Table", Element("skiros:Table"), ParamTypes.Inferred)
+        self.addParam("Bin", Element("skiros:Bin"), ParamTypes.Inferred)
+        self.addParam("Object", Element("skiros:Cube"), ParamTypes.Optional)
+        self.addParam("Moved", list, ParamTypes.Optional)
+        self.addPreCondition(ConditionRelation("OnTable", "skiros:contain", "Table", "Object", True))
+
+
+class MoveToBin(SkillDescription):
+    def createDescription(self):
+        self.addParam("Table", Element("skiros:Table"), ParamTypes.Required)
+        self.addParam("Bin", Element("skiros:Bin"), ParamTypes.Required)
+        self.addParam("Object", Element("skiros:Cube"), ParamTypes.Required)
+        self.addParam("Moved", list, ParamTypes.Optional)
+
+
+class move_to_bin(PrimitiveBase):
+    def createDescription(self):
+        self.setDescription(MoveToBin(), "move_to_bin")
+
+    def execute(self):
+        t, b, o = (self.params[k].value.id for k in ("Table", "Bin", "Object"))
+        self.wmi.set_relation(t, "skiros:contain", o, False)
+        self.wmi.set_relation(b, "skiros:contain", o, True)
+        self.params["Moved"].value = (self.params["Moved"].value or []) + [o]
+        return self.success(f"moved {o}")
+
+
+class clear(SkillBase):
+    def createDescription(self):
+        self.setDescription(Clear(), "clear")
+
+    def expand(self, skill):
+        from skillbus.skill import InferInvalid, Loop
+        skill.setProcessor(Loop(3))
+        skill(self.skill(InferInvalid())(self.skill("MoveToBin", "")))
