@@ -128,3 +128,16 @@ def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):
         time.sleep(0.05)
     rc, out, _ = cli(sandbox, "run", "Consume", "-p", "Item=x", "--timeout", "20")
     assert rc == 0 and "consumed x" in out, out
+
+
+def test_several_tasks_run_at_once(sandbox):
+    start_system(sandbox, "flow_skills")
+    runs = [sandbox.start(f"run{i}", [sys.executable, "-m", "skillbus.cli", "run", "Wait", "-p", f"Ticks={n}",
+                                      "--timeout", "60"], env={"PYTHONPATH": str(LIBS)})
+            for i, n in enumerate((40, 20))]
+    for r in runs:
+        assert sandbox.wait(r, 60) == 0, r.stdout() + r.stderr()
+    outs = [r.stdout() for r in runs]
+    ids = sorted(int(o.split("task ")[1].split(":")[0]) for o in outs)
+    assert ids == [1, 2]  # two tasks, each with its own id and its own result
+    assert all("Wait Success: waited" in o for o in outs)
