@@ -124,7 +124,8 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
   for (const auto& p : req.params) t->blackboard.set(p.key, p);  // a fresh blackboard per task
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
-                                                        opt_.tick_timeout, 1, &world_, opt_.robot});
+                                                        opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot});
+  // (instance ids name running primitives in skill processes: unique across tasks)
   auto impls = registry_.find(req.type, req.label);
   if (impls.empty()) {
     SB_WARN(kLog, "task " << id << ": skill " << req.type << " is not available");
