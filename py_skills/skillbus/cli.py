@@ -30,6 +30,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--lose-acks-every", type=int, default=0, help="test: lose every N-th ack")
     p.add_argument("--clock-timeout", type=float, default=10.0)
     p.add_argument("--message-timeout", type=float, default=2.0)
+    hub = sub.add_parser("can-hub", help="run a virtual SocketCAN bus (a hub on a Unix socket)")
+    hub.add_argument("--channel", default="vcan0", help="a name (socket under $SKILLBUS_CAN_DIR) or a socket path")
+    hub.add_argument("--queue-limit", type=int, default=20000, help="records queued per client before back-pressure")
+    hub.add_argument("--stall-timeout", type=float, default=2.0,
+                     help="disconnect a client that takes nothing for this long while over its queue limit")
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
     from skillbus.skill import cli as skill_cli
@@ -46,6 +51,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command in ("skills-process", "skills", "run", "stop", "pause", "resume", "step"):
         from skillbus.skill import cli as skill_cli
         return skill_cli.main(args)
+    if args.command == "can-hub":
+        from skillbus.can import hub
+        return hub.main(args)
     if args.command == "wm":
         from skillbus.world import cli as wm_cli
         return wm_cli.main(args)

@@ -1,0 +1,202 @@
+"""The virtual SocketCAN hub: relays records between the clients of one channel.
+
+    skillbus can-hub --channel gripper0        # socket $SKILLBUS_CAN_DIR/gripper0.sock
+
+SocketCAN semantics:
+* a record from one client goes to every other client, in the order it arrived;
+* a client gets its own records back only if it asked (control record b"ECHO1");
+* nothing is dropped: each client has an outgoing queue; while any queue is over its
+  limit, the hub stops reading from senders (back-pressure) until it drains;
+* a client that dies or hangs up is removed; the others go on. So is a client that stops
+  reading: one whose queue stays over the limit without draining for `stall_timeout`
+  seconds is disconnected (logged with what it had queued), since the kernel's SocketCAN
+  would not hold up a bus for one socket either;
+* a record that is neither 16 nor 72 bytes is counted and dropped (a broken client).
+Filters are applied by each client (python-can's id/mask filters, as SocketCAN applies
+them per socket).
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import os
+import selectors
+import signal
+import socket
+import sys
+import time
+from pathlib import Path
+
+from skillbus.can.records import CAN_MTU, CANFD_MTU
+
+log = logging.getLogger("can-hub")
+QUEUE_LIMIT = 20000     # records per client before back-pressure
+ECHO_ON, ECHO_OFF = b"ECHO1", b"ECHO0"
+
+
+def socket_dir() -> Path:
+    return Path(os.environ.get("SKILLBUS_CAN_DIR", "/tmp/skillbus-can"))
+
+
+def socket_path(channel: str) -> Path:
+    """A channel is a name (under SKILLBUS_CAN_DIR) or a path to the hub's socket."""
+    return Path(channel) if "/" in channel else socket_dir() / f"{channel}.sock"
+
+
+class Client:
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock = sock
+        self.out: collections.deque[bytes] = collections.deque()
+        self.echo = False
+        self.last_progress = time.monotonic()  # when it last took a record
+
+
+class Hub:
+    def __init__(self, path: Path, queue_limit: int = QUEUE_LIMIT, stall_timeout: float = 2.0) -> None:
+        self.path = path
+        self.queue_limit, self.stall_timeout = queue_limit, stall_timeout
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if path.exists():
+            path.unlink()  # a stale socket from a hub that died
+        self.listener = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        self.listener.bind(str(path))
+        self.listener.listen(64)
+        self.listener.setblocking(False)
+        self.sel = selectors.DefaultSelector()
+        self.sel.register(self.listener, selectors.EVENT_READ)
+        self.clients: dict[int, Client] = {}
+        self.relayed = self.bad = self.stalled = 0
+        self.running = True
+
+    def _update(self, c: Client) -> None:
+        events = (0 if self._paused() else selectors.EVENT_READ) | (selectors.EVENT_WRITE if c.out else 0)
+        try:
+            if events:
+                self.sel.modify(c.sock, events, c)
+            else:
+                self.sel.modify(c.sock, selectors.EVENT_READ, c)  # always notice a hang-up
+        except KeyError:
+            pass
+
+    def _paused(self) -> bool:
+        return any(len(c.out) > self.queue_limit for c in self.clients.values())
+
+    def _drop(self, c: Client, why: str) -> None:
+        log.info("client %d left (%s)", c.sock.fileno(), why)
+        self.clients.pop(c.sock.fileno(), None)
+        try:
+            self.sel.unregister(c.sock)
+        except (KeyError, ValueError):
+            pass
+        c.sock.close()
+
+    def _read(self, c: Client) -> None:
+        for _ in range(256):  # a burst per wake-up, fairly
+            if self._paused():
+                return
+            try:
+                rec = c.sock.recv(CANFD_MTU + 1)
+            except BlockingIOError:
+                return
+            except OSError as e:
+                self._drop(c, str(e))
+                return
+            if not rec:
+                self._drop(c, "hung up")
+                return
+            if rec in (ECHO_ON, ECHO_OFF):
+                c.echo = rec == ECHO_ON
+                continue
+            if len(rec) not in (CAN_MTU, CANFD_MTU):
+                self.bad += 1
+                if self.bad <= 5 or self.bad % 1000 == 0:
+                    log.warning("dropped a %d-byte record (not a can_frame or canfd_frame; %d so far)",
+                                len(rec), self.bad)
+                continue
+            for other in list(self.clients.values()):
+                if other is not c or c.echo:
+                    other.out.append(rec)
+                    self._update(other)
+            self.relayed += 1
+
+    def _write(self, c: Client) -> None:
+        while c.out:
+            try:
+                c.sock.send(c.out[0])
+            except BlockingIOError:
+                break
+            except OSError as e:
+                self._drop(c, str(e))
+                return
+            c.out.popleft()
+            c.last_progress = time.monotonic()
+        self._update(c)
+        if not self._paused():
+            for other in list(self.clients.values()):
+                self._update(other)
+
+    def _drop_stalled(self) -> None:
+        now = time.monotonic()
+        for c in list(self.clients.values()):
+            if len(c.out) > self.queue_limit and now - c.last_progress > self.stall_timeout:
+                log.warning("client %d stopped reading: disconnected with %d records queued", c.sock.fileno(),
+                            len(c.out))
+                self.stalled += 1
+                self._drop(c, "stopped reading")
+        for c in list(self.clients.values()):
+            self._update(c)
+
+    def run(self) -> None:
+        log.info("virtual SocketCAN hub on %s", self.path)
+        while self.running:
+            if self._paused():
+                self._drop_stalled()
+            for key, events in self.sel.select(timeout=0.2):
+                if key.fileobj is self.listener:
+                    try:
+                        sock, _ = self.listener.accept()
+                    except BlockingIOError:
+                        continue
+                    sock.setblocking(False)
+                    c = Client(sock)
+                    c.last_progress = time.monotonic()
+                    self.clients[sock.fileno()] = c
+                    self.sel.register(sock, selectors.EVENT_READ, c)
+                    continue
+                c = key.data
+                if c.sock.fileno() not in self.clients:
+                    continue
+                if events & selectors.EVENT_WRITE:
+                    self._write(c)
+                if events & selectors.EVENT_READ and c.sock.fileno() in self.clients:
+                    self._read(c)
+        self.close()
+
+    def close(self) -> None:
+        for c in list(self.clients.values()):
+            self._drop(c, "hub stopping")
+        self.sel.close()
+        self.listener.close()
+        try:
+            self.path.unlink()
+        except FileNotFoundError:
+            pass
+
+
+def main(args) -> int:
+    hub = Hub(socket_path(args.channel), args.queue_limit, args.stall_timeout)
+
+    def stop(*_):
+        hub.running = False
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
+    print(f"can-hub {hub.path}", flush=True)
+    hub.run()
+    print(f'{{"relayed": {hub.relayed}, "bad": {hub.bad}, "stalled": {hub.stalled}}}', flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
