@@ -23,5 +23,5 @@ def test_records_of_other_sizes_or_lengths_are_refused():
         from_record(b"not a frame")
     bad = bytearray(to_record(can.Message(arbitration_id=1, data=b"", is_extended_id=False)))
     bad[4] = 9  # a classic frame claiming 9 data bytes
-    with pytest.raises(ValueError, match="CAN record with 9 data bytes"):
+    with pytest.raises(ValueError, match=r"a CAN record with \d+ data bytes"):
         from_record(bytes(bad))
