@@ -35,6 +35,13 @@ def build_parser() -> argparse.ArgumentParser:
     hub.add_argument("--queue-limit", type=int, default=20000, help="records queued per client before back-pressure")
     hub.add_argument("--stall-timeout", type=float, default=2.0,
                      help="disconnect a client that takes nothing for this long while over its queue limit")
+    dev = sub.add_parser("gripper-device", help="the simulated CANopen (CiA 402) gripper, standalone")
+    dev.add_argument("--channel", default="vcan0")
+    dev.add_argument("--interface", default="skillbus_vcan", help="python-can interface (socketcan on real CAN)")
+    dev.add_argument("--node-id", type=int, default=5)
+    dev.add_argument("--eds", default=None)
+    dev.add_argument("--object-width", type=float, default=None, help="um: an object between the fingers")
+    dev.add_argument("--period-ms", type=float, default=10.0)
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
     from skillbus.skill import cli as skill_cli
@@ -51,6 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command in ("skills-process", "skills", "run", "stop", "pause", "resume", "step"):
         from skillbus.skill import cli as skill_cli
         return skill_cli.main(args)
+    if args.command == "gripper-device":
+        from skillbus.can import device
+        return device.main(args)
     if args.command == "can-hub":
         from skillbus.can import hub
         return hub.main(args)

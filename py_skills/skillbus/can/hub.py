@@ -50,6 +50,7 @@ class Client:
         self.out: collections.deque[bytes] = collections.deque()
         self.echo = False
         self.last_progress = time.monotonic()  # when it last took a record
+        self.gone = False  # its end is closed for reading: relay nothing more to it
 
 
 class Hub:
@@ -115,7 +116,7 @@ class Hub:
                                 len(rec), self.bad)
                 continue
             for other in list(self.clients.values()):
-                if other is not c or c.echo:
+                if not other.gone and (other is not c or c.echo):
                     other.out.append(rec)
                     self._update(other)
             self.relayed += 1
@@ -127,7 +128,12 @@ class Hub:
             except BlockingIOError:
                 break
             except OSError as e:
-                self._drop(c, str(e))
+                # Its end is closed, but records it sent before closing may still wait to be
+                # read: stop writing, and drop it when the read side sees the hang-up.
+                log.info("client %d no longer reads (%s)", c.sock.fileno(), e)
+                c.gone = True
+                c.out.clear()
+                self._update(c)
                 return
             c.out.popleft()
             c.last_progress = time.monotonic()
@@ -167,10 +173,10 @@ class Hub:
                 c = key.data
                 if c.sock.fileno() not in self.clients:
                     continue
-                if events & selectors.EVENT_WRITE:
-                    self._write(c)
-                if events & selectors.EVENT_READ and c.sock.fileno() in self.clients:
+                if events & selectors.EVENT_READ:  # reads first: what a client sent before leaving counts
                     self._read(c)
+                if events & selectors.EVENT_WRITE and c.sock.fileno() in self.clients:
+                    self._write(c)
         self.close()
 
     def close(self) -> None:
