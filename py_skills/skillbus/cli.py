@@ -44,6 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
     dev.add_argument("--period-ms", type=float, default=10.0)
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
+    from skillbus.sim import cli as sim_cli
+    sim_cli.add_parsers(sub)
     from skillbus.skill import cli as skill_cli
     skill_cli.add_parsers(sub)
     return ap
@@ -67,6 +69,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "wm":
         from skillbus.world import cli as wm_cli
         return wm_cli.main(args)
+    from skillbus.sim import cli as sim_cli
+    if args.command in sim_cli.COMMANDS:
+        return sim_cli.main(args)
     if args.command == "lockstep-participant":
         from skillbus import lockstep_demo
         return lockstep_demo.main(args)

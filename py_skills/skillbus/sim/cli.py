@@ -1,0 +1,61 @@
+"""Command-line parts for the physics server: ``skillbus sim ...``, ``skillbus sim-script``
+and ``skillbus scene turtle``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+COMMANDS = ("sim", "sim-script", "scene")
+
+
+def add_parsers(sub) -> None:
+    s = sub.add_parser("sim", help="the physics server's control services (status, reset, ...)")
+    s.add_argument("action", choices=["status", "digest", "reset", "load-scene", "pause", "resume"])
+    s.add_argument("scene", nargs="?", default="", help="load-scene: the scene file")
+    s.add_argument("--url", default=None)
+    s.add_argument("--timeout", type=float, default=5.0)
+
+    p = sub.add_parser("sim-script", help="play a command script against the physics server (lockstep)")
+    p.add_argument("script", help="JSON: {\"steps\": [{\"at_s\": 0.5, \"arm\"|\"gripper\": {...}}]}")
+    p.add_argument("--name", default="script")
+    p.add_argument("--url", default=None)
+    p.add_argument("--out", default=None, help="write the recorded states and replies here (JSON)")
+    p.add_argument("--clock-timeout", type=float, default=10.0)
+
+    sc = sub.add_parser("scene", help="scene files: turn one into the world model's Turtle scene")
+    sc.add_argument("action", choices=["turtle"])
+    sc.add_argument("scene", help="the scene file (JSON, docs/scene.md)")
+    sc.add_argument("-o", "--output", default=None, help="write here instead of stdout")
+
+
+def main(args: argparse.Namespace) -> int:
+    if args.command == "sim-script":
+        from skillbus.sim import script
+        return script.main(args)
+    if args.command == "scene":
+        from skillbus.sim import scene
+        try:
+            text = scene.to_turtle(scene.load(args.scene))
+        except scene.SceneError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        if args.output:
+            with open(args.output, "w") as f:
+                f.write(text)
+        else:
+            sys.stdout.write(text)
+        return 0
+    from skillbus.bus import open_bus
+    from skillbus.rpc import RpcError
+    from skillbus.sim.client import SimClient
+    c = SimClient(open_bus(args.url), timeout=args.timeout)
+    action = args.action.replace("-", "_")
+    try:
+        rep = c.load_scene(args.scene) if action == "load_scene" else getattr(c, action)()
+    except RpcError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    print(json.dumps(rep) if isinstance(rep, dict) else rep)
+    return 0

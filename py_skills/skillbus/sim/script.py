@@ -1,0 +1,118 @@
+"""``skillbus sim-script``: a lockstep participant that plays a command script against
+the physics server and records what it publishes.
+
+The script (JSON) lists commands at sim times::
+
+    {"steps": [
+       {"at_s": 0.0, "arm": {"id": "up", "joints": ["joint2"], "points": [[1.0, [0.3]]]}},
+       {"at_s": 1.5, "gripper": {"id": "close", "width": 0.0, "speed": 0.05, "force_limit": 20}}
+     ],
+     "record_every": 10}
+
+A step is sent in the first frame whose sim time is at least ``at_s``, so the same
+script gives the same messages in the same frames on every run. Every
+``record_every``-th state (and every command reply) goes to ``--out`` as JSON.
+Timing comes only from the frames: no wall clock, no randomness.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from skillbus.bus import open_bus
+from skillbus.lockstep import LockstepParticipant, StampedMessage
+from skillbus.msgs import decode, sim_cmd_reply_t, sim_state_t
+from skillbus.sim.messages import (arm_channel, arm_command, gripper_channel, gripper_command, reply_channel,
+                                   state_channel, state_dict)
+
+
+class ScriptError(ValueError):
+    pass
+
+
+def load_script(path: str) -> dict[str, Any]:
+    try:
+        script = json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError) as e:
+        raise ScriptError(f"{path}: {e}") from e
+    steps = script.get("steps", [])
+    if not isinstance(steps, list):
+        raise ScriptError(f"{path}: steps must be a list")
+    for i, s in enumerate(steps):
+        if not isinstance(s, dict) or not isinstance(s.get("at_s"), (int, float)):
+            raise ScriptError(f"{path}: steps[{i}] needs a number at_s")
+        if not ({"arm", "gripper", "raw"} & set(s)):
+            raise ScriptError(f"{path}: steps[{i}] has no arm, gripper or raw command")
+    script["steps"] = sorted(steps, key=lambda s: s["at_s"])  # stable: equal times keep file order
+    return script
+
+
+class ScriptPlayer:
+    def __init__(self, p: LockstepParticipant, script: dict[str, Any]) -> None:
+        self.p = p
+        self.steps = list(script["steps"])
+        self.record_every = int(script.get("record_every", 10))
+        self.states: list[dict[str, Any]] = []
+        self.replies: list[dict[str, Any]] = []
+        self.last_state: dict[str, Any] | None = None
+        self.bad = 0
+        p.subscribe(state_channel(), self.on_state)
+        p.subscribe(reply_channel(), self.on_reply)
+        p.on_frame = self.on_frame
+
+    def on_state(self, m: StampedMessage) -> None:
+        s = decode(sim_state_t, m.data)
+        if s is None:
+            self.bad += 1
+            return
+        self.last_state = state_dict(s)
+        if s.header.frame % self.record_every == 0:
+            self.states.append(self.last_state)
+
+    def on_reply(self, m: StampedMessage) -> None:
+        r = decode(sim_cmd_reply_t, m.data)
+        if r is None:
+            self.bad += 1
+            return
+        self.replies.append({"frame": r.header.frame, "id": r.id, "command": r.command,
+                             "accepted": bool(r.accepted), "error": r.error})
+
+    def on_frame(self, frame: int, sim_time_ns: int) -> None:
+        while self.steps and self.steps[0]["at_s"] * 1e9 <= sim_time_ns + 1:
+            step = self.steps.pop(0)
+            if "arm" in step:
+                a = step["arm"]
+                self.p.publish(arm_channel(), arm_command(a.get("id", ""), a["joints"],
+                                                          [(t, q) for t, q in a["points"]]))
+            if "gripper" in step:
+                g = step["gripper"]
+                self.p.publish(gripper_channel(), gripper_command(g.get("id", ""), g["width"], g.get("speed", 0.1),
+                                                                  g.get("force_limit", 20.0)))
+            if "raw" in step:  # tests: bytes that are not a valid command, on a command channel
+                r = step["raw"]
+                self.p.bus.publish(arm_channel() if r.get("channel") == "arm" else gripper_channel(),
+                                   bytes.fromhex(r["hex"]))
+
+
+def main(args) -> int:
+    try:
+        script = load_script(args.script)
+    except ScriptError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    bus = open_bus(args.url)
+    p = LockstepParticipant(bus, args.name, clock_timeout=args.clock_timeout)
+    player = ScriptPlayer(p, script)
+    r = p.run()
+    p.close()
+    if args.out:
+        Path(args.out).write_text(json.dumps({"states": player.states, "replies": player.replies,
+                                              "last_state": player.last_state}))
+    print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "sim_time_s": r.sim_time_ns * 1e-9,
+                      "digest": r.digest_hex, "replies": len(player.replies),
+                      "rejected": sum(1 for x in player.replies if not x["accepted"]), "bad_input": player.bad,
+                      "steps_left": len(player.steps)}), flush=True)
+    return 0 if r.ok else 1

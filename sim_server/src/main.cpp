@@ -1,0 +1,71 @@
+// sim_server: the DART physics server. See sim_server/README.md.
+#include <csignal>
+#include <cstdio>
+
+#include "../../common/apps/args.hpp"
+#include "server.hpp"
+
+using namespace skillbus;
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+std::string json_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) { o += ' '; continue; }
+    o += c;
+  }
+  return o;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  apps::Args args(argc, argv,
+                  {"url", "scene", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
+                   "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms"},
+                  {"wall-clock"});
+  sim::ServerOptions o;
+  o.scene_file = args.str("scene");
+  if (o.scene_file.empty()) apps::Args::die("--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
+  o.name = args.str("name", "sim");
+  o.participants = args.list("participants");
+  o.wall_clock = args.flag("wall-clock");
+  o.speed = args.real("speed", 1.0);
+  o.collision_detector = args.str("collision");
+  o.step_ms = args.real("step-ms", 0);
+  o.frame_ms = args.real("frame-ms", 0);
+  o.frames = args.num("frames", -1);
+  o.duration_s = args.real("duration-s", 0);
+  o.join_timeout = std::chrono::milliseconds(args.num("join-timeout-ms", 10000));
+  o.ack_timeout = std::chrono::milliseconds(args.num("ack-timeout-ms", 5000));
+  o.message_timeout = std::chrono::milliseconds(args.num("message-timeout-ms", 2000));
+
+  std::unique_ptr<Bus> bus;
+  std::unique_ptr<sim::SimServer> server;
+  try {
+    bus = open_bus(args.str("url"));
+    server = std::make_unique<sim::SimServer>(*bus, o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sim_server: cannot start: %s\n", e.what());
+    return 2;
+  }
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGINT, on_signal);
+  const sim::ServerReport rep = server->run_until([] { return g_stop != 0; });
+  const auto& r = rep.run;
+  const double rtf = r.wall_seconds > 0 ? r.sim_time_ns * 1e-9 / r.wall_seconds : 0.0;
+  std::printf(
+      "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"sim_time_s\": %.3f, \"wall_time_s\": %.3f, "
+      "\"real_time_factor\": %.2f, \"steps\": %lld, \"physics_us_per_step\": %.1f, \"collision_detector\": \"%s\", "
+      "\"participants\": %zu, \"state_digest\": \"%s\", \"session_digest\": \"%s\", \"commands_accepted\": %ld, "
+      "\"commands_rejected\": %ld, \"bad_input\": %ld}\n",
+      r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
+      r.wall_seconds, rtf, static_cast<long long>(rep.steps), rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0,
+      server->physics().collision_detector().c_str(), o.participants.size(), to_hex(rep.state_digest).c_str(),
+      r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input);
+  std::fflush(stdout);
+  return r.ok ? 0 : 1;
+}

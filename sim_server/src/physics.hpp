@@ -1,0 +1,61 @@
+// The simulated robot and world: a DART world built from a scene file, the arm's joint
+// controller (computed torque: gravity and Coriolis compensation plus PD on a joint
+// trajectory) and the finger controller (position ramp with a force limit), stepped a
+// frame at a time. DART stays behind this header (pimpl) so nothing else compiles it.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene.hpp"
+#include "skillbus/digest.hpp"
+#include "skillbus_msgs/sim_state_t.hpp"
+#include "trajectory.hpp"
+
+namespace skillbus::sim {
+
+struct ArmCommand {
+  std::string id;
+  std::vector<std::string> joints;
+  std::vector<Waypoint> points;
+};
+
+struct GripperCommand {
+  std::string id;
+  double width = 0, speed = 0, force_limit = 0;
+};
+
+class Physics {
+ public:
+  explicit Physics(const Scene& scene);  // throws SceneError when the scene cannot be built
+  ~Physics();
+  Physics(const Physics&) = delete;
+  Physics& operator=(const Physics&) = delete;
+
+  // Back to the scene's initial state (time keeps running; the world restarts).
+  void reset();
+
+  // Validate and take a command; the error (empty when accepted) names what was wrong.
+  // A rejected command changes nothing: the robot holds its targets.
+  std::string command_arm(const ArmCommand& cmd);
+  std::string command_gripper(const GripperCommand& cmd);
+
+  void step_frame();  // frame_ms / step_ms physics steps with the controllers
+  void fill_state(skillbus_msgs::sim_state_t& out) const;
+  // SHA-256 over every skeleton's positions and velocities (bit patterns), in scene order.
+  Digest digest() const;
+
+  const Scene& scene() const;
+  int steps_per_frame() const;
+  int64_t step_count() const;
+  std::string collision_detector() const;
+  double physics_seconds() const;  // wall time spent inside DART's step (benchmarks only)
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace skillbus::sim

@@ -1,0 +1,215 @@
+#include "scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+namespace skillbus::sim {
+
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+// Reads fields of one JSON object and names the offending field in every error.
+class Reader {
+ public:
+  Reader(const json& j, std::string where, std::string file) : j_(j), where_(std::move(where)), file_(std::move(file)) {
+    if (!j_.is_object()) fail("must be an object");
+  }
+
+  [[noreturn]] void fail(const std::string& what) const { throw SceneError(file_ + ": " + where_ + " " + what); }
+  [[noreturn]] void fail_field(const std::string& key, const std::string& what) const {
+    throw SceneError(file_ + ": " + field(key) + " " + what);
+  }
+  std::string field(const std::string& key) const { return where_.empty() ? key : where_ + "." + key; }
+  bool has(const std::string& key) const { return j_.contains(key); }
+
+  std::string str(const std::string& key, const std::string& def, bool required = false) const {
+    if (!has(key)) {
+      if (required) fail_field(key, "is missing");
+      return def;
+    }
+    if (!j_[key].is_string()) fail_field(key, "must be a string");
+    const std::string s = j_[key].get<std::string>();
+    if (required && s.empty()) fail_field(key, "must not be empty");
+    return s;
+  }
+  double num(const std::string& key, double def) const {
+    if (!has(key)) return def;
+    if (!j_[key].is_number()) fail_field(key, "must be a number");
+    const double v = j_[key].get<double>();
+    if (!std::isfinite(v)) fail_field(key, "must be finite");
+    return v;
+  }
+  template <size_t N>
+  std::array<double, N> vec(const std::string& key, std::array<double, N> def, bool required = false) const {
+    if (!has(key)) {
+      if (required) fail_field(key, "is missing");
+      return def;
+    }
+    const json& a = j_[key];
+    if (!a.is_array() || a.size() != N) fail_field(key, "must be an array of " + std::to_string(N) + " numbers");
+    std::array<double, N> out{};
+    for (size_t i = 0; i < N; ++i) {
+      if (!a[i].is_number()) fail_field(key, "[" + std::to_string(i) + "] must be a number");
+      out[i] = a[i].get<double>();
+      if (!std::isfinite(out[i])) fail_field(key, "[" + std::to_string(i) + "] must be finite");
+    }
+    return out;
+  }
+  Pose pose(const std::string& key) const {
+    Pose p = vec<7>(key, Pose{0, 0, 0, 0, 0, 0, 1});
+    const double n = std::sqrt(p[3] * p[3] + p[4] * p[4] + p[5] * p[5] + p[6] * p[6]);
+    if (n < 1e-9) fail_field(key, "has a zero quaternion (x y z qx qy qz qw)");
+    for (int i = 3; i < 7; ++i) p[i] /= n;
+    return p;
+  }
+  const json& sub(const std::string& key) const { return j_[key]; }
+
+ private:
+  const json& j_;
+  std::string where_, file_;
+};
+
+std::string resolve(const std::string& base_dir, const std::string& p) {
+  fs::path q(p);
+  if (q.is_relative()) q = fs::path(base_dir) / q;
+  return fs::weakly_canonical(q).string();
+}
+
+void check_file(const Reader& r, const std::string& key, const std::string& path) {
+  if (!fs::is_regular_file(path)) r.fail_field(key, "names a file that does not exist: " + path);
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::string& path) {
+  const std::string file = path.empty() ? "<scene>" : path;
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw SceneError(file + ": not valid JSON: " + e.what());
+  }
+  const std::string base = path.empty() ? "." : fs::path(path).parent_path().string();
+  Reader top(root, "", file);
+  Scene s;
+  s.path = path;
+  s.name = top.str("name", "scene");
+
+  if (top.has("physics")) {
+    Reader p(top.sub("physics"), "physics", file);
+    s.physics.step_ms = p.num("step_ms", 1.0);
+    s.physics.frame_ms = p.num("frame_ms", 10.0);
+    s.physics.gravity = p.vec<3>("gravity", s.physics.gravity);
+    s.physics.collision_detector = p.str("collision_detector", "bullet");
+    s.physics.lcp_solver = p.str("lcp_solver", "dantzig");
+    if (s.physics.lcp_solver != "dantzig" && s.physics.lcp_solver != "pgs")
+      p.fail_field("lcp_solver", "must be dantzig or pgs");
+    if (s.physics.step_ms <= 0) p.fail_field("step_ms", "must be > 0");
+    if (s.physics.frame_ms < s.physics.step_ms) p.fail_field("frame_ms", "must be >= step_ms");
+    const double ratio = s.physics.frame_ms / s.physics.step_ms;
+    if (std::abs(ratio - std::round(ratio)) > 1e-9) p.fail_field("frame_ms", "must be a whole number of steps");
+    const std::set<std::string> detectors{"bullet", "dart", "fcl"};
+    if (!detectors.count(s.physics.collision_detector))
+      p.fail_field("collision_detector", "must be one of bullet, dart, fcl");
+  }
+
+  if (!top.has("robot")) top.fail_field("robot", "is missing");
+  {
+    Reader r(top.sub("robot"), "robot", file);
+    s.robot.name = r.str("name", "robot", true);
+    s.robot.urdf = resolve(base, r.str("urdf", "", true));
+    check_file(r, "urdf", s.robot.urdf);
+    s.robot.pose = r.pose("pose");
+    s.robot.tool_link = r.str("tool_link", "", true);
+    s.robot.tool_offset = r.num("tool_offset", 0.0);
+    s.robot.left_finger_joint = r.str("left_finger_joint", "", true);
+    s.robot.right_finger_joint = r.str("right_finger_joint", "", true);
+    if (r.has("initial_joints")) {
+      const json& ij = r.sub("initial_joints");
+      if (!ij.is_object()) r.fail_field("initial_joints", "must be an object {joint: position}");
+      for (auto it = ij.begin(); it != ij.end(); ++it) {
+        if (!it.value().is_number() || !std::isfinite(it.value().get<double>()))
+          r.fail_field("initial_joints." + it.key(), "must be a finite number");
+        s.robot.initial_joints[it.key()] = it.value().get<double>();
+      }
+    }
+  }
+
+  std::set<std::string> names{s.robot.name};
+  auto unique_name = [&](const Reader& r, const std::string& n) {
+    if (!names.insert(n).second) r.fail_field("name", "'" + n + "' is used twice in the scene");
+  };
+  if (top.has("fixtures")) {
+    const json& arr = top.sub("fixtures");
+    if (!arr.is_array()) top.fail_field("fixtures", "must be an array");
+    for (size_t i = 0; i < arr.size(); ++i) {
+      Reader r(arr[i], "fixtures[" + std::to_string(i) + "]", file);
+      FixtureSpec f;
+      f.name = r.str("name", "", true);
+      unique_name(r, f.name);
+      f.type = r.str("type", "Fixture");
+      f.urdf = resolve(base, r.str("urdf", "", true));
+      check_file(r, "urdf", f.urdf);
+      f.pose = r.pose("pose");
+      f.friction = r.num("friction", 0.8);
+      if (f.friction < 0) r.fail_field("friction", "must be >= 0");
+      s.fixtures.push_back(f);
+    }
+  }
+  if (top.has("objects")) {
+    const json& arr = top.sub("objects");
+    if (!arr.is_array()) top.fail_field("objects", "must be an array");
+    for (size_t i = 0; i < arr.size(); ++i) {
+      Reader r(arr[i], "objects[" + std::to_string(i) + "]", file);
+      ObjectSpec o;
+      o.name = r.str("name", "", true);
+      unique_name(r, o.name);
+      o.type = r.str("type", "Object");
+      o.shape = r.str("shape", "", true);
+      if (o.shape == "box") {
+        o.size = r.vec<3>("size", {}, true);
+      } else if (o.shape == "cylinder") {
+        o.size[0] = r.num("radius", 0);
+        o.size[1] = r.num("height", 0);
+      } else {
+        r.fail_field("shape", "must be \"box\" or \"cylinder\", not \"" + o.shape + "\"");
+      }
+      for (double d : o.size)
+        if (d < 0) r.fail_field("size", "must not be negative");
+      if (o.size[0] <= 0 || o.size[1] <= 0 || (o.shape == "box" && o.size[2] <= 0))
+        r.fail_field(o.shape == "box" ? "size" : "radius/height", "must be > 0");
+      o.mass = r.num("mass", 0.1);
+      if (o.mass <= 0) r.fail_field("mass", "must be > 0");
+      o.friction = r.num("friction", 0.8);
+      if (o.friction < 0) r.fail_field("friction", "must be >= 0");
+      o.pose = r.pose("pose");
+      o.on = r.str("on", "");
+      s.objects.push_back(o);
+    }
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+      const auto& o = s.objects[i];
+      if (o.on.empty()) continue;
+      bool found = false;
+      for (const auto& f : s.fixtures) found = found || f.name == o.on;
+      if (!found)
+        throw SceneError(file + ": objects[" + std::to_string(i) + "].on names '" + o.on + "', which is not a fixture");
+    }
+  }
+  return s;
+}
+
+Scene load_scene(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open the scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_scene(ss.str(), path);
+}
+
+}  // namespace skillbus::sim

@@ -1,0 +1,71 @@
+// The scene file: one JSON document that lists the robot, the fixtures (table, bin) and
+// the graspable objects with their poses. The physics server builds its world from it,
+// and `skillbus scene turtle` turns the same file into the world model's Turtle scene,
+// so belief and truth start from one source. Format: docs/scene.md.
+#pragma once
+
+#include <array>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace skillbus::sim {
+
+// x y z qx qy qz qw, world frame.
+using Pose = std::array<double, 7>;
+
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RobotSpec {
+  std::string name;
+  std::string urdf;                         // absolute path (resolved against the scene file)
+  Pose pose{0, 0, 0, 0, 0, 0, 1};
+  std::map<std::string, double> initial_joints;
+  std::string tool_link;                    // the link the tool centre point hangs on
+  double tool_offset = 0.0;                 // m along that link's z axis
+  std::string left_finger_joint, right_finger_joint;
+};
+
+struct FixtureSpec {
+  std::string name, type, urdf;
+  Pose pose{0, 0, 0, 0, 0, 0, 1};
+  double friction = 0.8;
+};
+
+struct ObjectSpec {
+  std::string name, type;
+  std::string shape;                        // "box" or "cylinder"
+  std::array<double, 3> size{0, 0, 0};      // box: x y z; cylinder: radius, height, 0
+  double mass = 0.1;                        // kg
+  double friction = 0.8;
+  Pose pose{0, 0, 0, 0, 0, 0, 1};
+  std::string on;                           // the fixture it starts on (world model containment)
+};
+
+struct PhysicsSpec {
+  double step_ms = 1.0;
+  double frame_ms = 10.0;
+  std::array<double, 3> gravity{0, 0, -9.81};
+  std::string collision_detector = "bullet";  // bullet | dart | fcl
+  std::string lcp_solver = "dantzig";         // dantzig (PGS as fallback) | pgs
+};
+
+struct Scene {
+  std::string path;  // the file it came from
+  std::string name;
+  PhysicsSpec physics;
+  RobotSpec robot;
+  std::vector<FixtureSpec> fixtures;
+  std::vector<ObjectSpec> objects;
+};
+
+// Reads and checks a scene file. Throws SceneError naming the file and the offending
+// field (e.g. "scene.json: objects[1].mass must be > 0").
+Scene load_scene(const std::string& path);
+Scene parse_scene(const std::string& json_text, const std::string& path);
+
+}  // namespace skillbus::sim

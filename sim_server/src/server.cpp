@@ -1,0 +1,241 @@
+#include "server.hpp"
+
+#include <cmath>
+#include <thread>
+
+#include "skillbus/lockstep_frame.hpp"
+#include "skillbus/log.hpp"
+#include "skillbus_msgs/sim_arm_cmd_t.hpp"
+#include "skillbus_msgs/sim_cmd_reply_t.hpp"
+#include "skillbus_msgs/sim_control_t.hpp"
+#include "skillbus_msgs/sim_gripper_cmd_t.hpp"
+#include "skillbus_msgs/sim_status_t.hpp"
+
+namespace skillbus::sim {
+
+namespace {
+constexpr const char* kLog = "sim_server";
+}
+
+std::string state_channel() { return channel("SB_SIM_STATE"); }
+std::string arm_channel() { return channel("SB_SIM_ARM_CMD"); }
+std::string gripper_channel() { return channel("SB_SIM_GRIPPER_CMD"); }
+std::string reply_channel() { return channel("SB_SIM_CMD_REPLY"); }
+
+SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::move(options)) {
+  if (!(opt_.speed > 0) || !std::isfinite(opt_.speed)) throw SceneError("--speed must be a positive number");
+  physics_ = std::make_unique<Physics>(load(opt_.scene_file));
+  if (opt_.duration_s > 0)
+    opt_.frames = static_cast<int64_t>(std::llround(opt_.duration_s / (physics_->scene().physics.frame_ms * 1e-3)));
+  rpc_ = std::make_unique<RpcServer>(bus_, "SIM");
+  add_services();
+}
+
+SimServer::~SimServer() = default;
+
+Scene SimServer::load(const std::string& path) const {
+  Scene s = load_scene(path);
+  if (!opt_.collision_detector.empty()) {
+    if (opt_.collision_detector != "bullet" && opt_.collision_detector != "dart" && opt_.collision_detector != "fcl")
+      throw SceneError("--collision must be one of bullet, dart, fcl (got '" + opt_.collision_detector + "')");
+    s.physics.collision_detector = opt_.collision_detector;
+  }
+  if (opt_.step_ms > 0) s.physics.step_ms = opt_.step_ms;
+  if (opt_.frame_ms > 0) s.physics.frame_ms = opt_.frame_ms;
+  const double ratio = s.physics.frame_ms / s.physics.step_ms;
+  if (s.physics.frame_ms < s.physics.step_ms || std::abs(ratio - std::round(ratio)) > 1e-9)
+    throw SceneError("the frame (" + std::to_string(s.physics.frame_ms) + " ms) must be a whole number of steps (" +
+                     std::to_string(s.physics.step_ms) + " ms)");
+  return s;
+}
+
+void SimServer::reply(const std::string& id, const std::string& command, const std::string& error) {
+  skillbus_msgs::sim_cmd_reply_t r{};
+  r.id = id;
+  r.command = command;
+  r.accepted = error.empty();
+  r.error = error;
+  if (error.empty()) {
+    ++accepted_;
+  } else {
+    ++rejected_;
+    SB_WARN(kLog, "rejected " << command << " command '" << id << "': " << error);
+  }
+  pending_replies_.push_back(r);
+}
+
+void SimServer::on_arm(const uint8_t* data, size_t size, const std::string& ch) {
+  skillbus_msgs::sim_arm_cmd_t m;
+  if (!decode_msg(data, size, m)) {
+    bad_.record(ch, "does not decode as sim_arm_cmd_t", size);
+    ++rejected_;
+    return;
+  }
+  ArmCommand c;
+  c.id = m.id;
+  c.joints = m.joint_names;
+  for (const auto& p : m.points) {
+    Waypoint w;
+    w.t_ns = p.time_from_start_ns;
+    w.q = p.positions;
+    w.qd = p.velocities;
+    c.points.push_back(std::move(w));
+  }
+  reply(m.id, "arm", physics_->command_arm(c));
+}
+
+void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& ch) {
+  skillbus_msgs::sim_gripper_cmd_t m;
+  if (!decode_msg(data, size, m)) {
+    bad_.record(ch, "does not decode as sim_gripper_cmd_t", size);
+    ++rejected_;
+    return;
+  }
+  GripperCommand c{m.id, m.width, m.speed, m.force_limit};
+  reply(m.id, "gripper", physics_->command_gripper(c));
+}
+
+template <class Publish>
+void SimServer::publish_frame(Publish&& publish) {
+  for (const auto& r : pending_replies_) publish(reply_channel(), r);
+  pending_replies_.clear();
+  skillbus_msgs::sim_state_t s{};
+  physics_->fill_state(s);
+  publish(state_channel(), s);
+}
+
+skillbus_msgs::sim_status_t SimServer::status() const {
+  skillbus_msgs::sim_status_t s{};
+  s.frame = frame_;
+  s.sim_time_ns = sim_time_ns_;
+  s.lockstep = !opt_.wall_clock;
+  s.paused = paused_;
+  s.scene = physics_->scene().path;
+  s.digest = to_hex(physics_->digest());
+  s.collision_detector = physics_->collision_detector();
+  s.num_objects = static_cast<int32_t>(physics_->scene().objects.size());
+  s.commands_accepted = accepted_;
+  s.commands_rejected = rejected_;
+  return s;
+}
+
+void SimServer::add_services() {
+  using Req = skillbus_msgs::sim_control_t;
+  using Rep = skillbus_msgs::sim_status_t;
+  rpc_->add_method<Req, Rep>("status", [this](const Req&) { return status(); });
+  rpc_->add_method<Req, Rep>("digest", [this](const Req&) { return status(); });
+  rpc_->add_method<Req, Rep>("reset", [this](const Req&) {
+    physics_->reset();
+    SB_INFO(kLog, "reset to the scene " << physics_->scene().path << " at frame " << frame_);
+    return status();
+  });
+  rpc_->add_method<Req, Rep>("load_scene", [this](const Req& r) {
+    if (r.scene.empty()) throw RpcBadRequest("load_scene needs a scene file path");
+    Scene s = load(r.scene);  // a SceneError becomes the error reply; the old world stays
+    if (!opt_.wall_clock && std::abs(s.physics.frame_ms - physics_->scene().physics.frame_ms) > 1e-9)
+      throw RpcError("the scene's frame_ms differs from the running lockstep frame period");
+    physics_ = std::make_unique<Physics>(s);
+    SB_INFO(kLog, "loaded the scene " << s.path << " at frame " << frame_);
+    return status();
+  });
+  auto pause = [this](bool p) {
+    if (!opt_.wall_clock)
+      throw RpcError("pause and resume are for wall-clock mode; under lockstep the participants set the pace");
+    paused_ = p;
+    return status();
+  };
+  rpc_->add_method<Req, Rep>("pause", [pause](const Req&) { return pause(true); });
+  rpc_->add_method<Req, Rep>("resume", [pause](const Req&) { return pause(false); });
+}
+
+ServerReport SimServer::report(const RunResult& r) const {
+  ServerReport rep;
+  rep.run = r;
+  rep.steps = physics_->step_count();
+  rep.physics_seconds = physics_->physics_seconds();
+  rep.state_digest = physics_->digest();
+  rep.accepted = accepted_;
+  rep.rejected = rejected_;
+  rep.bad_input = bad_.total();
+  return rep;
+}
+
+ServerReport SimServer::run_until(std::function<bool()> should_stop) {
+  SB_INFO(kLog, "scene " << physics_->scene().path << ": " << physics_->scene().objects.size() << " objects, "
+                         << physics_->steps_per_frame() << " steps of " << physics_->scene().physics.step_ms
+                         << " ms per frame, collision detector " << physics_->collision_detector() << ", "
+                         << (opt_.wall_clock ? "wall-clock mode" : "lockstep master"));
+  return opt_.wall_clock ? run_wall_clock(should_stop) : run_lockstep(should_stop);
+}
+
+ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
+  MasterConfig cfg;
+  cfg.name = opt_.name;
+  cfg.participants = opt_.participants;
+  cfg.frame_period_ns = static_cast<int64_t>(std::llround(physics_->scene().physics.frame_ms * 1e6));
+  cfg.frames = opt_.frames;
+  cfg.join_timeout = opt_.join_timeout;
+  cfg.ack_timeout = opt_.ack_timeout;
+  cfg.message_timeout = opt_.message_timeout;
+  LockstepMaster master(bus_, cfg);
+  // Commands come through the master: delivered after every ack of their frame, in
+  // canonical order, so the order of arrival never reaches the physics.
+  master.subscribe(arm_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
+  master.subscribe(gripper_channel(),
+                   [this](const StampedMessage& m) { on_gripper(m.data.data(), m.data.size(), m.channel); });
+  master.on_frame_start = [&](int64_t frame, int64_t sim_time) {
+    frame_ = frame;
+    sim_time_ns_ = sim_time;
+    publish_frame([&](const std::string& ch, const auto& msg) { master.publish(ch, msg); });
+  };
+  master.on_frame_end = [&](int64_t, int64_t) {
+    physics_->step_frame();
+    if (should_stop()) master.stop("stopped by a signal");
+  };
+  const RunResult r = master.run();
+  ServerReport rep = report(r);
+  rep.bad_input += master.bad_input().total();
+  return rep;
+}
+
+ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop) {
+  using clock = std::chrono::steady_clock;
+  const int arm_sub = bus_.subscribe(arm_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
+    on_arm(d, n, ch);
+  });
+  const int grip_sub = bus_.subscribe(gripper_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
+    on_gripper(d, n, ch);
+  });
+  FrameOutbox outbox(bus_, opt_.name);
+  const int64_t period_ns = static_cast<int64_t>(std::llround(physics_->scene().physics.frame_ms * 1e6));
+  const auto wall_period = std::chrono::nanoseconds(static_cast<int64_t>(period_ns / opt_.speed));
+  const auto start = clock::now();
+  auto deadline = start;
+  RunResult r;
+  int64_t frame = 0;  // frames stepped (sim time stands still while paused)
+  int64_t tick = 0;   // frames published, paused or not
+  while ((opt_.frames < 0 || frame < opt_.frames) && !should_stop()) {
+    frame_ = tick++;
+    sim_time_ns_ = frame * period_ns;
+    outbox.begin_frame(frame_, sim_time_ns_);
+    publish_frame([&](const std::string& ch, const auto& msg) { outbox.publish(ch, msg); });
+    outbox.finish_frame();
+    deadline += wall_period;
+    for (auto now = clock::now(); now < deadline; now = clock::now())
+      bus_.handle(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now) + std::chrono::milliseconds(0));
+    // Behind by more than a second (a stalled machine): do not try to catch up in a burst.
+    if (clock::now() - deadline > std::chrono::seconds(1)) deadline = clock::now();
+    if (paused_) continue;
+    physics_->step_frame();
+    ++frame;
+  }
+  bus_.unsubscribe(arm_sub);
+  bus_.unsubscribe(grip_sub);
+  r.frames = frame;
+  r.sim_time_ns = frame * period_ns;
+  r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
+  r.digest = physics_->digest();
+  return report(r);
+}
+
+}  // namespace skillbus::sim

@@ -1,0 +1,82 @@
+// The physics server process: the robot interface over LCM (arm and finger commands in,
+// state out every frame), the control services over RPC (area SIM), and the clock:
+// lockstep master with the participants named at launch, or paced to the wall clock.
+//
+// Reads:   SB_SIM_ARM_CMD (sim_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t), SB_SIM_REQ
+// Writes:  SB_SIM_STATE (sim_state_t), SB_SIM_CMD_REPLY (sim_cmd_reply_t), SB_SIM_REP,
+//          SB_LOCKSTEP_CLOCK (as master)
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "physics.hpp"
+#include "skillbus/bus.hpp"
+#include "skillbus/lockstep.hpp"
+#include "skillbus/rpc.hpp"
+#include "skillbus_msgs/sim_cmd_reply_t.hpp"
+#include "skillbus_msgs/sim_status_t.hpp"
+
+namespace skillbus::sim {
+
+std::string state_channel();    // SB_SIM_STATE
+std::string arm_channel();      // SB_SIM_ARM_CMD
+std::string gripper_channel();  // SB_SIM_GRIPPER_CMD
+std::string reply_channel();    // SB_SIM_CMD_REPLY
+
+struct ServerOptions {
+  std::string scene_file;
+  std::string name = "sim";
+  std::vector<std::string> participants;  // lockstep: who must join and ack every frame
+  bool wall_clock = false;
+  double speed = 1.0;                      // wall-clock mode: sim seconds per wall second
+  int64_t frames = -1;                     // -1: until stopped
+  double duration_s = 0;                   // > 0: run this much sim time (overrides frames)
+  std::string collision_detector;          // overrides the scene's when set
+  double step_ms = 0, frame_ms = 0;        // override the scene's when > 0
+  std::chrono::milliseconds join_timeout{10000}, ack_timeout{5000}, message_timeout{2000};
+};
+
+struct ServerReport {
+  RunResult run;
+  int64_t steps = 0;
+  double physics_seconds = 0;
+  Digest state_digest{};
+  long accepted = 0, rejected = 0, bad_input = 0;
+};
+
+class SimServer {
+ public:
+  SimServer(Bus& bus, ServerOptions options);  // throws SceneError on a bad scene
+  ~SimServer();
+  ServerReport run_until(std::function<bool()> should_stop);
+  const Physics& physics() const { return *physics_; }
+
+ private:
+  Scene load(const std::string& path) const;  // the file, with the command-line overrides
+  void on_arm(const uint8_t* data, size_t size, const std::string& ch);
+  void on_gripper(const uint8_t* data, size_t size, const std::string& ch);
+  void reply(const std::string& id, const std::string& command, const std::string& error);
+  template <class Publish>
+  void publish_frame(Publish&& publish);
+  ServerReport run_lockstep(const std::function<bool()>& should_stop);
+  ServerReport run_wall_clock(const std::function<bool()>& should_stop);
+  void add_services();
+  skillbus_msgs::sim_status_t status() const;
+  ServerReport report(const RunResult& r) const;
+
+  Bus& bus_;
+  ServerOptions opt_;
+  std::unique_ptr<Physics> physics_;
+  std::unique_ptr<RpcServer> rpc_;
+  BadInputCounter bad_{"sim_server"};
+  std::vector<skillbus_msgs::sim_cmd_reply_t> pending_replies_;
+  long accepted_ = 0, rejected_ = 0;
+  int64_t frame_ = -1, sim_time_ns_ = 0;
+  bool paused_ = false;
+};
+
+}  // namespace skillbus::sim
