@@ -35,6 +35,7 @@ bench: build
 	$(PY) bench/lockstep_overhead.py
 	$(PY) bench/wm_query.py
 	$(PY) bench/skill_ticks.py
+	$(PY) bench/sim_physics.py
 
 clean:
 	rm -rf $(BUILD)

@@ -17,7 +17,12 @@ _PROGRAMS = {
     "sb_clock": "common",
     "sb_demo_participant": "common",
     "sb_rpc_counter": "common",
+    "sim_server": "sim_server",
 }
+
+
+def demo_scene() -> Path:
+    return REPO_ROOT / "deploy" / "scenes" / "demo.scene.json"
 
 
 def binary(name: str) -> Path:

@@ -24,12 +24,13 @@ std::string json_escape(const std::string& s) {
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv,
-                  {"url", "scene", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
+                  {"url", "scene", "script", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
                    "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms"},
                   {"wall-clock"});
   sim::ServerOptions o;
   o.scene_file = args.str("scene");
   if (o.scene_file.empty()) apps::Args::die("--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
+  o.script_file = args.str("script");
   o.name = args.str("name", "sim");
   o.participants = args.list("participants");
   o.wall_clock = args.flag("wall-clock");
@@ -56,16 +57,26 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   const sim::ServerReport rep = server->run_until([] { return g_stop != 0; });
   const auto& r = rep.run;
+  // Where each object ended (x y z in the world), for people and for the demo's summary.
+  skillbus_msgs::sim_state_t state{};
+  server->physics().fill_state(state);
+  std::string objects;
+  for (const auto& o : state.objects) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%s\"%s\": [%.4f, %.4f, %.4f]", objects.empty() ? "" : ", ",
+                  json_escape(o.name).c_str(), o.pose[0], o.pose[1], o.pose[2]);
+    objects += buf;
+  }
   const double rtf = r.wall_seconds > 0 ? r.sim_time_ns * 1e-9 / r.wall_seconds : 0.0;
   std::printf(
       "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"sim_time_s\": %.3f, \"wall_time_s\": %.3f, "
       "\"real_time_factor\": %.2f, \"steps\": %lld, \"physics_us_per_step\": %.1f, \"collision_detector\": \"%s\", "
       "\"participants\": %zu, \"state_digest\": \"%s\", \"session_digest\": \"%s\", \"commands_accepted\": %ld, "
-      "\"commands_rejected\": %ld, \"bad_input\": %ld}\n",
+      "\"commands_rejected\": %ld, \"bad_input\": %ld, \"objects\": {%s}}\n",
       r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
       r.wall_seconds, rtf, static_cast<long long>(rep.steps), rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0,
       server->physics().collision_detector().c_str(), o.participants.size(), to_hex(rep.state_digest).c_str(),
-      r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input);
+      r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input, objects.c_str());
   std::fflush(stdout);
   return r.ok ? 0 : 1;
 }

@@ -37,12 +37,14 @@ namespace {
 
 // Arm: computed torque with PID on the mass-normalised error, all three closed-loop
 // poles at -25 rad/s (Kp = 3w^2, Kd = 3w, Ki = w^3); the integral takes up what the model
-// does not know (a grasped object), bounded against wind-up. Fingers: PD in N/m on each finger, saturated at the
-// commanded force limit, so a finger blocked by an object squeezes with that limit.
+// does not know (a grasped object), bounded against wind-up. Fingers: critically
+// damped at up to 200 rad/s, but never beyond 0.25 rad per step (the 50 g fingers are
+// the stiffest part of the system: at 2 ms steps 200 rad/s would go unstable).
 constexpr double kArmW = 25.0;
 constexpr double kArmKp = 3 * kArmW * kArmW, kArmKd = 3 * kArmW, kArmKi = kArmW * kArmW * kArmW;
 constexpr double kArmIntegralLimit = 0.05;  // rad s
-constexpr double kFingerKp = 2000.0, kFingerKd = 20.0;
+constexpr double kFingerMaxW = 200.0, kFingerMaxWdt = 0.25;
+constexpr double kFingerIntegralRate = 10.0;  // 1/s: Ki = Kp * rate
 constexpr double kDefaultFingerSpeed = 0.1;   // m/s of the width
 constexpr double kDefaultFingerForce = 20.0;  // N per finger
 constexpr double kRobotFriction = 0.5, kFingerFriction = 1.0;
@@ -126,6 +128,8 @@ struct Physics::Impl {
   std::string traj_id;
   double finger_target = 0.04;              // per finger opening
   double finger_ref = 0.04;                 // the ramp toward it
+  double finger_integral = 0;               // m s, of the mean opening error
+  double finger_kp = 0, finger_kd = 0;      // from the finger mass and the step
   double finger_speed = kDefaultFingerSpeed / 2, finger_force = kDefaultFingerForce;
   Eigen::VectorXd applied;                  // forces applied in the last step
 
@@ -250,6 +254,11 @@ struct Physics::Impl {
     traj = JointTrajectory();
     traj_id.clear();
     finger_target = finger_ref = 0.5 * (robot->getPosition(left_dof) + robot->getPosition(right_dof));
+    finger_integral = 0;
+    const double finger_mass = robot->getMassMatrix()(left_dof, left_dof);
+    const double w = std::min(kFingerMaxW, kFingerMaxWdt / (step_ns * 1e-9));
+    finger_kp = finger_mass * w * w;
+    finger_kd = 2 * finger_mass * w;
     finger_speed = kDefaultFingerSpeed / 2;
     finger_force = std::min(kDefaultFingerForce, finger_effort);
   }
@@ -274,31 +283,38 @@ struct Physics::Impl {
       arm_integral[k] = std::clamp(arm_integral[k] + e * dt, -kArmIntegralLimit, kArmIntegralLimit);
       acc[i] = qdd[k] + kArmKp * e + kArmKd * (qd[k] - dq[i]) + kArmKi * arm_integral[k];
     }
-    Eigen::VectorXd tau = robot->getMassMatrix() * acc + robot->getCoriolisAndGravityForces();
+    // tau = M(q) acc + C(q, dq) + g(q) by recursive Newton-Euler: O(n), where forming M
+    // costs O(n^2) every step. The accelerations set here are overwritten by the step.
+    robot->setAccelerations(acc);
+    robot->computeInverseDynamics(false, false, false);
+    const Eigen::VectorXd tau = robot->getForces();
     for (size_t k = 0; k < arm_dofs.size(); ++k) {
       const size_t i = arm_dofs[k];
       auto* dof = robot->getDof(i);
       const double t = tau[i] + dof->getDampingCoefficient() * dq[i];
       applied[i] = std::clamp(t, dof->getForceLowerLimit(), dof->getForceUpperLimit());
     }
-    // Fingers: the reference ramps toward the target at the commanded speed.
+    // Fingers, coupled like a real parallel gripper's: their mean opening follows a
+    // reference that ramps to the target at the commanded speed, under a PID whose force
+    // is limited to the commanded force limit (a finger blocked by an object ends up
+    // squeezing with exactly that limit, whatever the gains); their difference is held at
+    // zero by a stiff PD, so a squeezed object cannot drift along the finger axis.
     const double delta = finger_target - finger_ref;
     const double max_step = finger_speed * dt;
     finger_ref += std::clamp(delta, -max_step, max_step);
     const double ref_vel = std::abs(delta) > max_step ? (delta > 0 ? finger_speed : -finger_speed) : 0.0;
-    // The fingers are coupled like a real parallel gripper's: their mean opening is
-    // force-limited, their difference is held at zero by a stiff centring term, so an
-    // object squeezed between them cannot drift along the finger axis.
-    const double centre = 0.5 * (q[left_dof] - q[right_dof]);
-    const double centre_vel = 0.5 * (dq[left_dof] - dq[right_dof]);
-    const double centring = -kFingerKp * centre - kFingerKd * centre_vel;
+    const double mean = 0.5 * (q[left_dof] + q[right_dof]), mean_vel = 0.5 * (dq[left_dof] + dq[right_dof]);
+    const double diff = 0.5 * (q[left_dof] - q[right_dof]), diff_vel = 0.5 * (dq[left_dof] - dq[right_dof]);
+    const double e = finger_ref - mean;
+    const double ki = finger_kp * kFingerIntegralRate;
+    finger_integral = std::clamp(finger_integral + e * dt, -finger_force / ki, finger_force / ki);
+    const double squeeze =
+        std::clamp(finger_kp * e + finger_kd * (ref_vel - mean_vel) + ki * finger_integral, -finger_force, finger_force);
+    const double centring = -finger_kp * diff - finger_kd * diff_vel;
     for (size_t i : {left_dof, right_dof}) {
       auto* dof = robot->getDof(i);
-      const double f = kFingerKp * (finger_ref - q[i]) + kFingerKd * (ref_vel - dq[i]) + tau[i] +
-                       dof->getDampingCoefficient() * dq[i];
-      const double squeeze = std::clamp(f, -finger_force, finger_force);
-      const double c = (i == left_dof) ? centring : -centring;
-      applied[i] = std::clamp(squeeze + c, dof->getForceLowerLimit(), dof->getForceUpperLimit());
+      const double f = squeeze + (i == left_dof ? centring : -centring) + tau[i] + dof->getDampingCoefficient() * dq[i];
+      applied[i] = std::clamp(f, dof->getForceLowerLimit(), dof->getForceUpperLimit());
     }
     robot->setForces(applied);
   }
@@ -389,6 +405,7 @@ std::string Physics::command_gripper(const GripperCommand& cmd) {
   m.finger_target = cmd.width / 2;
   m.finger_speed = cmd.speed / 2;
   m.finger_force = cmd.force_limit;
+  m.finger_integral = 0;  // a new command starts without the last one's wind-up
   return "";
 }
 

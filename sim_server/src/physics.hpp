@@ -9,23 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "commands.hpp"
 #include "scene.hpp"
 #include "skillbus/digest.hpp"
 #include "skillbus_msgs/sim_state_t.hpp"
 #include "trajectory.hpp"
 
 namespace skillbus::sim {
-
-struct ArmCommand {
-  std::string id;
-  std::vector<std::string> joints;
-  std::vector<Waypoint> points;
-};
-
-struct GripperCommand {
-  std::string id;
-  double width = 0, speed = 0, force_limit = 0;
-};
 
 class Physics {
  public:

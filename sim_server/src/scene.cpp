@@ -103,7 +103,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
 
   if (top.has("physics")) {
     Reader p(top.sub("physics"), "physics", file);
-    s.physics.step_ms = p.num("step_ms", 1.0);
+    s.physics.step_ms = p.num("step_ms", 2.0);
     s.physics.frame_ms = p.num("frame_ms", 10.0);
     s.physics.gravity = p.vec<3>("gravity", s.physics.gravity);
     s.physics.collision_detector = p.str("collision_detector", "bullet");

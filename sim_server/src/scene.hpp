@@ -47,7 +47,7 @@ struct ObjectSpec {
 };
 
 struct PhysicsSpec {
-  double step_ms = 1.0;
+  double step_ms = 2.0;   // the default: see docs/sim_server.md, "Choosing the step"
   double frame_ms = 10.0;
   std::array<double, 3> gravity{0, 0, -9.81};
   std::string collision_detector = "bullet";  // bullet | dart | fcl

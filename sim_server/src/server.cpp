@@ -27,6 +27,7 @@ SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::mov
   physics_ = std::make_unique<Physics>(load(opt_.scene_file));
   if (opt_.duration_s > 0)
     opt_.frames = static_cast<int64_t>(std::llround(opt_.duration_s / (physics_->scene().physics.frame_ms * 1e-3)));
+  if (!opt_.script_file.empty()) script_ = load_script(opt_.script_file);
   rpc_ = std::make_unique<RpcServer>(bus_, "SIM");
   add_services();
 }
@@ -93,6 +94,16 @@ void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& 
   }
   GripperCommand c{m.id, m.width, m.speed, m.force_limit};
   reply(m.id, "gripper", physics_->command_gripper(c));
+}
+
+void SimServer::play_script() {
+  while (script_next_ < script_.size() && script_[script_next_].at_ns <= sim_time_ns_) {
+    const ScriptStep& s = script_[script_next_++];
+    if (s.is_arm)
+      reply(s.arm.id, "arm", physics_->command_arm(s.arm));
+    else
+      reply(s.gripper.id, "gripper", physics_->command_gripper(s.gripper));
+  }
 }
 
 template <class Publish>
@@ -189,6 +200,7 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
     publish_frame([&](const std::string& ch, const auto& msg) { master.publish(ch, msg); });
   };
   master.on_frame_end = [&](int64_t, int64_t) {
+    play_script();
     physics_->step_frame();
     if (should_stop()) master.stop("stopped by a signal");
   };
@@ -226,6 +238,7 @@ ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop)
     // Behind by more than a second (a stalled machine): do not try to catch up in a burst.
     if (clock::now() - deadline > std::chrono::seconds(1)) deadline = clock::now();
     if (paused_) continue;
+    play_script();
     physics_->step_frame();
     ++frame;
   }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "physics.hpp"
+#include "script.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
@@ -29,6 +30,7 @@ std::string reply_channel();    // SB_SIM_CMD_REPLY
 
 struct ServerOptions {
   std::string scene_file;
+  std::string script_file;                 // commands played in-process (no participant needed)
   std::string name = "sim";
   std::vector<std::string> participants;  // lockstep: who must join and ack every frame
   bool wall_clock = false;
@@ -65,6 +67,7 @@ class SimServer {
   ServerReport run_lockstep(const std::function<bool()>& should_stop);
   ServerReport run_wall_clock(const std::function<bool()>& should_stop);
   void add_services();
+  void play_script();  // the in-process script's steps due by the current sim time
   skillbus_msgs::sim_status_t status() const;
   ServerReport report(const RunResult& r) const;
 
@@ -77,6 +80,8 @@ class SimServer {
   long accepted_ = 0, rejected_ = 0;
   int64_t frame_ = -1, sim_time_ns_ = 0;
   bool paused_ = false;
+  std::vector<ScriptStep> script_;
+  size_t script_next_ = 0;
 };
 
 }  // namespace skillbus::sim

@@ -24,7 +24,7 @@ from typing import Any
 
 from skillbus.bus import open_bus
 from skillbus.lockstep import LockstepParticipant, StampedMessage
-from skillbus.msgs import decode, sim_cmd_reply_t, sim_state_t
+from skillbus.msgs import decode, sim_cmd_reply_t, sim_state_t, test_sample_t
 from skillbus.sim.messages import (arm_channel, arm_command, gripper_channel, gripper_command, reply_channel,
                                    state_channel, state_dict)
 
@@ -44,7 +44,7 @@ def load_script(path: str) -> dict[str, Any]:
     for i, s in enumerate(steps):
         if not isinstance(s, dict) or not isinstance(s.get("at_s"), (int, float)):
             raise ScriptError(f"{path}: steps[{i}] needs a number at_s")
-        if not ({"arm", "gripper", "raw"} & set(s)):
+        if not ({"arm", "gripper", "raw", "wrong_type"} & set(s)):
             raise ScriptError(f"{path}: steps[{i}] has no arm, gripper or raw command")
     script["steps"] = sorted(steps, key=lambda s: s["at_s"])  # stable: equal times keep file order
     return script
@@ -57,7 +57,7 @@ class ScriptPlayer:
         self.record_every = int(script.get("record_every", 10))
         self.states: list[dict[str, Any]] = []
         self.replies: list[dict[str, Any]] = []
-        self.last_state: dict[str, Any] | None = None
+        self.last_msg: sim_state_t | None = None
         self.bad = 0
         p.subscribe(state_channel(), self.on_state)
         p.subscribe(reply_channel(), self.on_reply)
@@ -68,9 +68,9 @@ class ScriptPlayer:
         if s is None:
             self.bad += 1
             return
-        self.last_state = state_dict(s)
+        self.last_msg = s  # turned into plain data only when recorded (it costs more than the decode)
         if s.header.frame % self.record_every == 0:
-            self.states.append(self.last_state)
+            self.states.append(state_dict(s))
 
     def on_reply(self, m: StampedMessage) -> None:
         r = decode(sim_cmd_reply_t, m.data)
@@ -91,6 +91,10 @@ class ScriptPlayer:
                 g = step["gripper"]
                 self.p.publish(gripper_channel(), gripper_command(g.get("id", ""), g["width"], g.get("speed", 0.1),
                                                                   g.get("force_limit", 20.0)))
+            if "wrong_type" in step:  # tests: a stamped message of another type on a command channel
+                junk = test_sample_t()
+                junk.text = "not a command"
+                self.p.publish(arm_channel() if step["wrong_type"] == "arm" else gripper_channel(), junk)
             if "raw" in step:  # tests: bytes that are not a valid command, on a command channel
                 r = step["raw"]
                 self.p.bus.publish(arm_channel() if r.get("channel") == "arm" else gripper_channel(),
@@ -110,7 +114,7 @@ def main(args) -> int:
     p.close()
     if args.out:
         Path(args.out).write_text(json.dumps({"states": player.states, "replies": player.replies,
-                                              "last_state": player.last_state}))
+                                              "last_state": state_dict(player.last_msg) if player.last_msg else None}))
     print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "sim_time_s": r.sim_time_ns * 1e-9,
                       "digest": r.digest_hex, "replies": len(player.replies),
                       "rejected": sum(1 for x in player.replies if not x["accepted"]), "bad_input": player.bad,

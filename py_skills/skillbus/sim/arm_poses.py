@@ -1,7 +1,7 @@
 """Joint positions for top-down tool poses of the demo arm (sim_server/models/arm6.urdf),
 solved in closed form for the tests of the physics server: the arm's yaw, a two-link
 shoulder-elbow solution in the arm's vertical plane, and the wrist pitch that points the
-tool straight down. (The skills use the general Ceres IK; this is only a test aid.)"""
+tool straight down. (The skills use the general IK; this serves tests, benchmarks and scripts.)"""
 
 from __future__ import annotations
 

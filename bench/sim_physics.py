@@ -1,0 +1,103 @@
+"""Benchmark of the physics server on the demo scene (arm with gripper, table, 3 cubes, bin).
+
+For each physics step (1 ms and 2 ms, 10 ms frames) and collision detector:
+  * physics µs per step (time inside DART's World::step) with the arm at rest, and while
+    it grasps a cube, carries it on a fast swing and puts it down (grasp_and_carry);
+  * the real-time factor of the server alone (the script played in-process, no
+    participant) and with one lockstep participant playing the same script over LCM;
+  * how well the grasp holds: the largest displacement of the cube in the tool frame
+    while it is carried, and the cube's final distance from where it was put.
+
+Run: .venv/bin/python bench/sim_physics.py   (in `make bench`)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import tempfile
+from pathlib import Path
+
+from skillbus import paths
+from skillbus.netns import Sandbox, last_json
+from skillbus.sim.scripts import CUBE, grasp_and_carry
+from skillbus.sim.session import run_script_session
+
+DURATION = 13.0
+
+
+def rotate_inv(q, v):
+    """v rotated by the inverse of unit quaternion q (x y z w)."""
+    x, y, z, w = q
+    # R^T v via the rotation matrix of q
+    r = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    return [sum(r[i][j] * v[i] for i in range(3)) for j in range(3)]
+
+
+def slip(record) -> float:
+    def in_tool(s):
+        t, c = s["tool_pose"], s["objects"]["green"]["pose"]
+        return rotate_inv(t[3:], [c[i] - t[i] for i in range(3)])
+    held = [s for s in record["states"] if 4.9 <= s["t"] <= 10.9]
+    ref = in_tool(held[0])
+    return max(math.dist(in_tool(s), ref) for s in held)
+
+
+def scene_with(step_ms: float, detector: str, work: Path) -> Path:
+    s = json.loads(paths.demo_scene().read_text())
+    s["physics"].update(step_ms=step_ms, collision_detector=detector)
+    f = work / f"scene_{step_ms}_{detector}.json"
+    f.write_text(json.dumps(s).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    return f
+
+
+def alone(box: Sandbox, scene: Path, script: Path | None, duration: float) -> dict:
+    argv = [str(paths.binary("sim_server")), "--scene", str(scene), "--duration-s", str(duration)]
+    if script:
+        argv += ["--script", str(script)]
+    p = box.start("sim-alone", argv)
+    box.wait(p, 300)
+    return last_json(p.stdout())
+
+
+def main() -> int:
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp, Sandbox() as box:
+        work = Path(tmp)
+        script = grasp_and_carry()
+        script_file = work / "carry.json"
+        script_file.write_text(json.dumps(script))
+        for step_ms, detector in [(1.0, "bullet"), (2.0, "bullet"), (1.0, "fcl"), (1.0, "dart")]:
+            scene = scene_with(step_ms, detector, work)
+            idle = alone(box, scene, None, 5.0)
+            solo = alone(box, scene, script_file, DURATION)
+            with_p = run_script_session(box, script, DURATION, work / f"p_{step_ms}_{detector}", scene=scene,
+                                        timeout=300)
+            rec = with_p["record"]
+            end = rec["last_state"]["objects"]["green"]["pose"]
+            rows.append({
+                "step_ms": step_ms, "detector": detector,
+                "idle_us_per_step": idle["physics_us_per_step"],
+                "carry_us_per_step": solo["physics_us_per_step"],
+                "rtf_alone": solo["real_time_factor"],
+                "rtf_one_participant": with_p["sim"]["real_time_factor"],
+                "slip_mm": slip(rec) * 1000,
+                "put_down_error_mm": math.dist(end[:3], CUBE) * 1000,
+                "same_physics": solo["state_digest"] == with_p["sim"]["state_digest"],
+            })
+            r = rows[-1]
+            print(f"step {step_ms:.0f} ms {detector:6s}: {r['idle_us_per_step']:6.1f} µs/step at rest, "
+                  f"{r['carry_us_per_step']:6.1f} µs/step grasping and carrying; real-time factor "
+                  f"{r['rtf_alone']:5.2f} alone, {r['rtf_one_participant']:5.2f} with one lockstep participant "
+                  f"({r['rtf_one_participant'] / r['rtf_alone']:.2f}x); cube slip in the grasp {r['slip_mm']:.2f} mm, "
+                  f"put down {r['put_down_error_mm']:.1f} mm from its start; alone == with participant: "
+                  f"{r['same_physics']}", flush=True)
+    print(json.dumps({"sim_physics": rows}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,23 @@
+// Arm and finger commands as the physics takes them (decoded from sim_arm_cmd_t and
+// sim_gripper_cmd_t, or read from a script).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "trajectory.hpp"
+
+namespace skillbus::sim {
+
+struct ArmCommand {
+  std::string id;
+  std::vector<std::string> joints;
+  std::vector<Waypoint> points;
+};
+
+struct GripperCommand {
+  std::string id;
+  double width = 0, speed = 0, force_limit = 0;
+};
+
+}  // namespace skillbus::sim

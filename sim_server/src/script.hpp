@@ -1,0 +1,25 @@
+// A command script played inside the physics server (--script FILE), in the format of
+// `skillbus sim-script` (docs/sim_server.md): the same motions without any participant,
+// for benchmarks of the physics alone and for quick experiments. Commands are due at
+// frame boundaries, so a script gives the same run every time.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "scene.hpp"
+
+namespace skillbus::sim {
+
+struct ScriptStep {
+  int64_t at_ns = 0;
+  bool is_arm = false;
+  ArmCommand arm;
+  GripperCommand gripper;
+};
+
+// Throws SceneError naming the file and the step when the script is malformed.
+std::vector<ScriptStep> load_script(const std::string& path);
+
+}  // namespace skillbus::sim

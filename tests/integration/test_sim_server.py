@@ -1,0 +1,225 @@
+"""The physics server as a real process: DART stepping under lockstep with a scripted
+participant over LCM, in a private network namespace."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import sys
+import time
+
+import pytest
+
+from conftest import last_json
+from skillbus.sim.scripts import CUBE, HOME, ARM, arm, gripper, grasp_lift_release, sweep
+from skillbus import paths
+from skillbus.sim.session import run_script_session
+
+
+def at(record, t):
+    """The recorded state nearest to sim time t."""
+    return min(record["states"], key=lambda s: abs(s["t"] - t))
+
+
+def test_grasp_lift_and_release_twice_gives_bitwise_the_same_digest(sandbox, tmp_path):
+    runs = [run_script_session(sandbox, grasp_lift_release(), 10.0, tmp_path / f"run{i}", timeout=120)
+            for i in range(2)]
+    for r in runs:
+        assert r["sim"]["ok"], r["sim"]["error"]
+        assert r["script"]["ok"], r["script"]["error"]
+        assert r["sim"]["frames"] == 1000 and r["sim"]["commands_accepted"] == 5
+    # Determinism: every position and velocity after 10 s, bit for bit, and every message.
+    assert runs[0]["sim"]["state_digest"] == runs[1]["sim"]["state_digest"]
+    assert runs[0]["sim"]["session_digest"] == runs[1]["sim"]["session_digest"]
+    assert runs[0]["script"]["digest"] == runs[1]["script"]["digest"]
+    # The physics does not see how commands arrive: the same script played in-process
+    # (no participant) ends in the same state.
+    script_file = tmp_path / "run0" / "script.json"
+    alone = sandbox.start("alone", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                    "--script", str(script_file), "--duration-s", "10"])
+    assert sandbox.wait(alone, 120) == 0
+    assert last_json(alone.stdout())["state_digest"] == runs[0]["sim"]["state_digest"]
+
+    rec = runs[0]["record"]
+    z0 = CUBE[2]
+    closed = at(rec, 4.9)
+    assert 0.048 < closed["finger_width"] < 0.052, "the fingers stop on the 5 cm cube"
+    assert closed["finger_force"] == pytest.approx(20.0, abs=0.5), "squeezing with the force limit"
+    assert {c["finger"] for c in closed["contacts"] if c["object"] == "green"} == {"finger_left", "finger_right"}
+    # Lifted 10 cm: the cube's height follows the tool's within 5 mm all the way up and while held.
+    before_tool, before_cube = closed["tool_pose"][2], closed["objects"]["green"]["pose"][2]
+    for s in rec["states"]:
+        if 5.0 <= s["t"] <= 7.5:
+            rise_tool = s["tool_pose"][2] - before_tool
+            rise_cube = s["objects"]["green"]["pose"][2] - before_cube
+            assert abs(rise_cube - rise_tool) < 0.005, s["t"]
+    held = at(rec, 7.4)
+    assert held["objects"]["green"]["pose"][2] - z0 == pytest.approx(0.10, abs=0.005)
+    # Opened: it falls back onto the table (and stays upright there).
+    end = rec["last_state"]
+    assert end["finger_width"] > 0.07
+    assert end["objects"]["green"]["pose"][2] == pytest.approx(z0, abs=0.002)
+    assert not end["contacts"]
+    # The other cubes never moved.
+    for name in ("red", "blue"):
+        assert math.dist(end["objects"][name]["pose"][:3], rec["states"][0]["objects"][name]["pose"][:3]) < 1e-3
+
+
+def test_a_joint_trajectory_is_tracked_within_0_01_rad(sandbox, tmp_path):
+    script = sweep()
+    r = run_script_session(sandbox, script, 4.0, tmp_path)
+    assert r["sim"]["ok"] and r["script"]["ok"], (r["sim"], r["script"])
+    rec = r["record"]
+    moving = [s for s in rec["states"] if 0.5 < s["t"] <= 3.5]
+    assert max(s["arm_tracking_error"] for s in moving) < 0.01
+    # At each waypoint's time, every joint is where the waypoint says (the server's own
+    # error figure is not trusted alone).
+    start = 0.51  # the command goes out in the frame at 0.5 s and is applied at its end
+    for t, q in script["steps"][0]["arm"]["points"]:
+        s = at(rec, start + t)
+        for name, want in zip(ARM, q):
+            assert s["joints"][name] == pytest.approx(want, abs=0.01), (t, name)
+    end = rec["last_state"]
+    for name, want in zip(ARM, script["steps"][0]["arm"]["points"][-1][1]):
+        assert end["joints"][name] == pytest.approx(want, abs=1e-3)
+        assert abs(end["velocities"][name]) < 1e-3
+
+
+def test_bad_commands_are_rejected_and_the_robot_holds_its_position(sandbox, tmp_path):
+    nan = float("nan")
+    script = {"record_every": 10, "steps": [
+        arm(0.1, "nan", [[1.0, [0.0, nan, 1.6, 0.0, 1.3, 0.0]]]),
+        arm(0.2, "limit", [[1.0, [0.0, 3.0, 1.6, 0.0, 1.3, 0.0]]]),
+        arm(0.3, "unknown", [[1.0, [0.5]]], joints=["joint9"]),
+        arm(0.4, "finger", [[1.0, [0.01]]], joints=["finger_left_joint"]),
+        arm(0.5, "too-fast", [[0.1, [2.0, 0.2, 1.6, 0.0, 1.3416, 0.0]]]),
+        arm(0.6, "count", [[1.0, [0.1, 0.2]]]),
+        gripper(0.7, "wide", 0.5),
+        gripper(0.8, "force", 0.02, force=-1),
+        gripper(0.9, "speed", 0.02, speed=nan),
+        {"at_s": 1.0, "wrong_type": "arm"},
+        {"at_s": 1.0, "raw": {"channel": "gripper", "hex": "deadbeef"}},
+        gripper(1.5, "ok", 0.0),
+    ]}
+    r = run_script_session(sandbox, script, 3.0, tmp_path)
+    assert r["sim"]["ok"], r["sim"]["error"]  # still running to the end
+    replies = {x["id"]: x for x in r["record"]["replies"]}
+    expected = {
+        "nan": "not a finite number",
+        "limit": "joint2 target 3 at point 0 is outside its limits",
+        "unknown": "unknown arm joint 'joint9' (the arm has joint1, joint2",
+        "finger": "unknown arm joint 'finger_left_joint'",
+        "too-fast": "joint1 would move at 20 rad/s",
+        "count": "point 0 has 2 positions for 6 joints",
+        "wide": "width 0.500000 m is outside [0, 0.080000]",
+        "force": "force_limit -1.000000 N is outside",
+        "speed": "must be finite numbers",
+    }
+    for cmd_id, text in expected.items():
+        assert not replies[cmd_id]["accepted"], cmd_id
+        assert text in replies[cmd_id]["error"], (cmd_id, replies[cmd_id]["error"])
+    assert replies["ok"]["accepted"]
+    assert r["sim"]["commands_rejected"] == len(expected) + 1  # + the message of the wrong type
+    assert r["sim"]["bad_input"] >= 2  # the wrong type and the unstamped bytes
+    end = r["record"]["last_state"]
+    for name, want in zip(ARM, HOME):
+        assert end["joints"][name] == pytest.approx(want, abs=2e-3), name
+    assert end["finger_width"] < 0.002  # the one good command was carried out
+
+
+def test_rejections_are_logged(sandbox, tmp_path):
+    script = {"steps": [arm(0.1, "bad", [[1.0, [9.0]]], joints=["joint1"])]}
+    run_script_session(sandbox, script, 0.5, tmp_path)
+    sim = next(p for p in sandbox.procs if p.name == "sim")
+    assert re.search(r"rejected arm command 'bad': joint1 target 9", sim.stderr())
+
+
+def test_a_slow_participant_makes_the_master_wait_without_skipping_frames(sandbox, binary):
+    sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                "--participants", "slow,fast", "--frames", "100"])
+    slow = sandbox.start("slow", [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", "slow",
+                                  "--slow-at-frame", "50"])
+    fast = sandbox.start("fast", [str(binary("sb_demo_participant")), "--name", "fast"])
+    assert sandbox.wait(sim, 60) == 0, sim.stderr()[-2000:]
+    s = last_json(sim.stdout())
+    assert s["ok"] and s["frames"] == 100
+    assert s["wall_time_s"] > 0.8  # it waited out the slow frame (0.8 s) instead of running on
+    for p in (slow, fast):
+        assert sandbox.wait(p, 15) == 0
+        assert last_json(p.stdout())["frames"] == 100  # every frame, none skipped
+
+
+def test_a_dead_participant_stops_the_server_with_an_error_naming_it(sandbox, binary):
+    sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                "--participants", "alive,doomed", "--ack-timeout-ms", "1500"])
+    alive = sandbox.start("alive", [str(binary("sb_demo_participant")), "--name", "alive"])
+    doomed = sandbox.start("doomed", [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name",
+                                      "doomed", "--bare"])
+    deadline = time.monotonic() + 30
+    while "starting frames" not in sim.stderr() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    sandbox.kill(doomed)
+    assert sandbox.wait(sim, 30) == 1
+    s = last_json(sim.stdout())
+    assert not s["ok"] and s["frames"] > 0
+    assert re.search(r"no ack for frame \d+ from participant\(s\) doomed", s["error"]), s["error"]
+    sandbox.wait(alive, 15)
+
+
+def test_a_bad_scene_file_is_refused_with_the_field_named(sandbox, binary, tmp_path):
+    bad = json.loads(paths.demo_scene().read_text())
+    bad["objects"][1]["mass"] = 0
+    f = tmp_path / "bad.scene.json"
+    f.write_text(json.dumps(bad).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(f), "--frames", "1"])
+    assert sandbox.wait(sim, 30) == 2
+    assert f"{f}: objects[1].mass must be > 0" in sim.stderr()
+    missing = sandbox.start("sim2", [str(binary("sim_server")), "--scene", str(tmp_path / "none.json")])
+    assert sandbox.wait(missing, 30) == 2
+    assert "cannot open the scene file" in missing.stderr()
+
+
+def sim_cli(box, *args):
+    """`skillbus sim ...` inside the sandbox: (exit code, JSON reply or error text)."""
+    p = box.start(f"cli-{time.monotonic_ns()}", [sys.executable, "-m", "skillbus.cli", "sim", *args])
+    rc = box.wait(p, 30)
+    return rc, (json.loads(p.stdout()) if rc == 0 else p.stderr())
+
+
+def test_control_services_in_wall_clock_mode(sandbox, binary, tmp_path):
+    sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()), "--wall-clock",
+                                "--speed", "4"])
+    rc, s0 = sim_cli(sandbox, "status")
+    assert rc == 0, s0
+    assert not s0["lockstep"] and s0["collision_detector"] == "bullet" and s0["num_objects"] == 3
+    initial = sim_cli(sandbox, "reset")[1]["digest"]
+    assert sim_cli(sandbox, "pause")[1]["paused"]
+    t_paused = sim_cli(sandbox, "status")[1]["sim_time_ns"]
+    time.sleep(0.3)
+    assert sim_cli(sandbox, "status")[1]["sim_time_ns"] == t_paused, "sim time stands still while paused"
+    assert not sim_cli(sandbox, "resume")[1]["paused"]
+    time.sleep(0.3)
+    assert sim_cli(sandbox, "status")[1]["sim_time_ns"] > t_paused
+    assert sim_cli(sandbox, "reset")[1]["digest"] == initial
+    rc, err = sim_cli(sandbox, "load-scene", str(tmp_path / "missing.json"))
+    assert rc == 1 and "cannot open the scene file" in err
+    assert sim_cli(sandbox, "status")[1]["num_objects"] == 3  # the old world stays
+    two = json.loads(paths.demo_scene().read_text())
+    two["objects"] = two["objects"][:2]
+    f = tmp_path / "two.scene.json"
+    f.write_text(json.dumps(two).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    assert sim_cli(sandbox, "load-scene", str(f))[1]["num_objects"] == 2
+    sandbox.kill(sim, 15)
+    assert sandbox.wait(sim, 15) == 0
+    assert last_json(sim.stdout())["ok"]
+
+
+def test_pause_is_refused_under_lockstep(sandbox, binary):
+    sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()),
+                          "--participants", "late", "--join-timeout-ms", "20000"])
+    rc, s = sim_cli(sandbox, "status")
+    assert rc == 0 and s["lockstep"]
+    rc, err = sim_cli(sandbox, "pause")
+    assert rc == 1 and "pause and resume are for wall-clock mode" in err
