@@ -42,6 +42,10 @@ def build_parser() -> argparse.ArgumentParser:
     dev.add_argument("--eds", default=None)
     dev.add_argument("--object-width", type=float, default=None, help="um: an object between the fingers")
     dev.add_argument("--period-ms", type=float, default=10.0)
+    dev.add_argument("--lockstep", action="store_true",
+                     help="be a lockstep participant driving the physics server's fingers")
+    dev.add_argument("--name", default="gripper", help="lockstep participant name")
+    dev.add_argument("--url", default=None, help="bus URL (lockstep)")
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
     from skillbus.sim import cli as sim_cli

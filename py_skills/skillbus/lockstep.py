@@ -32,6 +32,7 @@ from typing import Any, Callable
 
 from skillbus.bus import Bus, channel
 from skillbus.log import BadInputCounter
+from skillbus import tick_context as context
 from skillbus.msgs import channel_count_t, header_t, lockstep_ack_t, lockstep_clock_t, lockstep_join_t
 
 
@@ -213,6 +214,8 @@ class LockstepParticipant:
         self._current = -1  # the frame being worked on (its clock may be resent meanwhile)
         self._running = bytes(32)
         self._stop_requested = False
+        self._held: list[tuple[int, str, Any]] = []  # (due frame, channel, message): from ticks
+        self.after_frame: list[Callable[[int], None]] = []  # run after each frame's ack
         if not wall_clock:
             self._subs.append(bus.subscribe(clock_channel(), self._on_clock))
 
@@ -225,12 +228,32 @@ class LockstepParticipant:
             self._subs.append(self.bus.subscribe(ch, self._on_stamped))
 
     def publish(self, ch: str, msg: Any) -> None:
-        """Publishes for the current frame (from on_frame or a message handler)."""
+        """Publishes for the current frame (from on_frame or a message handler).
+
+        In a skill process answering a manager's tick of frame n (between its own
+        frames, at a moment that varies from run to run) the message is held and goes
+        out at the start of this participant's frame n + 1, which always comes after the
+        tick: the same frame on every run."""
+        tick = context.current_tick() if not self.wall_clock else None
+        if tick is not None:
+            self._held.append((tick.frame + 1, ch, msg))
+            return
         self.outbox.publish(ch, msg)
+
+    def _publish_held(self, frame: int) -> None:
+        due = [(ch, m) for f, ch, m in self._held if f <= frame]
+        self._held = [h for h in self._held if h[0] > frame]
+        for ch, m in due:
+            self.outbox.publish(ch, m)
 
     @property
     def frame(self) -> int:
         return self.outbox.frame
+
+    @property
+    def completed_frame(self) -> int:
+        """The last frame this participant finished and acknowledged (-1 before the first)."""
+        return self._last_acked
 
     def stop(self) -> None:
         self._stop_requested = True
@@ -361,6 +384,7 @@ class LockstepParticipant:
                 return self._fail(r, "lockstep: " + err)
             failure = ""
             try:
+                self._publish_held(frame)
                 for m in self.inbox.take(expected, frame):
                     self.handlers[m.channel](m)
                 if self.on_frame is not None:
@@ -373,6 +397,8 @@ class LockstepParticipant:
                 return self._fail(r, f"lockstep: {self.name} in frame {frame}: {failure}")
             r.frames += 1
             r.sim_time_ns = sim_time
+            for after in self.after_frame:
+                after(frame)
         if self._stop_seen and self._stop_reason:
             return self._fail(r, f"lockstep stopped by the master: {self._stop_reason}")
         r.digest = self._running

@@ -61,18 +61,31 @@ class RpcBadRequest(RpcError):
 RawMethod = Callable[[bytes], bytes]
 
 
+class RpcDefer(Exception):
+    """Raised by a method that cannot answer yet: the server keeps the request and runs it
+    again at retry_deferred() (a skill process answers a lockstep tick of frame n only
+    once it has finished its own frame n)."""
+
+
 class RpcServer:
     def __init__(self, bus: Bus, area: str, memory: int = 4096) -> None:
         self.bus, self.area, self.memory = bus, area, memory
         self.req_channel, self.rep_channel = request_channel(area), reply_channel(area)
         self.methods: dict[str, RawMethod] = {}
         self._answered: collections.OrderedDict[tuple[str, int], bytes] = collections.OrderedDict()
+        self._deferred: collections.OrderedDict[tuple[str, int], tuple[str, bytes]] = collections.OrderedDict()
         self.served = self.duplicates = self.expired = 0
         self.bad_input = BadInputCounter(f"rpc-server {area}")
         self._sub = bus.subscribe(self.req_channel, self._on_request)
 
     def close(self) -> None:
         self.bus.unsubscribe(self._sub)
+
+    def retry_deferred(self) -> None:
+        """Runs the deferred requests again, oldest first (each may defer again)."""
+        pending, self._deferred = self._deferred, collections.OrderedDict()
+        for ch, data in pending.values():
+            self._on_request(ch, data)
 
     def add_raw_method(self, name: str, method: RawMethod) -> None:
         self.methods[name] = method
@@ -111,6 +124,9 @@ class RpcServer:
         else:
             try:
                 rep.payload = method(bytes(req.payload))
+            except RpcDefer:
+                self._deferred[key] = (ch, data)
+                return
             except RpcBadRequest as e:
                 rep.status, rep.error = BAD_REQUEST, str(e)
             except Exception as e:  # a failing method is an ERROR reply, never silence
@@ -142,6 +158,12 @@ class RpcClient:
 
     def close(self) -> None:
         self.bus.unsubscribe(self._sub)
+
+    def retry_deferred(self) -> None:
+        """Runs the deferred requests again, oldest first (each may defer again)."""
+        pending, self._deferred = self._deferred, collections.OrderedDict()
+        for ch, data in pending.values():
+            self._on_request(ch, data)
 
     def _on_reply(self, ch: str, data: bytes) -> None:
         rep = decode(rpc_reply_t, data)

@@ -45,6 +45,7 @@ constexpr double kArmKp = 3 * kArmW * kArmW, kArmKd = 3 * kArmW, kArmKi = kArmW 
 constexpr double kArmIntegralLimit = 0.05;  // rad s
 constexpr double kFingerMaxW = 200.0, kFingerMaxWdt = 0.25;
 constexpr double kFingerIntegralRate = 10.0;  // 1/s: Ki = Kp * rate
+constexpr double kGripLag = 0.001, kGripStill = 0.002;  // m, m/s: blocked fingers (grip mode)
 constexpr double kDefaultFingerSpeed = 0.1;   // m/s of the width
 constexpr double kDefaultFingerForce = 20.0;  // N per finger
 constexpr double kRobotFriction = 0.5, kFingerFriction = 1.0;
@@ -129,6 +130,7 @@ struct Physics::Impl {
   double finger_target = 0.04;              // per finger opening
   double finger_ref = 0.04;                 // the ramp toward it
   double finger_integral = 0;               // m s, of the mean opening error
+  bool finger_gripping = false;             // blocked: pushing with the force limit
   double finger_kp = 0, finger_kd = 0;      // from the finger mass and the step
   double finger_speed = kDefaultFingerSpeed / 2, finger_force = kDefaultFingerForce;
   Eigen::VectorXd applied;                  // forces applied in the last step
@@ -255,6 +257,7 @@ struct Physics::Impl {
     traj_id.clear();
     finger_target = finger_ref = 0.5 * (robot->getPosition(left_dof) + robot->getPosition(right_dof));
     finger_integral = 0;
+    finger_gripping = false;
     const double finger_mass = robot->getMassMatrix()(left_dof, left_dof);
     const double w = std::min(kFingerMaxW, kFingerMaxWdt / (step_ns * 1e-9));
     finger_kp = finger_mass * w * w;
@@ -308,8 +311,16 @@ struct Physics::Impl {
     const double e = finger_ref - mean;
     const double ki = finger_kp * kFingerIntegralRate;
     finger_integral = std::clamp(finger_integral + e * dt, -finger_force / ki, finger_force / ki);
+    // Grip mode, as a gripper's firmware does it: fingers that stop short of where they
+    // should be (1 mm behind the reference and still) are blocked by something, and push
+    // with the force limit itself at once, instead of letting the position loop wind up
+    // to it. They leave grip mode when they move again or get a new command.
+    if (!finger_gripping && std::abs(e) > kGripLag && std::abs(mean_vel) < kGripStill) finger_gripping = true;
+    if (finger_gripping && (std::abs(mean_vel) > 4 * kGripStill || std::abs(e) < kGripLag / 2)) finger_gripping = false;
     const double squeeze =
-        std::clamp(finger_kp * e + finger_kd * (ref_vel - mean_vel) + ki * finger_integral, -finger_force, finger_force);
+        finger_gripping ? (e > 0 ? finger_force : -finger_force)
+                        : std::clamp(finger_kp * e + finger_kd * (ref_vel - mean_vel) + ki * finger_integral,
+                                     -finger_force, finger_force);
     const double centring = -finger_kp * diff - finger_kd * diff_vel;
     for (size_t i : {left_dof, right_dof}) {
       auto* dof = robot->getDof(i);
@@ -406,6 +417,7 @@ std::string Physics::command_gripper(const GripperCommand& cmd) {
   m.finger_speed = cmd.speed / 2;
   m.finger_force = cmd.force_limit;
   m.finger_integral = 0;  // a new command starts without the last one's wind-up
+  m.finger_gripping = false;
   return "";
 }
 

@@ -1,5 +1,7 @@
 #include "manager.hpp"
 
+#include <sstream>
+
 #include "skillbus_msgs/skill_list_t.hpp"
 #include "skillbus_msgs/skill_register_t.hpp"
 
@@ -31,10 +33,28 @@ Manager::Manager(Bus& bus, ManagerOptions options)
       world_(bus, participant_, opt_.ontology_files, opt_.wall_clock),
       rpc_(bus, "SKILL") {
   if (!opt_.start_at_first_tick.empty()) {
+    // "Type[:label] [KEY=VALUE ...]": values are typed at the start, by the description.
+    std::istringstream words(opt_.start_at_first_tick);
+    std::string head, kv;
+    words >> head;
     skill_start_t req{};
-    const auto colon = opt_.start_at_first_tick.find(':');
-    req.type = opt_.start_at_first_tick.substr(0, colon);
-    if (colon != std::string::npos) req.label = opt_.start_at_first_tick.substr(colon + 1);
+    const auto colon = head.find(':');
+    req.type = head.substr(0, colon);
+    if (colon != std::string::npos) req.label = head.substr(colon + 1);
+    while (words >> kv) {
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos || eq == 0)
+        throw std::runtime_error("--start: '" + kv + "' is not KEY=VALUE");
+      skillbus_msgs::skill_param_t p{};
+      p.key = kv.substr(0, eq);
+      skillbus_msgs::skill_value_t v{};
+      v.type = skillbus_msgs::skill_value_t::STRING;
+      v.s = kv.substr(eq + 1);
+      p.values.push_back(v);
+      p.num_values = 1;
+      req.params.push_back(p);  // data_type empty: typed in begin()
+    }
+    req.num_params = static_cast<int32_t>(req.params.size());
     starts_.emplace_back(next_task_++, req);
   }
   // RPC handlers only record requests: they can run while a tick waits for a skill
@@ -116,17 +136,61 @@ RpcClient& Manager::client(const std::string& area) {
   return *c;
 }
 
+namespace {
+// A parameter given as text (--start KEY=VALUE), typed by the skill's description.
+void type_from_text(const skillbus_msgs::skill_description_t& d, skillbus_msgs::skill_param_t& p) {
+  const std::string text = p.values.empty() ? "" : p.values[0].s;
+  for (const auto& decl : d.params) {
+    if (decl.key != p.key) continue;
+    p.data_type = decl.data_type;
+    p.concept = decl.concept;
+    skillbus_msgs::skill_value_t v{};
+    try {
+      if (decl.data_type == "element") {
+        v.type = skillbus_msgs::skill_value_t::ELEMENT;
+        v.element.id = text;
+        v.element.type = decl.concept;
+      } else if (decl.data_type == "float") {
+        v.type = skillbus_msgs::skill_value_t::FLOAT;
+        v.f = std::stod(text);
+      } else if (decl.data_type == "int") {
+        v.type = skillbus_msgs::skill_value_t::INT;
+        v.i = std::stoll(text);
+      } else if (decl.data_type == "bool") {
+        v.type = skillbus_msgs::skill_value_t::BOOL;
+        v.b = text == "true" || text == "1" || text == "yes";
+      } else {
+        v.type = skillbus_msgs::skill_value_t::STRING;
+        v.s = text;
+      }
+    } catch (const std::exception&) {
+      SB_WARN("skill_mgr", "--start " << p.key << "=" << text << ": not a " << decl.data_type << "; ignored");
+      p.values.clear();
+      p.num_values = 0;
+      return;
+    }
+    p.values = {v};
+    p.num_values = 1;
+    return;
+  }
+  SB_WARN("skill_mgr", "--start: " << d.type << " has no parameter " << p.key << "; ignored");
+}
+}  // namespace
+
 void Manager::begin(const skill_start_t& req, int64_t id) {
   auto t = std::make_unique<Task>();
   t->id = id;
   t->type = req.type;
   t->label = req.label;
-  for (const auto& p : req.params) t->blackboard.set(p.key, p);  // a fresh blackboard per task
+  auto impls = registry_.find(req.type, req.label);
+  for (auto p : req.params) {  // a fresh blackboard per task
+    if (p.data_type.empty() && !impls.empty()) type_from_text(impls.front()->description, p);
+    t->blackboard.set(p.key, p);
+  }
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
                                                         opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot});
   // (instance ids name running primitives in skill processes: unique across tasks)
-  auto impls = registry_.find(req.type, req.label);
   if (impls.empty()) {
     SB_WARN(kLog, "task " << id << ": skill " << req.type << " is not available");
     results_[id] = "Failure: skill " + req.type + " is not available";
@@ -144,6 +208,8 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
 }
 
 void Manager::tick(Task& t) {
+  t.ctx->frame = frame_;
+  t.ctx->sim_time_ns = sim_time_ns_;
   if (t.stop_requested) {
     t.root->preempt();
   } else {
@@ -178,8 +244,10 @@ void Manager::publish_progress(const Task& t) {
   participant_.publish(channel("SB_SKILL_PROGRESS"), p);
 }
 
-void Manager::on_frame(int64_t, int64_t sim_time_ns) {
+void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
   if (sim_time_ns % opt_.tick_period_ns != 0) return;  // skills tick at 25 Hz of (sim) time
+  frame_ = frame;
+  sim_time_ns_ = sim_time_ns;
   while (!starts_.empty()) {
     auto [id, req] = starts_.front();
     starts_.pop_front();

@@ -62,6 +62,7 @@ class Manager {
   RpcServer rpc_;
   std::map<std::string, std::unique_ptr<RpcClient>> clients_;
   std::map<int64_t, std::unique_ptr<Task>> tasks_;
+  int64_t frame_ = -1, sim_time_ns_ = 0;  // of the tick in progress
   std::deque<std::pair<int64_t, skillbus_msgs::skill_start_t>> starts_;  // applied at the next tick
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;

@@ -209,6 +209,8 @@ State RemotePrimitive::call(int8_t action) {
   t.label = impl_.description.label;
   t.instance = instance_;
   t.action = action;
+  t.frame = ctx_.frame;
+  t.sim_time_ns = ctx_.sim_time_ns;
   t.params = params_;
   t.num_params = static_cast<int32_t>(params_.size());
   CallOptions opts;
@@ -356,6 +358,8 @@ bool RemoteCompound::start() {
   skill_tick_t t{};
   t.label = impl_.description.label;
   t.action = skill_tick_t::EXPAND;
+  t.frame = ctx_.frame;
+  t.sim_time_ns = ctx_.sim_time_ns;
   t.params = params;
   t.num_params = static_cast<int32_t>(params.size());
   CallOptions opts;

@@ -32,6 +32,8 @@ struct TaskContext {
   int64_t next_instance = 1;
   WorldReplica* world = nullptr;  // for conditions and grounding
   std::string robot;              // the agent this manager drives: every skill's Robot parameter
+  int64_t frame = -1;             // the frame being ticked, passed to skill processes
+  int64_t sim_time_ns = 0;
 };
 
 // A node's parameters, gathered for a tick: specified by a parent, else static (a

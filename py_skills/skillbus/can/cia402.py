@@ -64,3 +64,6 @@ GRIP_LOST = 0x08
 EMCY_OVER_CURRENT = 0x2310     # blocked for too long above the rated force
 EMCY_FOLLOWING_ERROR = 0x8611
 EMCY_TEXT = {EMCY_OVER_CURRENT: "over-current (blocked too long)", EMCY_FOLLOWING_ERROR: "following error"}
+
+# CiA 301 NMT state codes as sent in a heartbeat, by canopen's state names.
+NMT_STATE_CODES = {"INITIALISING": 0x00, "STOPPED": 0x04, "OPERATIONAL": 0x05, "PRE-OPERATIONAL": 0x7F}

@@ -1,9 +1,15 @@
 """The simulated gripper: one CANopen node (canopen's LocalNode) with the CiA 402 drive
 profile and the EDS in deploy/can/skillbus_gripper.eds, speaking exactly the frames a
-real CANopen gripper speaks. Standalone mode (here): an internal finger model stepped on
-a timer. (Under lockstep it is to be driven by sim frames instead: not built yet.)
+real CANopen gripper speaks. Two ways to run:
+
+* standalone: an internal finger model stepped on a wall-clock timer (tests of the
+  driver without the physics server);
+* ``--lockstep``: a lockstep participant whose fingers are the physics server's: each
+  set-point becomes a sim_gripper_cmd_t, width and force come back in sim_state_t, and
+  everything it sends (TPDO, heartbeat, EMCY) is driven by sim frames, never by timers.
 
     skillbus gripper-device --channel gripper0 --node-id 5 [--object-width 40000]
+    skillbus gripper-device --channel gripper0 --node-id 5 --lockstep --name gripper
 
 Reads RPDO1 (controlword, target position); sends boot-up, heartbeat, TPDO1
 (statusword, position, grip state) every step, EMCY on faults; answers SDO.
@@ -62,13 +68,103 @@ class FingerModel:
         return self.object_width is not None and abs(self.width - self.object_width) < 1e-6 and \
             self.target < self.object_width
 
+    def move_to(self, target: float, velocity: float, force_limit: int) -> None:
+        self.target, self.velocity = target, velocity
+        self.moving, self.blocked_for = True, 0.0
+
+    def halt(self) -> None:
+        self.target, self.moving = self.width, False
+
+    def fault_stop(self) -> None:
+        self.moving, self.blocked_for = False, 0.0
+
+    def following_error(self) -> bool:
+        return False  # the internal model always follows
+
+
+FOLLOWING_WINDOW_UM = 5_000      # 0x6065 semantics: the fingers may lag the profile this much
+FOLLOWING_TIMEOUT_S = 0.2
+AT_TARGET_UM = 500
+
+
+class SimFingers:
+    """The physics server's fingers. A set-point goes out as a sim_gripper_cmd_t; width,
+    force and finger-object contacts come back every frame in sim_state_t. The fingers
+    are stalled when they push with (nearly) the force limit short of the target; an
+    object is gripped when they are stalled on an object they touch."""
+
+    def __init__(self, publish) -> None:
+        self.publish = publish            # publish(sim_gripper_cmd_t) for this frame
+        self.width = float(MAX_WIDTH_UM)
+        self.target = float(MAX_WIDTH_UM)
+        self.velocity = 50_000.0
+        self.force_limit_n = 20.0
+        self.force = 0.0
+        self.touching: set[str] = set()
+        self.moving = False
+        self.blocked_for = 0.0
+        self._start, self._elapsed, self._lagging = self.width, 0.0, 0.0
+        self._commands = 0
+
+    def on_state(self, width_m: float, force_n: float, touching: set[str]) -> None:
+        self.width, self.force, self.touching = width_m * 1e6, force_n, touching
+
+    def _send(self, target: float) -> None:
+        from skillbus.sim.messages import gripper_command
+        self._commands += 1
+        self.publish(gripper_command(f"can-{self._commands}", target * 1e-6, max(self.velocity, 1.0) * 1e-6,
+                                     self.force_limit_n))
+
+    def move_to(self, target: float, velocity: float, force_limit: int) -> None:
+        self.target, self.velocity = float(target), float(velocity)
+        self.force_limit_n = max(0.1, force_limit / 10.0)
+        self.moving, self.blocked_for = True, 0.0
+        self._start, self._elapsed, self._lagging = self.width, 0.0, 0.0
+        self._send(self.target)
+
+    def halt(self) -> None:
+        self.target, self.moving = self.width, False
+        self._send(self.width)
+
+    def fault_stop(self) -> None:
+        self.halt()
+        self.blocked_for = 0.0
+
+    @property
+    def stalled(self) -> bool:
+        return abs(self.width - self.target) > AT_TARGET_UM and self.force >= 0.9 * self.force_limit_n
+
+    @property
+    def in_contact(self) -> bool:
+        return self.stalled and bool(self.touching)
+
+    def step(self, dt: float) -> None:
+        if not self.moving:
+            return
+        self._elapsed += dt
+        if abs(self.width - self.target) <= AT_TARGET_UM:
+            self.moving = False
+            return
+        if self.stalled:
+            self.blocked_for += dt
+            return
+        # following error: behind the commanded profile by more than the window
+        d = self.target - self._start
+        planned = self._start + max(-abs(d), min(abs(d), self.velocity * self._elapsed)) * (1 if d >= 0 else -1)
+        behind = abs(planned - self.width) > FOLLOWING_WINDOW_UM
+        self._lagging = self._lagging + dt if behind else 0.0
+
+    def following_error(self) -> bool:
+        return self.moving and self._lagging > FOLLOWING_TIMEOUT_S
+
 
 class GripperDevice:
     def __init__(self, network: canopen.Network, node_id: int, eds: str | Path = EDS,
-                 object_width: float | None = None) -> None:
+                 object_width: float | None = None, fingers: FingerModel | SimFingers | None = None) -> None:
         self.node = canopen.LocalNode(node_id, str(eds))
         network.add_node(self.node)
-        self.model = FingerModel(object_width=object_width)
+        self.network = network
+        self.model = fingers if fingers is not None else FingerModel(object_width=object_width)
         self.state = c.SWITCH_ON_DISABLED
         self.controlword = 0
         self.error_code = 0
@@ -116,19 +212,15 @@ class GripperDevice:
             self.state = c.OPERATION_ENABLED
         if self.state == c.OPERATION_ENABLED:
             if cw & c.CW_HALT:
-                self.model.target = self.model.width
-                self.model.moving = False
+                self.model.halt()
             elif rising & c.CW_NEW_SET_POINT:
-                self.model.target = max(0, min(MAX_WIDTH_UM, target))
-                self.model.velocity = self.node.sdo[0x6081].raw or 1
-                self.model.moving = True
-                self.model.blocked_for = 0.0
+                self.model.move_to(max(0, min(MAX_WIDTH_UM, target)), self.node.sdo[0x6081].raw or 1,
+                                   self.node.sdo[0x6073].raw)
                 self.was_gripped = False
 
     def _fault(self, code: int) -> None:
         self.state, self.error_code = c.FAULT, code
-        self.model.moving = False
-        self.model.blocked_for = 0.0
+        self.model.fault_stop()
         self.node.sdo[0x603F].raw = code
         self.node.sdo[0x1001].raw = 0x01  # generic error
         self.node.emcy.send(code, 0x01, struct.pack("<I", int(self.model.width))[:5].ljust(5, b"\0"))
@@ -156,6 +248,8 @@ class GripperDevice:
                 if (self.model.moving and self.model.in_contact and force > RATED_FORCE
                         and self.model.blocked_for > BLOCKED_TIMEOUT_S):
                     self._fault(c.EMCY_OVER_CURRENT)
+                elif self.model.following_error():
+                    self._fault(c.EMCY_FOLLOWING_ERROR)
             sw = c.STATE_WORDS[self.state] | c.SW_REMOTE
             grip = self.grip_state()
             if grip & c.GRIP_REACHED and self.state == c.OPERATION_ENABLED:
@@ -174,8 +268,70 @@ class GripperDevice:
             tpdo.transmit()
 
 
+    def heartbeat_if_due(self, sim_time_ns: int) -> None:
+        """Lockstep: the heartbeat producer (0x1017 ms of sim time) from the frames."""
+        period_ms = self.node.sdo[0x1017].raw
+        if period_ms <= 0 or self.node.nmt.state == "INITIALISING":
+            return
+        if self._next_heartbeat_ns is None or sim_time_ns >= self._next_heartbeat_ns:
+            self.network.send_message(0x700 + self.node.id, [c.NMT_STATE_CODES[self.node.nmt.state]])
+            self._next_heartbeat_ns = sim_time_ns + period_ms * 1_000_000
+
+    _next_heartbeat_ns: int | None = None
+
+
+def run_lockstep(args) -> int:
+    """The device as a lockstep participant, its fingers those of the physics server."""
+    import can
+
+    from skillbus.bus import open_bus
+    from skillbus.can.lockstep_link import LockstepCanLink, sdo_ids
+    from skillbus.lockstep import LockstepParticipant
+    from skillbus.msgs import decode, sim_state_t
+    from skillbus.sim.messages import gripper_channel, state_channel
+
+    bus = open_bus(args.url)
+    p = LockstepParticipant(bus, args.name, kind="gripper-device")
+    network = canopen.Network()
+    link = LockstepCanLink(p, can.Bus(interface=args.interface, channel=args.channel), args.channel, network,
+                           sdo_ids(args.node_id))
+    fingers = SimFingers(lambda m: p.publish(gripper_channel(), m))
+    dev = GripperDevice(network, args.node_id, args.eds or EDS, fingers=fingers)
+    bad = [0]
+
+    def on_state(m) -> None:
+        s = decode(sim_state_t, m.data)
+        if s is None:
+            bad[0] += 1
+            return
+        fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts})
+
+    p.subscribe(state_channel(), on_state)
+    last = [None]
+
+    def on_frame(frame: int, sim_time_ns: int) -> None:
+        if last[0] is None:
+            dev.boot()  # boot-up in the first frame: nothing but SDO goes out before the run
+        dt = (sim_time_ns - last[0]) * 1e-9 if last[0] is not None else 0.0
+        last[0] = sim_time_ns
+        dev.step(dt)
+        dev.heartbeat_if_due(sim_time_ns)
+
+    p.on_frame = link.wrap(on_frame)
+    print(json.dumps({"node": args.node_id, "channel": args.channel, "lockstep": args.name}), flush=True)
+    r = p.run()
+    p.close()
+    link.shutdown()
+    print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex,
+                      "can_sent": link.stats["sent"], "can_received": link.stats["received"],
+                      "rpdo_errors": dev.rpdo_errors, "bad_input": bad[0]}), flush=True)
+    return 0 if r.ok else 1
+
+
 def main(args) -> int:
     logging.basicConfig(level=logging.INFO)
+    if getattr(args, "lockstep", False):
+        return run_lockstep(args)
     network = canopen.Network()
     network.connect(interface=args.interface, channel=args.channel)
     dev = GripperDevice(network, args.node_id, args.eds or EDS, args.object_width)

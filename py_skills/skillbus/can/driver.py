@@ -10,7 +10,13 @@ frames are counted and logged, never raised into a skill.
     driver = GripperDriver(network, node_id=5)
     driver.start()                    # boot-up, SDO configuration, NMT start, enable operation
     driver.command(width_um=0)        # close
-    s = driver.status()               # s.state, s.position_um, s.gripped, s.faults ...
+    s = driver.status()               # s.state, s.position_um, s.gripped, s.fresh, s.faults ...
+
+Under lockstep (a skill process's driver, its CAN traffic carried by a LockstepCanLink):
+configure() by SDO before the run, then begin_startup() and, every frame, advance(sim
+time) and snapshot(frame): the NMT start and the CiA 402 enable sequence proceed frame by
+frame without waiting, the heartbeat is supervised in sim time, and a tick of frame n
+sees the status as of frame n - 1 (the same on every run).
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from pathlib import Path
 
 import canopen
 
+from skillbus import tick_context
 from skillbus.can import cia402 as c
 from skillbus.can.device import EDS
 
@@ -42,6 +49,7 @@ class GripperStatus:
     target_reached: bool = False
     faults: list[str] = field(default_factory=list)
     updates: int = 0
+    fresh: bool = True   # it reflects the last command (a status from before it may still show the old move)
 
     @property
     def moving(self) -> bool:
@@ -58,8 +66,12 @@ class GripperStatus:
 
 class GripperDriver:
     def __init__(self, network: canopen.Network, node_id: int, eds: str | Path = EDS, heartbeat_ms: int = 100,
-                 velocity_um_s: int = 50_000, force_limit: int = 200) -> None:
-        self.network, self.heartbeat_ms = network, heartbeat_ms
+                 velocity_um_s: int = 50_000, force_limit: int = 200, clock=time.monotonic) -> None:
+        self.network, self.heartbeat_ms, self.clock = network, heartbeat_ms, clock
+        self._startup: list[tuple[int, str]] | None = None  # lockstep start-up steps still to do
+        self._startup_deadline = 0.0
+        self._snapshots: dict[int, GripperStatus] = {}
+        self._fresh_after: tuple[str, int] = ("updates", 0)
         self.velocity, self.force_limit = velocity_um_s, force_limit
         self.node = canopen.RemoteNode(node_id, str(eds))
         network.add_node(self.node)
@@ -94,7 +106,7 @@ class GripperDriver:
             s.updates += 1
 
     def _on_heartbeat(self, state: int) -> None:
-        self._last_heartbeat = time.monotonic()
+        self._last_heartbeat = self.clock()
 
     def _on_emcy(self, emcy) -> None:
         if emcy.code == 0:
@@ -110,16 +122,65 @@ class GripperDriver:
             self.node.nmt.wait_for_heartbeat(timeout)
         except canopen.nmt.NmtError as e:
             raise GripperError(f"gripper node {self.node.id}: no heartbeat within {timeout} s ({e})") from None
-        self._last_heartbeat = time.monotonic()
+        self._last_heartbeat = self.clock()
+        self.configure()
+        self.node.nmt.state = "OPERATIONAL"
+        self.enable(timeout)
+
+    def configure(self) -> None:
+        """Configuration by SDO (start-up only; under lockstep, before the run)."""
         try:
             self.node.sdo[0x1017].raw = self.heartbeat_ms
             self.node.sdo[0x6060].raw = 1                     # profile position mode
             self.node.sdo[0x6081].raw = self.velocity
             self.node.sdo[0x6073].raw = self.force_limit
-        except canopen.SdoError as e:
+        except canopen.sdo.exceptions.SdoError as e:
             raise GripperError(f"gripper node {self.node.id}: configuration by SDO failed: {e}") from None
-        self.node.nmt.state = "OPERATIONAL"
-        self.enable(timeout)
+
+    # -- lockstep start-up and frames (never waits) ------------------------------------------
+    def begin_startup(self, timeout_s: float = 5.0) -> None:
+        """Lockstep: NMT start, then shutdown, switch on, enable operation, one step per
+        frame once the device shows the state the last step asked for (advance())."""
+        self._startup = [(c.CW_SHUTDOWN, c.READY_TO_SWITCH_ON), (c.CW_SWITCH_ON, c.SWITCHED_ON),
+                         (c.CW_ENABLE_OPERATION, c.OPERATION_ENABLED)]
+        self._startup_timeout = timeout_s
+        self._startup_started = False
+
+    @property
+    def ready(self) -> bool:
+        return self._startup is None and self._status.state == c.OPERATION_ENABLED
+
+    def advance(self) -> None:
+        """Lockstep, every frame: the next start-up step when due; heartbeat supervision."""
+        now = self.clock()
+        if self._last_heartbeat is None:
+            self._last_heartbeat = now  # supervision starts with the run
+        if self._startup is not None:
+            if not self._startup_started:
+                self.node.nmt.state = "OPERATIONAL"
+                self._startup_started, self._startup_deadline = True, now + self._startup_timeout
+                self._send(self._startup[0][0], self._status.position_um)
+            elif self._status.state == self._startup[0][1]:
+                self._startup.pop(0)
+                if self._startup:
+                    self._send(self._startup[0][0], self._status.position_um)
+                else:
+                    self._startup = None
+                    log.info("gripper node %d enabled", self.node.id)
+            elif now > self._startup_deadline:
+                msg = (f"start-up failed: state {self._status.state!r}, not {self._startup[0][1]!r}, "
+                       f"after {self._startup_timeout:.1f} s")
+                self._startup = None
+                with self._lock:
+                    self._status.faults.append(msg)
+                log.error("gripper node %d: %s", self.node.id, msg)
+        self.poll()
+
+    def snapshot(self, frame: int) -> None:
+        """Lockstep: keep the status of this frame for the ticks of the next one."""
+        self._snapshots[frame] = self._copy()
+        for f in [f for f in self._snapshots if f < frame - 8]:
+            del self._snapshots[f]
 
     def enable(self, timeout: float = 5.0) -> None:
         """The CiA 402 way to operation enabled: shutdown, switch on, enable operation
@@ -147,7 +208,15 @@ class GripperDriver:
 
     def command(self, width_um: int) -> None:
         """Moves the fingers to `width_um` (a close stops at an object, gripping it with the
-        configured force limit). Sends two RPDOs: the new set-point bit low, then high."""
+        configured force limit). Sends two RPDOs: the new set-point bit low, then high.
+        Statuses are `fresh` again once they can show the move: under lockstep from the
+        tick four frames later (a tick of frame n: sent at n + 1, seen by the device at
+        n + 2, its answer here at n + 3, shown to ticks of n + 4), on the wall clock after
+        two more status updates."""
+        tick = tick_context.current_tick()
+        with self._lock:
+            self._fresh_after = (("frame", tick.frame + 4) if tick is not None
+                                 else ("updates", self._status.updates + 2))
         self._send(c.CW_ENABLE_OPERATION, width_um)
         self._send(c.CW_ENABLE_OPERATION | c.CW_NEW_SET_POINT, width_um)
 
@@ -164,7 +233,7 @@ class GripperDriver:
         """Heartbeat supervision: no heartbeat for 3 periods is the fault 'device lost'."""
         if self._last_heartbeat is None:
             return
-        silent = time.monotonic() - self._last_heartbeat
+        silent = self.clock() - self._last_heartbeat
         if silent > 3 * self.heartbeat_ms / 1000.0:
             with self._lock:
                 msg = f"device lost: no heartbeat from node {self.node.id} for {silent * 1000:.0f} ms"
@@ -172,8 +241,25 @@ class GripperDriver:
                     self._status.faults.append(msg)
                     log.error("%s", msg)
 
-    def status(self) -> GripperStatus:
+    def _copy(self) -> GripperStatus:
         with self._lock:
             s = self._status
-            return GripperStatus(s.state, s.statusword, s.position_um, s.grip, s.target_reached, list(s.faults),
-                                 s.updates)
+            out = GripperStatus(s.state, s.statusword, s.position_um, s.grip, s.target_reached, list(s.faults),
+                                s.updates)
+            kind, mark = self._fresh_after
+            out.fresh = kind != "updates" or s.updates >= mark
+            return out
+
+    def status(self) -> GripperStatus:
+        """The latest status; in a tick of frame n under lockstep, the status of frame n - 1."""
+        tick = tick_context.current_tick()
+        if tick is None or not self._snapshots:
+            return self._copy()
+        older = [f for f in self._snapshots if f < tick.frame]
+        frame = max(older) if older else min(self._snapshots)
+        out = self._snapshots[frame]
+        out = GripperStatus(out.state, out.statusword, out.position_um, out.grip, out.target_reached,
+                            list(out.faults), out.updates)
+        kind, mark = self._fresh_after
+        out.fresh = kind != "frame" or tick.frame >= mark
+        return out

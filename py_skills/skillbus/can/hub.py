@@ -33,6 +33,9 @@ from skillbus.can.records import CAN_MTU, CANFD_MTU
 log = logging.getLogger("can-hub")
 QUEUE_LIMIT = 20000     # records per client before back-pressure
 ECHO_ON, ECHO_OFF = b"ECHO1", b"ECHO0"
+# The hub's answer to a client's first record: from now on every frame reaches it. A
+# client waits for it before it is used, as a kernel socket is bound before it is used.
+JOINED = b"JOIN1"
 
 
 def socket_dir() -> Path:
@@ -108,6 +111,8 @@ class Hub:
                 return
             if rec in (ECHO_ON, ECHO_OFF):
                 c.echo = rec == ECHO_ON
+                c.out.append(JOINED)
+                self._update(c)
                 continue
             if len(rec) not in (CAN_MTU, CANFD_MTU):
                 self.bad += 1

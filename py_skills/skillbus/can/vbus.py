@@ -9,6 +9,7 @@ FD, id/mask filters, own frames only with ``receive_own_messages``. ``send`` blo
 
 from __future__ import annotations
 
+import collections
 import select
 import socket
 import time
@@ -16,7 +17,7 @@ from typing import Any
 
 import can
 
-from skillbus.can.hub import ECHO_OFF, ECHO_ON, socket_path
+from skillbus.can.hub import ECHO_OFF, ECHO_ON, JOINED, socket_path
 from skillbus.can.records import CANFD_MTU, from_record, to_record
 
 
@@ -42,6 +43,20 @@ class VirtualSocketCanBus(can.BusABC):
                 time.sleep(0.02)
         self.sock.send(ECHO_ON if receive_own_messages else ECHO_OFF)
         self.bad_records = 0
+        self._early: collections.deque[bytes] = collections.deque()
+        # Wait until the hub has us: frames sent by anyone after this returns reach us.
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([self.sock], [], [], max(left, 0.5))[0]:
+                self.sock.close()
+                raise can.CanInitializationError(f"the virtual SocketCAN hub at {path} did not answer")
+            rec = self.sock.recv(CANFD_MTU + 1)
+            if rec == JOINED:
+                break
+            if not rec:
+                self.sock.close()
+                raise can.CanInitializationError(f"the virtual SocketCAN hub at {path} hung up")
+            self._early.append(rec)  # relayed to us before our first record was read: keep it
         super().__init__(channel=channel, **kwargs)
 
     def fileno(self) -> int:
@@ -61,13 +76,16 @@ class VirtualSocketCanBus(can.BusABC):
 
     def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
         while True:
-            ready = select.select([self.sock], [], [], timeout)[0]
-            if not ready:
-                return None, False
-            try:
-                rec = self.sock.recv(CANFD_MTU + 1)
-            except OSError as e:
-                raise can.CanOperationError(f"virtual SocketCAN receive failed: {e}") from e
+            if self._early:
+                rec = self._early.popleft()
+            else:
+                ready = select.select([self.sock], [], [], timeout)[0]
+                if not ready:
+                    return None, False
+                try:
+                    rec = self.sock.recv(CANFD_MTU + 1)
+                except OSError as e:
+                    raise can.CanOperationError(f"virtual SocketCAN receive failed: {e}") from e
             if not rec:
                 raise can.CanOperationError(f"the virtual SocketCAN hub of {self.channel} is gone")
             try:

@@ -21,7 +21,8 @@ from typing import Any
 
 from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t
-from skillbus.rpc import RpcClient, RpcError, RpcServer
+from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer
+from skillbus import tick_context as context
 from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
 from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
 
@@ -58,8 +59,8 @@ def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
 
 
 class SkillProcess:
-    def __init__(self, bus: Bus, name: str, libraries: list[str], wmi: Any = None) -> None:
-        self.bus, self.name, self.wmi = bus, name, wmi
+    def __init__(self, bus: Bus, name: str, libraries: list[str], wmi: Any = None, participant: Any = None) -> None:
+        self.bus, self.name, self.wmi, self.participant = bus, name, wmi, participant
         self.classes, self.errors = load_libraries(libraries)
         for e in self.errors:
             log.error("%s", e)
@@ -68,6 +69,11 @@ class SkillProcess:
         self.server = RpcServer(bus, self.area)
         self.server.add_method("tick", self.on_tick, skill_tick_t, skill_tick_reply_t)
         self.server.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
+        if participant is not None:
+            # A tick of frame n is answered only after this process has finished its own
+            # frame n, so the skill always sees the world-model replica and the devices as
+            # they were at the end of frame n, however the tick and the clock raced.
+            participant.after_frame.append(lambda frame: self.server.retry_deferred())
         self.incarnation = time.time_ns()  # identity of this run of the process, not behaviour
 
     def registration(self) -> skill_register_t:
@@ -103,7 +109,16 @@ class SkillProcess:
             r.num_params = len(r.params)
         return r
 
+    def _wait_for_frame(self, t: skill_tick_t) -> None:
+        if self.participant is not None and t.frame >= 0 and self.participant.completed_frame < t.frame:
+            raise RpcDefer()
+
     def on_tick(self, t: skill_tick_t) -> skill_tick_reply_t:
+        self._wait_for_frame(t)
+        with context.ticking(t.frame, t.sim_time_ns):
+            return self._tick(t)
+
+    def _tick(self, t: skill_tick_t) -> skill_tick_reply_t:
         cls = self.classes.get(t.label)
         if cls is None or not issubclass(cls, PrimitiveBase):
             return self._reply(None, State.Failure, f"{self.name} has no primitive {t.label!r}", -1)
@@ -146,6 +161,7 @@ class SkillProcess:
             return self._reply(skill, State.Failure, f"{t.label}.{hook}() raised {type(e).__name__}: {e}", -1)
 
     def on_expand(self, t: skill_tick_t) -> skill_tree_t:
+        self._wait_for_frame(t)
         cls = self.classes.get(t.label)
         if cls is None or not issubclass(cls, SkillBase):
             out = skill_tree_t()
@@ -173,7 +189,15 @@ def main(args) -> int:
     if args.world_model:
         from skillbus.world import WorldModelInterface
         wmi = WorldModelInterface(bus, args.name, participant=participant)
-    proc = SkillProcess(bus, args.name, args.library, wmi)
+    if getattr(args, "gripper", None):
+        from skillbus.can import gripper_service
+        from skillbus.can.driver import GripperError
+        try:
+            gripper_service.setup(args.gripper, args.can_interface, participant)
+        except GripperError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+    proc = SkillProcess(bus, args.name, args.library, wmi, participant)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
     reply = proc.register(timeout=args.register_timeout)
     log.info("registered %d skill(s) with the manager (%d refused)", len(proc.classes), len(reply.errors))

@@ -1,0 +1,89 @@
+"""The gripper of a skill process: one GripperDriver, set up when the process starts
+(``skillbus skills-process --gripper gripper0:5``) and used by the gripper skills.
+
+Wall clock: the driver starts at once (waits for the device, configures it by SDO,
+enables it). Lockstep: it is configured by SDO before the process joins the run, its CAN
+traffic goes through a LockstepCanLink, and the start-up sequence and heartbeat
+supervision advance with the process's frames, in sim time.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any
+
+import can
+import canopen
+
+from skillbus.can.driver import GripperDriver, GripperError
+
+log = logging.getLogger("gripper-service")
+_driver: GripperDriver | None = None
+_link: Any = None
+
+
+def parse(spec: str) -> tuple[str, int]:
+    channel, _, node = spec.partition(":")
+    if not channel:
+        raise GripperError(f"--gripper {spec!r}: give CHANNEL[:NODE], e.g. gripper0:5")
+    try:
+        return channel, int(node) if node else 5
+    except ValueError:
+        raise GripperError(f"--gripper {spec!r}: the node id must be a number") from None
+
+
+def setup(spec: str, interface: str = "skillbus_vcan", participant: Any = None, sdo_timeout: float = 10.0,
+          **driver_args: Any) -> GripperDriver:
+    global _driver, _link
+    channel, node_id = parse(spec)
+    network = canopen.Network()
+    if participant is None:
+        network.connect(interface=interface, channel=channel)
+        _driver = GripperDriver(network, node_id, **driver_args)
+        _driver.start(timeout=sdo_timeout)
+        return _driver
+    from skillbus.can.lockstep_link import LockstepCanLink, sdo_ids
+    _link = LockstepCanLink(participant, can.Bus(interface=interface, channel=channel), channel, network,
+                            sdo_ids(node_id))
+    frame_time = {"t": 0.0}
+    _driver = GripperDriver(network, node_id, clock=lambda: frame_time["t"], **driver_args)
+    # By SDO, before the run (the device answers SDO outside the frames); the device may
+    # still be starting, so try again until sdo_timeout.
+    _driver.node.sdo.RESPONSE_TIMEOUT = 0.5
+    deadline = time.monotonic() + sdo_timeout
+    while True:
+        try:
+            _driver.configure()
+            break
+        except GripperError:
+            if time.monotonic() > deadline:
+                raise
+    _driver.begin_startup()
+    inner = participant.on_frame
+
+    def on_frame(frame: int, sim_time_ns: int) -> None:
+        frame_time["t"] = sim_time_ns * 1e-9
+        _driver.advance()
+        _driver.snapshot(frame)
+        if inner is not None:
+            inner(frame, sim_time_ns)
+
+    participant.on_frame = _link.wrap(on_frame)
+    log.info("gripper on %s node %d (lockstep)", channel, node_id)
+    return _driver
+
+
+def driver() -> GripperDriver:
+    if _driver is None:
+        raise GripperError("this skill process drives no gripper: start it with --gripper CHANNEL[:NODE]")
+    return _driver
+
+
+def shutdown() -> None:
+    global _driver, _link
+    if _link is not None:
+        _link.shutdown()
+    elif _driver is not None:
+        _driver.network.disconnect()
+    _driver, _link = None, None

@@ -1,0 +1,167 @@
+"""CAN in lockstep: a canopen Network whose traffic is paced by lockstep frames.
+
+A CAN bus is a second path between lockstep participants, beside LCM, and the same rule
+must hold on it: what one process sends in frame n reaches the others at frame n + 1,
+never earlier or later depending on timing. The link does for CAN frames what the
+lockstep inbox does for LCM messages:
+
+* Everything canopen sends goes through the link (it is the Network's ``bus``). At the
+  end of each frame the link announces how many frames it put on the bus (can_sync_t on
+  SB_CAN_SYNC, itself a lockstep message).
+* A reader thread queues what arrives. At the start of frame n + 1 the link hands canopen
+  exactly the announced number of frames, in arrival order (one sender per bus keeps its
+  order; the hub keeps order per sender), waiting for stragglers up to a timeout.
+* Sends made while a skill process answers a tick of frame n (outside its own frames)
+  are held and go out at the start of its frame n + 1, which always comes after the tick.
+* SDO (COB-IDs 0x580 + node, 0x600 + node: request and answer, configuration before the
+  run) is passed on at once and not counted; nothing else may be sent outside the frames.
+
+Periodic sends (canopen's heartbeat producer) are disabled: a device under lockstep sends
+its heartbeat from its frames, by sim time.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import os
+import threading
+import time
+from typing import Callable
+
+import can
+import canopen
+
+from skillbus.bus import channel
+from skillbus.lockstep import LockstepError, LockstepParticipant, StampedMessage
+from skillbus.msgs import can_sync_t, decode
+from skillbus import tick_context as context
+
+log = logging.getLogger("can-lockstep")
+
+
+def sync_channel() -> str:
+    return channel("SB_CAN_SYNC")
+
+
+def sdo_ids(node_id: int) -> set[int]:
+    return {0x580 + node_id, 0x600 + node_id}
+
+
+class _NoPeriodicTask:
+    """What send_periodic returns under lockstep: periodic sends are the frames' job."""
+
+    def stop(self) -> None:
+        pass
+
+    def modify_data(self, msg) -> None:
+        pass
+
+
+class LockstepCanLink:
+    def __init__(self, participant: LockstepParticipant, bus: can.BusABC, can_channel: str,
+                 network: canopen.Network, out_of_band: set[int], timeout: float = 2.0) -> None:
+        # The bus by name, not by where its socket happens to be: it is in the digest.
+        self.p, self.real, self.can_channel, self.network = participant, bus, os.path.basename(can_channel), network
+        self.out_of_band, self.timeout = set(out_of_band), timeout
+        self.channel_info = f"lockstep link on {getattr(bus, 'channel_info', can_channel)}"
+        network.bus = self
+        self._queue: collections.deque[can.Message] = collections.deque()
+        self._cv = threading.Condition()
+        self._expected: list[tuple[str, int]] = []   # (sender, frames) announced for the next frame
+        self._held: list[tuple[int, can.Message]] = []  # (due frame, message): sends from ticks
+        self._sent = 0
+        self.stats = {"sent": 0, "received": 0, "out_of_band": 0}
+        self._stop = False
+        self._reader = threading.Thread(target=self._read, name="can-lockstep-reader", daemon=True)
+        self._reader.start()
+        participant.subscribe(sync_channel(), self._on_sync)
+
+    # -- the python-can surface canopen uses ------------------------------------------------
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        if msg.arbitration_id in self.out_of_band:
+            self.stats["out_of_band"] += 1
+            self.real.send(msg, timeout)
+            return
+        tick = context.current_tick()
+        if tick is not None:  # a skill's tick of frame n: out at the start of our frame n + 1
+            self._held.append((tick.frame + 1, msg))
+            return
+        self.real.send(msg, timeout)
+        self._sent += 1
+
+    def send_periodic(self, msg, period, *args, **kwargs) -> _NoPeriodicTask:
+        return _NoPeriodicTask()
+
+    def shutdown(self) -> None:
+        self._stop = True
+        self._reader.join(timeout=1.0)
+        self.real.shutdown()
+
+    # -- frames ------------------------------------------------------------------------------
+    def _read(self) -> None:
+        while not self._stop:
+            try:
+                msg = self.real.recv(0.1)
+            except can.CanError as e:
+                log.warning("CAN receive failed: %s", e)
+                continue
+            if msg is None or msg.is_error_frame:
+                continue
+            if msg.arbitration_id in self.out_of_band:
+                self.network.notify(msg.arbitration_id, msg.data, msg.timestamp)
+                continue
+            with self._cv:
+                self._queue.append(msg)
+                self._cv.notify_all()
+
+    def _on_sync(self, m: StampedMessage) -> None:
+        s = decode(can_sync_t, m.data)
+        if s is None:
+            raise ValueError(f"{m.channel} from {m.stamp.sender} is not a can_sync_t")
+        if s.can_channel == self.can_channel and s.frames > 0:
+            self._expected.append((m.stamp.sender, s.frames))
+
+    def begin_frame(self, frame: int) -> None:
+        """Hands canopen the CAN frames the others announced in the last frame (call first
+        in on_frame), then sends what ticks held for this frame."""
+        for sender, n in self._expected:
+            deadline = time.monotonic() + self.timeout
+            got = []
+            with self._cv:
+                while len(got) < n:
+                    if self._queue:
+                        got.append(self._queue.popleft())
+                        continue
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        raise LockstepError(f"CAN frames lost on {self.can_channel}: {sender} announced {n} in frame "
+                                            f"{frame - 1}, {len(got)} arrived within {self.timeout:.1f} s")
+                    self._cv.wait(left)
+            for msg in got:
+                self.stats["received"] += 1
+                self.network.notify(msg.arbitration_id, msg.data, msg.timestamp)
+        self._expected = []
+        due = [m for f, m in self._held if f <= frame]
+        self._held = [(f, m) for f, m in self._held if f > frame]
+        for msg in due:
+            self.real.send(msg)
+            self._sent += 1
+
+    def end_frame(self) -> None:
+        """Announces this frame's sends (call last in on_frame)."""
+        if self._sent:
+            s = can_sync_t()
+            s.can_channel, s.frames = self.can_channel, self._sent
+            self.p.publish(sync_channel(), s)
+            self.stats["sent"] += self._sent
+        self._sent = 0
+
+    def wrap(self, on_frame: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
+        """on_frame with the link's begin and end around it."""
+        def framed(frame: int, sim_time_ns: int) -> None:
+            self.begin_frame(frame)
+            if on_frame is not None:
+                on_frame(frame, sim_time_ns)
+            self.end_frame()
+        return framed

@@ -1,0 +1,73 @@
+"""The one primitive behind the gripper skills (skillbus.skills.gripper), in its own
+module so that the library registers only its three bindings."""
+
+from __future__ import annotations
+
+import time
+
+from skillbus import tick_context
+from skillbus.can import cia402 as c
+from skillbus.can import gripper_service
+from skillbus.can.driver import GripperError
+from skillbus.skill import PrimitiveBase
+
+OPEN_UM, CLOSED_UM = 80_000, 0
+TIMEOUT_S = 10.0
+
+
+class GripperPrimitive(PrimitiveBase):
+    """The one implementation behind the three gripper skills."""
+
+    def createDescription(self):  # each binding sets its description
+        raise NotImplementedError
+
+    def _now(self) -> float:
+        tick = tick_context.current_tick()
+        return tick.sim_time_ns * 1e-9 if tick is not None else time.monotonic()
+
+    def onStart(self):
+        try:
+            self.gripper = gripper_service.driver()
+        except GripperError as e:
+            self.message = str(e)
+            return False
+        self.command = self.params["Command"].value
+        if self.command not in ("open", "close", "grasp"):
+            self.message = f"unknown gripper command {self.command!r} (open, close or grasp)"
+            return False
+        self.sent = False
+        self.written = False
+        self.started_at = self._now()
+        return True
+
+    def execute(self):
+        cmd = self.command
+        if self._now() - self.started_at > TIMEOUT_S:
+            return self.fail(f"{cmd}: no result within {TIMEOUT_S:.0f} s", -2)
+        s = self.gripper.status()
+        if s.faults:
+            return self.fail(f"{cmd}: gripper fault: {s.faults[-1]}", -3)
+        if s.state != c.OPERATION_ENABLED:
+            return self.step(f"{cmd}: waiting for the gripper (state {s.state})")
+        if not self.sent:
+            self.gripper.command(OPEN_UM if cmd == "open" else CLOSED_UM)
+            self.sent = True
+            return self.step(f"{cmd}: sent")
+        width = f"{s.position_um / 1000:.1f} mm"
+        if not s.fresh or s.moving:
+            return self.step(f"{cmd}: moving, width {width}")
+        if cmd != "grasp":
+            if s.target_reached:
+                return self.success(f"{cmd}: width {width}" + (", holding an object" if s.gripped else ""))
+            return self.step(f"{cmd}: width {width}")
+        if not s.gripped:
+            return self.fail(f"grasp: nothing gripped (the fingers closed to {width})", -1)
+        gripper, obj = self.params["Gripper"].value, self.params["Object"].value
+        if self.wmi is None:
+            return self.success(f"grasp: holding {obj.id or obj.label} at {width} (no world model)")
+        if not self.written:
+            self.wmi.set_parent(obj.id, gripper.id)
+            self.written = True
+        if self.wmi.get_relations(gripper.id, "skiros:contain", obj.id):
+            return self.success(f"grasp: {gripper.id} holds {obj.id} at {width}")
+        return self.step(f"grasp: holding {obj.id} at {width}; writing it to the world model")
