@@ -20,13 +20,13 @@ build: setup
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q -rs tests
 
 test-cpp: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-py: build
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q -rs tests
 
 demo: build
 	$(VENV)/bin/skillbus demo

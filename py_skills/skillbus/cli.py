@@ -46,6 +46,15 @@ def build_parser() -> argparse.ArgumentParser:
                      help="be a lockstep participant driving the physics server's fingers")
     dev.add_argument("--name", default="gripper", help="lockstep participant name")
     dev.add_argument("--url", default=None, help="bus URL (lockstep)")
+    rec = sub.add_parser("can-record", help="record a CAN bus to a candump log file")
+    rec.add_argument("file", help="where to write (.log: candump format)")
+    rec.add_argument("--channel", default="vcan0")
+    rec.add_argument("--interface", default="skillbus_vcan", help="python-can interface (socketcan on real CAN)")
+    rec.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at SIGINT)")
+    cl = sub.add_parser("can-log", help="print a candump log decoded as CANopen")
+    cl.add_argument("file")
+    cl.add_argument("--node-id", type=int, default=5)
+    cl.add_argument("--eds", default=None, help="the device's EDS (default: the skillbus gripper's)")
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
     from skillbus.sim import cli as sim_cli
@@ -67,6 +76,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "gripper-device":
         from skillbus.can import device
         return device.main(args)
+    if args.command == "can-record":
+        from skillbus.can import canlog
+        return canlog.main_record(args)
+    if args.command == "can-log":
+        from skillbus.can import canlog
+        return canlog.main_log(args)
     if args.command == "can-hub":
         from skillbus.can import hub
         return hub.main(args)

@@ -141,11 +141,14 @@ class Sandbox:
         return e
 
     # -- processes --------------------------------------------------------
-    def start(self, name: str, argv: list[str], env: dict[str, str] | None = None) -> Proc:
+    def start(self, name: str, argv: list[str], env: dict[str, str] | None = None, host_network: bool = False) -> Proc:
+        """Starts a process in the namespace (with host_network: in the host's network,
+        for a kernel CAN interface there; it is still stopped with the sandbox)."""
         out = self.log_dir / f"{name}.out"
         err = self.log_dir / f"{name}.err"
+        prefix = [] if host_network else self.prefix()
         with open(out, "wb") as fo, open(err, "wb") as fe:
-            popen = subprocess.Popen(self.prefix() + [str(a) for a in argv], stdout=fo, stderr=fe,
+            popen = subprocess.Popen(prefix + [str(a) for a in argv], stdout=fo, stderr=fe,
                                      stdin=subprocess.DEVNULL, env=self.env(env), start_new_session=True)
         proc = Proc(name, popen, out, err)
         self.procs.append(proc)

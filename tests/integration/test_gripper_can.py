@@ -11,29 +11,57 @@ from skillbus.can import cia402
 from skillbus.can.driver import GripperDriver
 
 
-@pytest.fixture
-def rig(sandbox, tmp_path):
-    """hub + device (+ object if asked) + a connected driver; returns a factory."""
-    path = tmp_path / "grip.sock"
-    sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+def kernel_vcan0() -> str:
+    """'' when the kernel's vcan0 is usable (created here if missing), else why not."""
+    import socket
+    import subprocess
+    try:
+        socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
+    except (OSError, AttributeError) as e:
+        return f"this kernel has no SocketCAN (AF_CAN socket: {e})"
+    if subprocess.run(["ip", "link", "show", "vcan0"], capture_output=True).returncode != 0:
+        made = subprocess.run(["ip", "link", "add", "dev", "vcan0", "type", "vcan"], capture_output=True, text=True)
+        if made.returncode != 0:
+            return f"cannot create vcan0: {made.stderr.strip()}"
+    up = subprocess.run(["ip", "link", "set", "up", "vcan0"], capture_output=True, text=True)
+    return "" if up.returncode == 0 else f"cannot bring vcan0 up: {up.stderr.strip()}"
+
+
+@pytest.fixture(params=["virtual", "kernel"])
+def rig(request, sandbox, tmp_path):
+    """hub + device (+ object if asked) + a connected driver; returns a factory. Runs on the
+    user-space virtual bus, and on the kernel's vcan0 through python-can's socketcan
+    where the kernel provides it (skipped with the reason where it does not)."""
+    if request.param == "kernel":
+        why = kernel_vcan0()
+        if why:
+            print(f"kernel vcan0 variant skipped: {why}")
+            pytest.skip(why)
+        interface, channel, host = "socketcan", "vcan0", True
+    else:
+        path = tmp_path / "grip.sock"
+        sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
+        deadline = time.monotonic() + 10
+        while not path.exists():
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        interface, channel, host = "skillbus_vcan", str(path), False
     networks = []
 
     def make(object_width=None, force_limit=200):
-        args = [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", path, "--node-id", "5"]
+        args = [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", channel, "--node-id", "5",
+                "--interface", interface]
         if object_width is not None:
             args += ["--object-width", str(object_width)]
-        device = sandbox.start("device", args)
+        device = sandbox.start("device", args, host_network=host)
         net = canopen.Network()
-        net.connect(interface="skillbus_vcan", channel=str(path))
+        net.connect(interface=interface, channel=channel)
         networks.append(net)
         driver = GripperDriver(net, 5, force_limit=force_limit)
         driver.start(timeout=10)
         return driver, device, net
 
+    make.interface = interface
     yield make
     for n in networks:
         n.disconnect()
@@ -101,7 +129,7 @@ def test_emcy_on_a_blocked_move_then_fault_reset(rig):
 
 def test_malformed_frames_are_ignored_and_counted_by_both_sides(rig, sandbox):
     driver, device, net = rig()
-    rogue = can.Bus(interface="skillbus_vcan", channel=net.bus.channel)  # a third node on the bus
+    rogue = can.Bus(interface=rig.interface, channel=net.bus.channel)  # a third node on the bus
     rogue.send(can.Message(arbitration_id=0x205, data=b"\x0f\x00\x01", is_extended_id=False))   # short RPDO
     rogue.send(can.Message(arbitration_id=0x185, data=b"\x27\x06\x00", is_extended_id=False))   # short TPDO
     rogue.send(can.Message(arbitration_id=0x7AB, data=b"\x01", is_extended_id=False))           # unknown COB-ID
@@ -114,3 +142,51 @@ def test_malformed_frames_are_ignored_and_counted_by_both_sides(rig, sandbox):
     assert "RPDO1 of 3 bytes (6 expected) ignored" in device.stderr()
     driver.command(30000)  # and both still work
     wait_until(driver, lambda s: s.position_um == 30000 and s.target_reached)
+
+
+def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
+    path = tmp_path / "grip.sock"
+    log_file = tmp_path / "traffic.log"
+    sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
+    deadline = time.monotonic() + 10
+    while not path.exists():
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    recorder = sandbox.start("recorder", [sys.executable, "-m", "skillbus.cli", "can-record", str(log_file),
+                                          "--channel", str(path)])
+    time.sleep(1.0)  # the recorder joins the hub before the device boots (a real logger is on first)
+    sandbox.start("device", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", path,
+                             "--node-id", "5", "--object-width", "40000"])
+    net = canopen.Network()
+    net.connect(interface="skillbus_vcan", channel=str(path))
+    try:
+        driver = GripperDriver(net, 5, force_limit=200)
+        driver.start(timeout=10)
+        driver.command(0)
+        wait_until(driver, lambda s: s.gripped)
+        with pytest.raises(canopen.sdo.exceptions.SdoAbortedError):
+            driver.node.sdo.upload(0x5555, 0)  # a missing object: the device aborts
+        net.send_message(0x123, b"\x01\x02")  # a COB-ID nobody owns
+    finally:
+        net.disconnect()
+    time.sleep(0.3)
+    sandbox.kill(recorder, 2)  # SIGINT: the recorder closes its file
+    assert sandbox.wait(recorder, 10) == 0
+    raw = log_file.read_text().splitlines()
+    assert raw and all(line.startswith("(") and " " in line and "#" in line for line in raw)  # candump -l
+    out = sandbox.start("can-log", [sys.executable, "-m", "skillbus.cli", "can-log", str(log_file)])
+    assert sandbox.wait(out, 30) == 0, out.stderr()
+    text = out.stdout()
+    for expected in ("boot-up", "heartbeat PRE-OPERATIONAL", "SDO request download 0x1017 Producer heartbeat time = 100",
+                     "SDO answer download ok 0x1017", "SDO answer download ok 0x6073", "NMT start node 5",
+                     "heartbeat OPERATIONAL", "RPDO1 Controlword=15, Target position=0",
+                     "RPDO1 Controlword=31, Target position=0", "Grip state=6 [operation enabled]",
+                     "SDO answer abort 0x5555sub0 (not in the EDS): code 0x06020000",
+                     "unknown COB-ID 0x123 (2 bytes)"):
+        assert expected in text, f"{expected!r} not in:\n{text[:3000]}"
+
+
+def test_can_log_names_a_file_it_cannot_read(sandbox, tmp_path):
+    out = sandbox.start("can-log", [sys.executable, "-m", "skillbus.cli", "can-log", str(tmp_path / "none.log")])
+    assert sandbox.wait(out, 30) == 2
+    assert "none.log" in out.stderr()

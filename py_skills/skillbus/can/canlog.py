@@ -1,0 +1,144 @@
+"""CAN traffic on record: ``skillbus can-record`` writes a bus to a candump log file
+(python-can's Logger, the format of Linux's candump -l), and ``skillbus can-log`` prints
+such a file decoded as CANopen: NMT commands, heartbeats and boot-ups, SDO requests and
+answers with the object's name, PDOs with their mapped objects by name and value (from
+the EDS, decoded by canopen's own PDO maps), and EMCY with code and text.
+
+    skillbus can-record --channel gripper0 traffic.log --seconds 10
+    skillbus can-log traffic.log --node-id 5
+"""
+
+from __future__ import annotations
+
+import signal
+import struct
+import sys
+import time
+from pathlib import Path
+from typing import Iterator
+
+import can
+import canopen
+
+from skillbus.can import cia402 as c
+from skillbus.can.device import EDS
+
+NMT_COMMANDS = {0x01: "start", 0x02: "stop", 0x80: "enter pre-operational", 0x81: "reset node",
+                0x82: "reset communication"}
+NMT_STATES = {code: name for name, code in c.NMT_STATE_CODES.items()}
+SDO_CLIENT = {1: "download", 2: "upload", 4: "abort"}       # ccs, bits 7-5 of byte 0
+SDO_SERVER = {3: "download ok", 2: "upload answer", 4: "abort"}  # scs
+
+
+def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: float | None = None) -> int:
+    """Writes every frame on the bus to `path` (candump format for .log) until `seconds`
+    pass or SIGINT/SIGTERM; returns how many."""
+    bus = can.Bus(interface=interface, channel=channel)
+    stop = [False]
+
+    def on_signal(*_):
+        stop[0] = True
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    n = 0
+    end = time.monotonic() + seconds if seconds else None
+    with can.Logger(path) as log:  # nothing is lost on a stop: the file is flushed and closed
+        while not stop[0] and (end is None or time.monotonic() < end):
+            msg = bus.recv(0.1)
+            if msg is not None:
+                log.on_message_received(msg)
+                n += 1
+    bus.shutdown()
+    return n
+
+
+class Decoder:
+    def __init__(self, node_id: int = 5, eds: str | Path = EDS) -> None:
+        self.node_id = node_id
+        self.node = canopen.RemoteNode(node_id, str(eds))
+        canopen.Network().add_node(self.node)  # never connected: only to read the PDO maps
+        self.od = self.node.object_dictionary
+        self.node.tpdo.read(from_od=True)
+        self.node.rpdo.read(from_od=True)
+        self.pdos = {}
+        for kind, maps in (("TPDO", self.node.tpdo), ("RPDO", self.node.rpdo)):
+            for num, m in maps.map.items():
+                if m.cob_id and m.enabled:
+                    self.pdos[m.cob_id] = (f"{kind}{num}", m)
+
+    def _name(self, index: int, sub: int) -> str:
+        try:
+            obj = self.od[index]
+            if isinstance(obj, canopen.objectdictionary.Variable):
+                return f"0x{index:04X} {obj.name}"
+            return f"0x{index:04X}sub{sub} {obj.name}.{obj[sub].name}"
+        except KeyError:
+            return f"0x{index:04X}sub{sub} (not in the EDS)"
+
+    def decode(self, msg: can.Message) -> str:
+        cid, data, nid = msg.arbitration_id, bytes(msg.data), self.node_id
+        if cid == 0x000 and len(data) == 2:
+            return f"NMT {NMT_COMMANDS.get(data[0], f'command 0x{data[0]:02X}')} node {data[1] or 'all'}"
+        if cid == 0x080:
+            return "SYNC"
+        if cid in self.pdos:
+            name, m = self.pdos[cid]
+            if len(data) != len(m.data):
+                return f"{name} of {len(data)} bytes ({len(m.data)} mapped): malformed"
+            m.data = bytearray(data)
+            fields = ", ".join(f"{v.name}={v.raw}" for v in m.map)
+            extra = ""
+            if name == "TPDO1":
+                extra = f" [{c.state_of(m.map[0].raw)}]"
+            return f"{name} {fields}{extra}"
+        if cid == 0x080 + nid:
+            if not data:
+                return "EMCY (empty)"
+            code = struct.unpack_from("<H", data)[0]
+            if code == 0:
+                return "EMCY error reset"
+            return f"EMCY 0x{code:04X} {c.EMCY_TEXT.get(code, 'device error')}, register 0x{data[2]:02X}"
+        if cid in (0x600 + nid, 0x580 + nid) and len(data) == 8:
+            role = "request" if cid == 0x600 + nid else "answer"
+            spec = (data[0] >> 5) & 7
+            index, sub = struct.unpack_from("<HB", data, 1)
+            what = (SDO_CLIENT if role == "request" else SDO_SERVER).get(spec, f"command {spec}")
+            if spec == 4:
+                abort = struct.unpack_from("<I", data, 4)[0]
+                return f"SDO {role} abort {self._name(index, sub)}: code 0x{abort:08X}"
+            value = ""
+            if (data[0] & 0x02) and ((role == "request" and spec == 1) or (role == "answer" and spec == 2)):
+                size = 4 - ((data[0] >> 2) & 3) if data[0] & 0x01 else 4
+                value = f" = {int.from_bytes(data[4:4 + size], 'little')}"
+            return f"SDO {role} {what} {self._name(index, sub)}{value}"
+        if cid == 0x700 + nid and len(data) == 1:
+            if data[0] == 0:
+                return "boot-up"
+            return f"heartbeat {NMT_STATES.get(data[0], f'state 0x{data[0]:02X}')}"
+        return f"unknown COB-ID 0x{cid:03X} ({len(data)} bytes)"
+
+
+def lines(path: str, node_id: int = 5, eds: str | Path = EDS) -> Iterator[str]:
+    d = Decoder(node_id, eds)
+    start = None
+    for msg in can.LogReader(path):
+        start = msg.timestamp if start is None else start
+        raw = f"{msg.arbitration_id:03X}#{bytes(msg.data).hex().upper()}"
+        yield f"{msg.timestamp - start:10.4f}  {raw:<24} {d.decode(msg)}"
+
+
+def main_record(args) -> int:
+    n = record(args.channel, args.file, args.interface, args.seconds)
+    print(f"{n} frames written to {args.file}", file=sys.stderr)
+    return 0
+
+
+def main_log(args) -> int:
+    try:
+        for line in lines(args.file, args.node_id, args.eds or EDS):
+            print(line)
+    except (OSError, ValueError) as e:
+        print(f"error: {args.file}: {e}", file=sys.stderr)
+        return 2
+    return 0
