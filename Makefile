@@ -36,6 +36,7 @@ bench: build
 	$(PY) bench/wm_query.py
 	$(PY) bench/skill_ticks.py
 	$(PY) bench/sim_physics.py
+	$(PY) bench/can_latency.py
 
 clean:
 	rm -rf $(BUILD)

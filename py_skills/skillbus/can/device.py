@@ -193,6 +193,7 @@ class GripperDevice:
         target = pdo["Target position"].raw
         with self.lock:
             self._controlword(cw, target)
+        self._publish_status()  # the answer to a set-point does not wait for the next step
 
     def _controlword(self, cw: int, target: int) -> None:
         rising = cw & ~self.controlword
@@ -241,6 +242,7 @@ class GripperDevice:
         return g
 
     def step(self, dt: float) -> None:
+        """One step of the fingers, then TPDO1 (the event timer of its transmission)."""
         with self.lock:
             if self.state == c.OPERATION_ENABLED:
                 self.model.step(dt)
@@ -250,6 +252,12 @@ class GripperDevice:
                     self._fault(c.EMCY_OVER_CURRENT)
                 elif self.model.following_error():
                     self._fault(c.EMCY_FOLLOWING_ERROR)
+        self._publish_status()
+
+    def _publish_status(self) -> None:
+        """TPDO1 with the current state (event-driven, transmission type 255: on every
+        step, and at once when a controlword changes the state)."""
+        with self.lock:
             sw = c.STATE_WORDS[self.state] | c.SW_REMOTE
             grip = self.grip_state()
             if grip & c.GRIP_REACHED and self.state == c.OPERATION_ENABLED:
