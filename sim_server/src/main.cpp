@@ -72,11 +72,13 @@ int main(int argc, char** argv) {
       "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"sim_time_s\": %.3f, \"wall_time_s\": %.3f, "
       "\"real_time_factor\": %.2f, \"steps\": %lld, \"physics_us_per_step\": %.1f, \"collision_detector\": \"%s\", "
       "\"participants\": %zu, \"state_digest\": \"%s\", \"session_digest\": \"%s\", \"commands_accepted\": %ld, "
-      "\"commands_rejected\": %ld, \"bad_input\": %ld, \"objects\": {%s}}\n",
+      "\"commands_rejected\": %ld, \"bad_input\": %ld, \"finger_width\": %.5f, \"finger_force\": %.3f, "
+      "\"objects\": {%s}}\n",
       r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
       r.wall_seconds, rtf, static_cast<long long>(rep.steps), rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0,
       server->physics().collision_detector().c_str(), o.participants.size(), to_hex(rep.state_digest).c_str(),
-      r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input, objects.c_str());
+      r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input, state.finger_width, state.finger_force,
+      objects.c_str());
   std::fflush(stdout);
   return r.ok ? 0 : 1;
 }

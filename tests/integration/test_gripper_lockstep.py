@@ -75,6 +75,9 @@ def test_grasp_closes_the_fingers_on_the_cube_and_the_world_model_knows(tmp_path
         assert r["device"]["ok"] and r["device"]["can_sent"] > 0 and r["device"]["can_received"] > 0
         assert r["device"]["rpdo_errors"] == 0
         assert r["sim"]["commands_accepted"] >= 1  # the device's set-point reached the physics
+        # closed on the 5 cm cube, squeezing with the configured 20 N (0x6073 = 200), not more
+        assert abs(r["sim"]["finger_width"] - 0.05) < 0.002
+        assert 18.0 <= r["sim"]["finger_force"] <= 20.0 + 1e-6
     # Bit for bit the same: the physics, every lockstep message, the manager's run.
     assert runs[0]["sim"]["state_digest"] == runs[1]["sim"]["state_digest"]
     assert runs[0]["sim"]["session_digest"] == runs[1]["sim"]["session_digest"]
