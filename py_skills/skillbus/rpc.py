@@ -159,12 +159,6 @@ class RpcClient:
     def close(self) -> None:
         self.bus.unsubscribe(self._sub)
 
-    def retry_deferred(self) -> None:
-        """Runs the deferred requests again, oldest first (each may defer again)."""
-        pending, self._deferred = self._deferred, collections.OrderedDict()
-        for ch, data in pending.values():
-            self._on_request(ch, data)
-
     def _on_reply(self, ch: str, data: bytes) -> None:
         rep = decode(rpc_reply_t, data)
         if rep is None:

@@ -8,8 +8,11 @@ CLIENTS = 4
 
 def test_1000_writes_from_4_clients_each_applied_once_with_every_third_message_dropped(sandbox, binary):
     server = sandbox.start("server", [binary("sb_rpc_counter"), "--drop-every", "3"])
+    # Each call may retry for 30 s: with four clients and every third message of every
+    # process dropped, ten losses in a row (5 s of back-off) happen about once in a few
+    # thousand calls; what this test asserts is exactly-once, not a deadline.
     writers = [sandbox.start(f"writer{i}", python_tool("rpc_writer.py", f"client{i}", str(WRITES_PER_CLIENT),
-                                                       "3", "5.0"))
+                                                       "3", "30.0"))
                for i in range(CLIENTS)]
     for w in writers:
         assert sandbox.wait(w, 120) == 0, w.stdout() + w.stderr()[-2000:]
