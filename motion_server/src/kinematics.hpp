@@ -1,0 +1,35 @@
+// The arm's kinematics from the scene's robot (URDF through DART): forward kinematics of
+// the tool centre point and its Jacobian, over the arm joints (the finger joints are not
+// part of the arm). DART stays in kinematics.cpp.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene.hpp"
+
+namespace skillbus::motion {
+
+struct JointInfo {
+  std::string name;
+  double lower, upper, velocity;
+};
+
+class Kinematics {
+ public:
+  explicit Kinematics(const sim::Scene& scene);  // throws sim::SceneError
+  ~Kinematics();
+  const std::vector<JointInfo>& joints() const { return joints_; }
+  Eigen::Isometry3d tool_pose(const Eigen::VectorXd& q) const;
+  // 6 x n: rows 0-2 linear velocity of the tool point, rows 3-5 angular, world frame.
+  Eigen::MatrixXd jacobian(const Eigen::VectorXd& q) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::vector<JointInfo> joints_;
+};
+
+}  // namespace skillbus::motion

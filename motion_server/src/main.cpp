@@ -1,0 +1,91 @@
+// motion_server: arm motion for the skills, over RPC (area MOTION). See README.md.
+//
+// Reads: SB_MOTION_REQ (plan: motion_request_t). Writes: SB_MOTION_REP (motion_plan_t).
+// Not a lockstep participant: it holds no state, and the same request always gets the
+// same answer (Ceres single-threaded, fixed seeds), so skills may call it from a tick.
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+
+#include "../../common/apps/args.hpp"
+#include "planner.hpp"
+#include "skillbus/bus.hpp"
+#include "skillbus/log.hpp"
+#include "skillbus/rpc.hpp"
+#include "skillbus_msgs/motion_plan_t.hpp"
+#include "skillbus_msgs/motion_request_t.hpp"
+
+using namespace skillbus;
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_msgs::motion_request_t& req) {
+  skillbus_msgs::motion_plan_t out{};
+  const auto& joints = k.joints();
+  if (req.joint_names.size() != joints.size() || req.start.size() != joints.size())
+    throw RpcBadRequest("plan: give all " + std::to_string(joints.size()) + " arm joints, in order");
+  for (size_t i = 0; i < joints.size(); ++i) {
+    if (req.joint_names[i] != joints[i].name)
+      throw RpcBadRequest("plan: joint " + std::to_string(i) + " is '" + req.joint_names[i] + "', expected '" +
+                          joints[i].name + "'");
+    if (!std::isfinite(req.start[i])) throw RpcBadRequest("plan: start of " + joints[i].name + " is not finite");
+  }
+  for (double v : req.target)
+    if (!std::isfinite(v)) throw RpcBadRequest("plan: the target pose is not finite");
+  const Eigen::Quaterniond q(req.target[6], req.target[3], req.target[4], req.target[5]);
+  if (std::abs(q.norm() - 1.0) > 1e-3) throw RpcBadRequest("plan: the target quaternion is not a unit quaternion");
+  motion::PlanRequest pr;
+  pr.start = Eigen::Map<const Eigen::VectorXd>(req.start.data(), static_cast<Eigen::Index>(req.start.size()));
+  pr.target.translation() = Eigen::Vector3d(req.target[0], req.target[1], req.target[2]);
+  pr.target.linear() = q.normalized().toRotationMatrix();
+  pr.cartesian = req.cartesian;
+  pr.step_m = req.step_m;
+  pr.speed_scale = req.speed_scale;
+  const motion::Plan p = motion::plan_motion(k, pr);
+  out.ok = p.ok;
+  out.error = p.error;
+  out.position_error = p.position_error;
+  out.orientation_error = p.orientation_error;
+  out.seeds_tried = p.seeds_tried;
+  for (const auto& j : joints) out.joint_names.push_back(j.name);
+  out.num_joints = static_cast<int32_t>(joints.size());
+  if (p.ok) out.goal.assign(p.goal.data(), p.goal.data() + p.goal.size());
+  else out.goal.assign(joints.size(), 0.0);
+  for (const auto& [t, qs] : p.points) {
+    skillbus_msgs::sim_traj_point_t pt{};
+    pt.time_from_start_ns = t;
+    pt.positions.assign(qs.data(), qs.data() + qs.size());
+    pt.num_positions = static_cast<int32_t>(pt.positions.size());
+    out.points.push_back(pt);
+  }
+  out.num_points = static_cast<int32_t>(out.points.size());
+  return out;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  apps::Args args(argc, argv, {"url", "scene"}, {});
+  const std::string scene_file = args.str("scene");
+  if (scene_file.empty()) apps::Args::die("--scene FILE is required (the robot comes from it)");
+  std::unique_ptr<Bus> bus;
+  std::unique_ptr<motion::Kinematics> kin;
+  try {
+    kin = std::make_unique<motion::Kinematics>(sim::load_scene(scene_file));
+    bus = open_bus(args.str("url"));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "motion_server: cannot start: %s\n", e.what());
+    return 2;
+  }
+  RpcServer rpc(*bus, "MOTION");
+  rpc.add_method<skillbus_msgs::motion_request_t, skillbus_msgs::motion_plan_t>(
+      "plan", [&](const skillbus_msgs::motion_request_t& r) { return handle(*kin, r); });
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGINT, on_signal);
+  SB_INFO("motion_server", "serving " << rpc_request_channel("MOTION") << " for " << kin->joints().size()
+                                      << " arm joints of " << scene_file);
+  while (!g_stop) bus->handle(std::chrono::milliseconds(100));
+  std::printf("{\"ok\": true, \"served\": %ld, \"bad_input\": %ld}\n", rpc.served(), rpc.bad_input().total());
+  return 0;
+}
