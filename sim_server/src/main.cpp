@@ -25,7 +25,7 @@ std::string json_escape(const std::string& s) {
 int main(int argc, char** argv) {
   apps::Args args(argc, argv,
                   {"url", "scene", "script", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
-                   "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms"},
+                   "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms", "stop-after-task"},
                   {"wall-clock"});
   sim::ServerOptions o;
   o.scene_file = args.str("scene");
@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   o.frame_ms = args.real("frame-ms", 0);
   o.frames = args.num("frames", -1);
   o.duration_s = args.real("duration-s", 0);
+  o.stop_after_task = args.num("stop-after-task", -1);
   o.join_timeout = std::chrono::milliseconds(args.num("join-timeout-ms", 10000));
   o.ack_timeout = std::chrono::milliseconds(args.num("ack-timeout-ms", 5000));
   o.message_timeout = std::chrono::milliseconds(args.num("message-timeout-ms", 2000));

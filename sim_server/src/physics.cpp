@@ -418,6 +418,9 @@ std::string Physics::command_gripper(const GripperCommand& cmd) {
   m.finger_force = cmd.force_limit;
   m.finger_integral = 0;  // a new command starts without the last one's wind-up
   m.finger_gripping = false;
+  // ... and from where the fingers are: after a grip the reference has run on to the
+  // closed position, and an opening must not first wait for it to come back.
+  m.finger_ref = 0.5 * (m.robot->getPosition(m.left_dof) + m.robot->getPosition(m.right_dof));
   return "";
 }
 

@@ -35,8 +35,13 @@ std::string Scope::key(const std::string& own) const {
 }
 
 const Param* Scope::specified(const std::string& own) const {
+  // Fixed here, else fixed for this key by an ancestor: a compound whose parent specified
+  // its Object hands that Object to the children that read Object (after their remaps).
   auto it = specify_.find(own);
-  return it == specify_.end() ? nullptr : &it->second;
+  if (it != specify_.end()) return &it->second;
+  if (!parent_) return nullptr;
+  auto r = remap_.find(own);
+  return parent_->specified(r == remap_.end() ? own : r->second);
 }
 
 std::string value_text(const skillbus_msgs::skill_value_t& v) {

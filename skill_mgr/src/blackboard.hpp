@@ -34,7 +34,7 @@ class Scope {
   // A child's scope: its remaps (child key -> key in this scope) and specified values.
   std::shared_ptr<Scope> child(std::map<std::string, std::string> remap, std::map<std::string, Param> specify) const;
   std::string key(const std::string& own) const;       // the blackboard key
-  const Param* specified(const std::string& own) const;  // fixed by a parent, or null
+  const Param* specified(const std::string& own) const;  // fixed by a parent or an ancestor, or null
 
  private:
   std::shared_ptr<const Scope> parent_;

@@ -85,7 +85,10 @@ class LockstepCanLink:
             return
         tick = context.current_tick()
         if tick is not None:  # a skill's tick of frame n: out at the start of our frame n + 1
-            self._held.append((tick.frame + 1, msg))
+            # A copy: canopen sends a PDO map's own buffer, which the next send overwrites.
+            held = can.Message(arbitration_id=msg.arbitration_id, data=bytes(msg.data), is_extended_id=msg.is_extended_id,
+                               is_remote_frame=msg.is_remote_frame, dlc=msg.dlc, is_fd=msg.is_fd)
+            self._held.append((tick.frame + 1, held))
             return
         self.real.send(msg, timeout)
         self._sent += 1

@@ -27,6 +27,8 @@ def add_parsers(sub) -> None:
     sp.add_argument("--gripper", default=None, metavar="CHANNEL[:NODE]",
                     help="drive a CANopen gripper on this CAN channel (node id, default 5) for the gripper skills")
     sp.add_argument("--can-interface", default="skillbus_vcan", help="python-can interface of --gripper")
+    sp.add_argument("--arm", action="store_true",
+                    help="give the skills the arm (robot state, trajectories, the motion service)")
     sp.add_argument("--world-model", action="store_true", help="give skills a world-model client (self.wmi)")
     ls = sub.add_parser("skills", help="the skills the manager knows, with parameters and conditions")
     ls.add_argument("--url", default=None)

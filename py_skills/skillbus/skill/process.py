@@ -44,6 +44,8 @@ def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
         for name, cls in inspect.getmembers(mod, inspect.isclass):
             if cls.__module__ != mod.__name__ or not issubclass(cls, (PrimitiveBase, SkillBase)):
                 continue
+            if name.startswith("_"):
+                continue  # a private base class that skills of the library build on
             try:
                 skill = cls()
                 if isinstance(skill, PrimitiveBase) and skill.onInit() is False:
@@ -189,6 +191,9 @@ def main(args) -> int:
     if args.world_model:
         from skillbus.world import WorldModelInterface
         wmi = WorldModelInterface(bus, args.name, participant=participant)
+    if getattr(args, "arm", False):
+        from skillbus.robot import arm as arm_service
+        arm_service.setup(bus, participant)
     if getattr(args, "gripper", None):
         from skillbus.can import gripper_service
         from skillbus.can.driver import GripperError

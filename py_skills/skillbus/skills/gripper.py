@@ -1,4 +1,4 @@
-"""Gripper skills: GripperOpen, GripperClose and Grasp, all served by one primitive,
+"""Gripper skills: GripperOpen, GripperClose, Grasp and Release, all served by one primitive,
 `GripperPrimitive`, configured by the static parameter Command (a Required parameter
 with a value in the description, as SkiROS2 does it).
 
@@ -7,7 +7,8 @@ The primitive drives the CANopen gripper of its skill process (``skills-process
 then only reads the latest status on each tick. Grasp succeeds only when the device
 reports an object gripped; it then writes into the world model that the gripper
 contains the object (and its old container no longer does), and finishes once its own
-replica shows it, so the manager's post-condition sees it too.
+replica shows it, so the manager's post-condition sees it too. Release opens and writes
+that the location contains the object.
 """
 
 from __future__ import annotations
@@ -37,6 +38,16 @@ class Grasp(SkillDescription):
         self.addPostCondition(ConditionRelation("Holding", "skiros:contain", "Gripper", "Object", True))
 
 
+class Release(SkillDescription):
+    def createDescription(self):
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Required)
+        self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+        self.addParam("Location", Element("skiros:Location"), ParamTypes.Required)
+        self.addParam("Command", "release", ParamTypes.Required)  # static
+        self.addPreCondition(ConditionRelation("Holding", "skiros:contain", "Gripper", "Object", True))
+        self.addPostCondition(ConditionRelation("Contains", "skiros:contain", "Location", "Object", True))
+
+
 class gripper_open(GripperPrimitive):
     def createDescription(self):
         self.setDescription(GripperOpen(), "gripper_open")
@@ -50,3 +61,8 @@ class gripper_close(GripperPrimitive):
 class grasp(GripperPrimitive):
     def createDescription(self):
         self.setDescription(Grasp(), "grasp")
+
+
+class release(GripperPrimitive):
+    def createDescription(self):
+        self.setDescription(Release(), "release")

@@ -32,8 +32,8 @@ class GripperPrimitive(PrimitiveBase):
             self.message = str(e)
             return False
         self.command = self.params["Command"].value
-        if self.command not in ("open", "close", "grasp"):
-            self.message = f"unknown gripper command {self.command!r} (open, close or grasp)"
+        if self.command not in ("open", "close", "grasp", "release"):
+            self.message = f"unknown gripper command {self.command!r} (open, close, grasp or release)"
             return False
         self.sent = False
         self.written = False
@@ -50,12 +50,24 @@ class GripperPrimitive(PrimitiveBase):
         if s.state != c.OPERATION_ENABLED:
             return self.step(f"{cmd}: waiting for the gripper (state {s.state})")
         if not self.sent:
-            self.gripper.command(OPEN_UM if cmd == "open" else CLOSED_UM)
+            self.gripper.command(OPEN_UM if cmd in ("open", "release") else CLOSED_UM)
             self.sent = True
             return self.step(f"{cmd}: sent")
         width = f"{s.position_um / 1000:.1f} mm"
         if not s.fresh or s.moving:
             return self.step(f"{cmd}: moving, width {width}")
+        if cmd == "release":
+            if not s.target_reached:
+                return self.step(f"release: width {width}")
+            obj, location = self.params["Object"].value, self.params["Location"].value
+            if self.wmi is None:
+                return self.success(f"release: opened at {width} (no world model)")
+            if not self.written:
+                self.wmi.set_parent(obj.id, location.id)
+                self.written = True
+            if self.wmi.get_relations(location.id, "skiros:contain", obj.id):
+                return self.success(f"release: {location.id} contains {obj.id}")
+            return self.step(f"release: opened; writing that {location.id} contains {obj.id}")
         if cmd != "grasp":
             if s.target_reached:
                 return self.success(f"{cmd}: width {width}" + (", holding an object" if s.gripped else ""))

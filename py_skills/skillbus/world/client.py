@@ -247,6 +247,15 @@ class WorldModelInterface:
         elif not value and rel in self._relations:
             self.commit([op(wm_op_t.REMOVE_RELATION, relation=rel)])
 
+    def write(self, ops: list[wm_op_t]) -> None:
+        """Commits `ops`: at once, or under lockstep with this frame (commit_async)."""
+        if not ops:
+            return
+        if self.participant is not None:
+            self.commit_async(ops)
+        else:
+            self.commit(ops)
+
     def set_parent(self, eid: str, parent: str, relation: str = "skiros:contain") -> None:
         """Makes `parent` the only element that contains `eid` (a grasped object moves
         from its table into the gripper). Under lockstep the write goes out with this
@@ -255,12 +264,7 @@ class WorldModelInterface:
                if r[1] == relation and r[2] == eid and r[0] != parent]
         if (parent, relation, eid) not in self._relations:
             ops.append(op(wm_op_t.ADD_RELATION, relation=(parent, relation, eid)))
-        if not ops:
-            return
-        if self.participant is not None:
-            self.commit_async(ops)
-        else:
-            self.commit(ops)
+        self.write(ops)
 
     # -- server-side questions -----------------------------------------------
     def get_transform(self, source: str, target: str) -> tuple[list[float], list[float]]:

@@ -1,0 +1,119 @@
+"""The arm of a skill process (``skills-process --arm``): the robot's state as the
+physics server (or a real arm's driver) publishes it on SB_SIM_STATE, trajectories out on
+SB_SIM_ARM_CMD, and motion planning by the motion service (RPC area MOTION).
+
+Under lockstep the state is a lockstep subscription (a tick of frame n sees the state of
+frame n) and commands are lockstep publications (from a tick of frame n they go out in
+frame n + 1). On the wall clock both go straight over the bus.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from skillbus.bus import Bus
+from skillbus.lockstep import StampedMessage
+from skillbus.msgs import (decode, motion_plan_t, motion_request_t, sim_arm_cmd_t, sim_cmd_reply_t, sim_object_t,
+                           sim_state_t)
+from skillbus.rpc import RpcClient
+from skillbus.sim.messages import arm_channel, reply_channel, state_channel
+
+log = logging.getLogger("arm")
+_arm: "Arm | None" = None
+
+
+class ArmError(RuntimeError):
+    pass
+
+
+class Arm:
+    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 10.0) -> None:
+        self.bus, self.participant = bus, participant
+        self.motion = RpcClient(bus, "MOTION", name)
+        self.motion_timeout = motion_timeout
+        self.state: sim_state_t | None = None
+        self.replies: dict[str, sim_cmd_reply_t] = {}
+        self.bad = 0
+        if participant is not None:
+            participant.subscribe(state_channel(), lambda m: self._on_state(m.data))
+            participant.subscribe(reply_channel(), lambda m: self._on_reply(m.data))
+        else:
+            bus.subscribe(state_channel(), lambda ch, d: self._on_state(d))
+            bus.subscribe(reply_channel(), lambda ch, d: self._on_reply(d))
+
+    def _on_state(self, data: bytes) -> None:
+        s = decode(sim_state_t, data)
+        if s is None:
+            self.bad += 1
+            return
+        self.state = s
+
+    def _on_reply(self, data: bytes) -> None:
+        r = decode(sim_cmd_reply_t, data)
+        if r is None:
+            self.bad += 1
+            return
+        if r.command == "arm":
+            self.replies[r.id] = r
+            while len(self.replies) > 1000:
+                self.replies.pop(next(iter(self.replies)))
+
+    # -- what the skills use ---------------------------------------------------
+    def joint_names(self) -> list[str]:
+        s = self._need_state()
+        return [n for n in s.joint_names if not n.startswith("finger")]
+
+    def joints(self) -> list[float]:
+        s = self._need_state()
+        return [q for n, q in zip(s.joint_names, s.position) if not n.startswith("finger")]
+
+    def objects(self) -> list[sim_object_t]:
+        return list(self._need_state().objects)
+
+    def _need_state(self) -> sim_state_t:
+        if self.state is None:
+            raise ArmError("no robot state yet (is the physics server or the arm driver running?)")
+        return self.state
+
+    def plan(self, target: list[float], cartesian: bool = False, speed_scale: float = 0.5) -> motion_plan_t:
+        req = motion_request_t()
+        req.joint_names = self.joint_names()
+        req.num_joints = len(req.joint_names)
+        req.start = self.joints()
+        req.target = [float(x) for x in target]
+        req.cartesian, req.step_m, req.speed_scale = cartesian, 0.01, speed_scale
+        return self.motion.call("plan", req, motion_plan_t, timeout=self.motion_timeout)
+
+    def execute(self, plan: motion_plan_t, cmd_id: str) -> None:
+        m = sim_arm_cmd_t()
+        m.id = cmd_id
+        m.joint_names, m.num_joints = list(plan.joint_names), plan.num_joints
+        m.points, m.num_points = list(plan.points), plan.num_points
+        if self.participant is not None:
+            self.participant.publish(arm_channel(), m)
+        else:
+            self.bus.publish(arm_channel(), m.encode())
+
+    def finished(self, cmd_id: str, tolerance: float = 0.01) -> tuple[bool, str]:
+        """(done, error): done when the arm has played `cmd_id` and settled; error when
+        the robot rejected it."""
+        r = self.replies.get(cmd_id)
+        if r is not None and not r.accepted:
+            return True, r.error
+        s = self.state
+        if s is None or s.arm_command_id != cmd_id:
+            return False, ""
+        return (not s.arm_moving and s.arm_tracking_error < tolerance), ""
+
+
+def setup(bus: Bus, participant: Any = None) -> Arm:
+    global _arm
+    _arm = Arm(bus, participant)
+    return _arm
+
+
+def arm() -> Arm:
+    if _arm is None:
+        raise ArmError("this skill process has no arm: start it with --arm")
+    return _arm

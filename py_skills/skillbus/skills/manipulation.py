@@ -1,0 +1,241 @@
+"""Manipulation skills: Locate, MoveArm, LiftArm, and the compounds Pick, Place and
+ClearTable. The primitives need a skill process started with ``--arm --world-model``;
+the gripper skills (skillbus.skills.gripper) need ``--gripper``.
+
+Tool poses: the tool points straight down; its yaw follows the target's yaw, folded to
+within 45 degrees (a cube looks the same every 90 degrees), so the wrist turns least.
+Poses come from the world model replica (skillbus.world.poses), never from a server
+call, so a skill decides the same way on every run.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+from skillbus import tick_context
+from skillbus.robot import arm as arm_service
+from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SerialStar,
+                            SkillBase, SkillDescription)
+from skillbus.world.poses import qmul, set_world_pose, world_pose, yaw_of
+
+DOWN = (0.0, 1.0, 0.0, 0.0)  # tool z pointing down: half a turn about y
+MOVE_TIMEOUT_S = 20.0
+APPROACH, GRASP_HEIGHT, LIFT = 0.10, 0.005, 0.10      # m, tool above the object's centre
+BIN_ABOVE, BIN_RELEASE = 0.45, 0.30                     # m, tool above the bin's origin
+
+
+def top_down(yaw: float) -> tuple[float, float, float, float]:
+    return qmul((0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)), DOWN)
+
+
+def fold(yaw: float) -> float:
+    """The yaw within [-45, 45] degrees that grasps a square the same way."""
+    return (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
+
+
+def now() -> float:
+    tick = tick_context.current_tick()
+    return tick.sim_time_ns * 1e-9 if tick is not None else time.monotonic()
+
+
+def command_id(label: str) -> str:
+    tick = tick_context.current_tick()
+    return f"{label}@{tick.frame}" if tick is not None else f"{label}@{time.monotonic_ns()}"
+
+
+# -- descriptions ---------------------------------------------------------------------
+class Locate(SkillDescription):
+    def createDescription(self):
+        self.addParam("Location", Element("skiros:Location"), ParamTypes.Required)
+
+
+class MoveArm(SkillDescription):
+    def createDescription(self):
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("Target", Element("skiros:PhysicalObject"), ParamTypes.Required)
+        self.addParam("Height", 0.1, ParamTypes.Optional, description="tool above the target's origin, m")
+        self.addParam("Cartesian", False, ParamTypes.Optional, description="along a straight line")
+
+
+class LiftArm(SkillDescription):
+    def createDescription(self):
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("Height", 0.1, ParamTypes.Optional, description="straight up by this much, m")
+
+
+class Pick(SkillDescription):
+    def createDescription(self):
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Required)
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+        self.addPreCondition(ConditionRelation("NotHolding", "skiros:contain", "Gripper", "Object", False))
+        self.addPostCondition(ConditionRelation("Holding", "skiros:contain", "Gripper", "Object", True))
+
+
+class Place(SkillDescription):
+    def createDescription(self):
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Required)
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+        self.addParam("Location", Element("skiros:Location"), ParamTypes.Required)
+        self.addPreCondition(ConditionRelation("Holding", "skiros:contain", "Gripper", "Object", True))
+        self.addPostCondition(ConditionRelation("Contains", "skiros:contain", "Location", "Object", True))
+
+
+class ClearTable(SkillDescription):
+    def createDescription(self):
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Required)
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("Table", Element("skiros:Table"), ParamTypes.Required)
+        self.addParam("Bin", Element("skiros:Bin"), ParamTypes.Required)
+        self.addParam("Attempts", 2, ParamTypes.Optional, description="tries per object (RetryOnFail)")
+
+
+# -- primitives -----------------------------------------------------------------------
+class locate(PrimitiveBase):
+    """The simulated camera: every object the robot's state reports is written into the
+    world model with its pose (known elements by label; the rest are reported)."""
+
+    def createDescription(self):
+        self.setDescription(Locate(), "locate")
+
+    def onStart(self):
+        self.arm = arm_service.arm()
+        self.expected: dict[str, tuple] = {}
+        self.unknown: list[str] = []
+        return True
+
+    def execute(self):
+        if not self.expected:
+            by_label = {e.label: e for e in self.wmi.get_elements() if e.label}
+            for o in self.arm.objects():
+                e = by_label.get(o.name)
+                if e is None:
+                    self.unknown.append(o.name)
+                    continue
+                p, q = tuple(o.pose[:3]), tuple(o.pose[3:])
+                set_world_pose(self.wmi, e.id, p, q)
+                self.expected[e.id] = p
+            if not self.expected:
+                return self.fail(f"located nothing known to the world model (seen: {', '.join(self.unknown) or 'none'})",
+                                 -1)
+            return self.step(f"writing {len(self.expected)} object pose(s)")
+        for eid, p in self.expected.items():
+            got, _ = world_pose(self.wmi, eid)
+            if max(abs(a - b) for a, b in zip(got, p)) > 1e-4:
+                return self.step(f"waiting for the world model to show {eid}")
+        extra = f"; not in the world model: {', '.join(self.unknown)}" if self.unknown else ""
+        return self.success(f"located {len(self.expected)} object(s){extra}")
+
+
+class _ArmMotion(PrimitiveBase):
+    """Plans with the motion service, sends the trajectory, waits until the arm settles."""
+
+    def createDescription(self):  # bound by the subclasses
+        raise NotImplementedError
+
+    def onStart(self):
+        self.arm = arm_service.arm()
+        self.cmd = None
+        self.started_at = now()
+        return True
+
+    def target(self) -> tuple[list[float], bool, str]:
+        raise NotImplementedError
+
+    def execute(self):
+        if self.cmd is None:
+            pose, cartesian, what = self.target()
+            plan = self.arm.plan(pose, cartesian)
+            if not plan.ok:
+                return self.fail(f"{self.label} to {what}: {plan.error}", -1)
+            self.cmd = command_id(self.label)
+            self.what = what
+            self.arm.execute(plan, self.cmd)
+            return self.step(f"moving to {what}")
+        done, error = self.arm.finished(self.cmd)
+        if error:
+            return self.fail(f"{self.label}: the robot rejected the trajectory: {error}", -2)
+        if done:
+            return self.success(f"at {self.what}")
+        if now() - self.started_at > MOVE_TIMEOUT_S:
+            return self.fail(f"{self.label}: not at {self.what} after {MOVE_TIMEOUT_S:.0f} s", -3)
+        return self.step(f"moving to {self.what}")
+
+
+class move_arm(_ArmMotion):
+    def createDescription(self):
+        self.setDescription(MoveArm(), "move_arm")
+
+    def target(self):
+        t = self.params["Target"].value
+        h = float(self.params["Height"].value)
+        p, q = world_pose(self.wmi, t.id)
+        pose = [p[0], p[1], p[2] + h, *top_down(fold(yaw_of(q)))]
+        return pose, bool(self.params["Cartesian"].value), f"{h * 100:.1f} cm above {t.id}"
+
+
+class lift_arm(_ArmMotion):
+    def createDescription(self):
+        self.setDescription(LiftArm(), "lift_arm")
+
+    def target(self):
+        tool = list(self.arm.state.tool_pose)
+        h = float(self.params["Height"].value)
+        tool[2] += h
+        return tool, True, f"{h * 100:.1f} cm higher"
+
+
+# -- compounds ------------------------------------------------------------------------
+class pick(SkillBase):
+    def createDescription(self):
+        self.setDescription(Pick(), "pick")
+
+    def expand(self, skill):
+        skill.setProcessor(SerialStar())
+        skill(
+            self.skill("MoveArm", "", remap={"Target": "Object"}, specify={"Height": APPROACH}),
+            self.skill("GripperOpen", ""),
+            self.skill("MoveArm", "", remap={"Target": "Object"}, specify={"Height": GRASP_HEIGHT, "Cartesian": True}),
+            self.skill("Grasp", ""),
+            self.skill("LiftArm", "", specify={"Height": LIFT}),
+        )
+
+
+class place(SkillBase):
+    def createDescription(self):
+        self.setDescription(Place(), "place")
+
+    def expand(self, skill):
+        skill.setProcessor(SerialStar())
+        skill(
+            self.skill("MoveArm", "", remap={"Target": "Location"}, specify={"Height": BIN_ABOVE}),
+            self.skill("MoveArm", "", remap={"Target": "Location"}, specify={"Height": BIN_RELEASE, "Cartesian": True}),
+            self.skill("Release", ""),
+            self.skill("LiftArm", "", specify={"Height": LIFT}),
+        )
+
+
+class clear_table(SkillBase):
+    """Locate, then every product on the table into the bin, each Pick-and-Place retried
+    once on failure (RetryOnFail), then Locate again for the final poses."""
+
+    def createDescription(self):
+        self.setDescription(ClearTable(), "clear_table")
+
+    def expand(self, skill):
+        table = self.params["Table"].value
+        attempts = int(self.params["Attempts"].value)
+        products = [r["dst"] for r in self.wmi.get_relations(table.id, "skiros:contain", "")] if self.wmi else []
+        steps = [self.skill("Locate", "", remap={"Location": "Table"})]
+        for oid in products:
+            obj = self.wmi.get_element(oid)
+            steps.append(self.skill(RetryOnFail(attempts))(
+                self.skill(SerialStar())(
+                    self.skill("Pick", "", specify={"Object": obj}),
+                    self.skill("Place", "", remap={"Location": "Bin"}, specify={"Object": obj}),
+                )))
+        steps.append(self.skill("Locate", "", remap={"Location": "Bin"}))
+        skill.setProcessor(SerialStar())
+        skill(*steps)

@@ -1,0 +1,71 @@
+"""The pick-and-place system: every process, its command line, and the task.
+
+One description serves the supervisor configuration (deploy/supervisord.conf.in, through
+``skillbus launch``), the demo, the tests and the benchmarks, so they all run the same
+system. Under lockstep the physics server is the clock master and the world model server,
+the skill manager, the skill process and the gripper device are its participants; the
+CAN hub and the motion service are plain servers.
+"""
+
+from __future__ import annotations
+
+import shlex
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from skillbus import paths
+
+PARTICIPANTS = ["wm", "skill_mgr", "skills", "gripper"]
+TASK = ("ClearTable Gripper=skiros:Gripper-7 Arm=skiros:Arm-8 Table=skiros:Table-1 Bin=skiros:Bin-5")
+LIBRARIES = ["skillbus.skills.gripper", "skillbus.skills.manipulation"]
+
+
+@dataclass
+class Program:
+    name: str
+    argv: list[str]
+    participant: bool = False
+    env: dict[str, str] = field(default_factory=dict)
+
+    def command(self) -> str:
+        return " ".join(shlex.quote(a) for a in self.argv)
+
+
+def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, lockstep: bool = True,
+             stop_after_task: bool = True, extra_sim: tuple[str, ...] = ()) -> list[Program]:
+    """The processes, in start order. `task` is started at the manager's first tick."""
+    scene = scene or paths.demo_scene()
+    ttl = scene.with_suffix("").with_suffix(".ttl") if scene.name.endswith(".scene.json") else scene.with_suffix(".ttl")
+    can = str(run_dir / "gripper0.sock")
+    py = [sys.executable, "-m", "skillbus.cli"]
+    b = paths.build_dir()
+    sim = [str(b / "sim_server" / "sim_server"), "--scene", str(scene)]
+    if lockstep:
+        sim += ["--participants", ",".join(PARTICIPANTS), "--join-timeout-ms", "60000"]
+        if task and stop_after_task:
+            sim += ["--stop-after-task", "1"]
+    else:
+        sim += ["--wall-clock"]
+    sim += list(extra_sim)
+    clock = [] if lockstep else ["--wall-clock"]
+    mgr = [str(b / "skill_mgr" / "skill_mgr"), *clock, "--tick-timeout-ms", "2000"]
+    if task:
+        mgr += ["--start", task]
+    skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm", "--gripper", f"{can}:5"]
+    for lib in LIBRARIES:
+        skills += ["--library", lib]
+    if lockstep:
+        skills.append("--lockstep")
+    device = [*py, "gripper-device", "--channel", can, "--node-id", "5", "--name", "gripper"]
+    device += ["--lockstep"] if lockstep else ["--physics"]
+    return [
+        Program("can_hub", [*py, "can-hub", "--channel", can]),
+        Program("sim", sim),
+        Program("motion", [str(b / "motion_server" / "motion_server"), "--scene", str(scene)]),
+        Program("wm", [str(b / "wm_server" / "wm_server"), *clock, "--data", str(run_dir / "wm"), "--scene", str(ttl)],
+                participant=True),
+        Program("gripper", device, participant=True),
+        Program("skill_mgr", mgr, participant=True),
+        Program("skills", skills, participant=True),
+    ]
