@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 
 from skillbus import paths
-from skillbus.demo import python_participant_argv
+from skillbus.lockstep_session import python_participant_argv
 from skillbus.netns import Sandbox, last_json
 
 HERE = Path(__file__).resolve().parent

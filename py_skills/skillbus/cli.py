@@ -13,11 +13,21 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--log-level", default=None, help="debug, info, warn or error")
     sub = ap.add_subparsers(dest="command", required=True)
 
-    d = sub.add_parser("demo", help="run the main job (for now: a short lockstep session)")
-    d.add_argument("--frames", type=int, default=1000)
-    d.add_argument("--python", type=int, default=3, help="Python participants")
-    d.add_argument("--cpp", type=int, default=1, help="C++ participants")
-    d.add_argument("--timeout", type=float, default=120.0, help="seconds before the run is abandoned")
+    d = sub.add_parser("demo", help="the main job: the robot clears the table (lockstep, under supervisord)")
+    d.add_argument("--run-dir", default="runs/demo", help="logs, world model data and the LCM log go here")
+    d.add_argument("--json", action="store_true", help="print the result as JSON")
+    ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
+    ls.add_argument("--frames", type=int, default=1000)
+    ls.add_argument("--python", type=int, default=3, help="Python participants")
+    ls.add_argument("--cpp", type=int, default=1, help="C++ participants")
+    ls.add_argument("--timeout", type=float, default=120.0, help="seconds before the run is abandoned")
+    la = sub.add_parser("launch", help="start the system under supervisord")
+    la.add_argument("--run-dir", default="runs/launch")
+    la.add_argument("--wall-clock", action="store_true", help="as on a robot: no lockstep, processes restart")
+    la.add_argument("--task", default=None, help="a task for the manager's first tick (default: ClearTable)")
+    la.add_argument("--no-task", action="store_true", help="start no task (run them with skillbus run)")
+    sd = sub.add_parser("shutdown", help="stop a launched system")
+    sd.add_argument("--run-dir", default="runs/launch")
 
     p = sub.add_parser("lockstep-participant", help="run a demo lockstep participant")
     p.add_argument("--name", required=True)
@@ -44,6 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
     dev.add_argument("--period-ms", type=float, default=10.0)
     dev.add_argument("--lockstep", action="store_true",
                      help="be a lockstep participant driving the physics server's fingers")
+    dev.add_argument("--physics", action="store_true",
+                     help="wall clock, with the fingers of the physics server (in wall-clock mode)")
     dev.add_argument("--name", default="gripper", help="lockstep participant name")
     dev.add_argument("--url", default=None, help="bus URL (lockstep)")
     rec = sub.add_parser("can-record", help="record a CAN bus to a candump log file")
@@ -70,6 +82,18 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "demo":
         from skillbus import demo
         return demo.main(args)
+    if args.command == "lockstep-session":
+        from skillbus import lockstep_session
+        return lockstep_session.main(args)
+    if args.command == "launch":
+        from skillbus import launch
+        if args.task is None:
+            from skillbus.system import TASK
+            args.task = TASK
+        return launch.main_launch(args)
+    if args.command == "shutdown":
+        from skillbus import launch
+        return launch.main_shutdown(args)
     if args.command in ("skills-process", "skills", "run", "stop", "pause", "resume", "step"):
         from skillbus.skill import cli as skill_cli
         return skill_cli.main(args)

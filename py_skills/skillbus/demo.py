@@ -1,57 +1,187 @@
-"""`skillbus demo`: the main job. Until the pick-and-place demo exists it runs a short
-lockstep session of real processes (a C++ clock master, Python and C++ participants)
-in a private network namespace and prints its summary."""
+"""``skillbus demo`` (and ``make demo``): the main job. The robot clears the table.
+
+Every part a real process, launched under supervisord as on a robot, in lockstep with the
+physics server: the world model server, the skill manager, the skill process (gripper
+and manipulation skills), the CANopen gripper device on the virtual CAN bus, the motion
+service, the physics server, and an LCM logger recording the run. The skill manager
+starts ClearTable at its first tick; the demo shows the skill tree live, and when the
+physics server ends the session (a fixed number of frames after the task) it prints the
+summary: result, sim time, wall time, real-time factor, where every object ended in the
+world model (read back from the world model's journal) and in the physics server, and the
+digests. Exit code 0 when the task succeeded and every cube is in the bin in both.
+"""
 
 from __future__ import annotations
 
+import json
+import os
+import shutil
+import subprocess
 import sys
+import time
+from pathlib import Path
+from typing import Any
 
 from skillbus import paths
-from skillbus.netns import Sandbox, last_json
+
+BIN_CENTRE, BIN_HALF, BIN_TOP = (0.0, 0.6), 0.15, 0.25
 
 
-def python_participant_argv(name: str, *extra: str) -> list[str]:
-    return [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", name, *extra]
+def _last_json(path: Path) -> dict[str, Any]:
+    from skillbus.netns import last_json
+    try:
+        return last_json(path.read_text()) or {}
+    except OSError:
+        return {}
 
 
-def run_session(box: Sandbox, frames: int, n_python: int, n_cpp: int, timeout: float,
-                period_ms: float = 10.0) -> dict:
-    """Runs one demo session in `box`; returns the master's summary plus the participants'."""
-    names = [f"py{i + 1}" for i in range(n_python)] + [f"cpp{i + 1}" for i in range(n_cpp)]
-    clock = box.start("clock", [paths.binary("sb_clock"), "--demo", "--frames", str(frames),
-                                "--period-ms", str(period_ms), "--participants", ",".join(names)])
-    parts = []
-    for n in names:
-        argv = (python_participant_argv(n) if n.startswith("py")
-                else [str(paths.binary("sb_demo_participant")), "--name", n])
-        parts.append(box.start(n, argv))
-    box.wait(clock, timeout)
-    summary = last_json(clock.stdout()) or {"ok": False, "error": f"clock printed no summary: {clock.stderr()}"}
-    summary["participant_results"] = {}
-    for p in parts:
-        box.wait(p, 15)
-        summary["participant_results"][p.name] = last_json(p.stdout()) or {"ok": False}
-    return summary
+def in_bin(p: list[float]) -> bool:
+    return abs(p[0] - BIN_CENTRE[0]) < BIN_HALF and abs(p[1] - BIN_CENTRE[1]) < BIN_HALF and p[2] < BIN_TOP
 
 
-def print_summary(s: dict) -> None:
-    print("skillbus lockstep session")
-    print(f"  result            {'ok' if s.get('ok') else 'FAILED: ' + s.get('error', '?')}")
-    print(f"  participants      {s.get('participants')} ({', '.join(s.get('participant_results', {}))})")
-    print(f"  frames            {s.get('frames')}")
-    print(f"  sim time          {s.get('sim_time_s', 0):.3f} s")
-    print(f"  wall time         {s.get('wall_time_s', 0):.3f} s")
-    print(f"  real-time factor  {s.get('real_time_factor', 0):.1f}x")
-    print(f"  frame overhead    {s.get('us_per_frame', 0):.0f} us/frame")
-    print(f"  digest            {s.get('digest')}")
-    print(f"  bad input         {s.get('bad_input')}")
+class Watcher:
+    """The live skill tree: one line whenever the running path changes."""
+
+    def __init__(self) -> None:
+        from skillbus.bus import channel, open_bus
+        self.bus = open_bus()
+        self.last = ""
+        self.final = None
+        self.bus.subscribe(channel("SB_SKILL_PROGRESS"), self.on_progress)
+
+    def on_progress(self, ch: str, data: bytes) -> None:
+        from skillbus.msgs import decode, skill_progress_t
+        p = decode(skill_progress_t, data)
+        if p is None:
+            return
+        self.final = p
+        names = {n.id: n for n in p.nodes}
+        running = [n for n in p.nodes if n.state == 2 and n.type]
+        if not running:
+            return
+        leaf = running[-1]
+        path, cur = [], leaf
+        while cur is not None:
+            if cur.type:
+                label = cur.type
+                obj = next((line.split("=", 1)[1] for line in cur.params.splitlines() if line.startswith("Object=")),
+                           "")
+                path.append(f"{label}({obj})" if obj and cur.type in ("Pick", "Place") else label)
+            cur = names.get(cur.parent)
+        line = " > ".join(reversed(path)) + (f": {leaf.message}" if leaf.message else "")
+        if line != self.last:
+            self.last = line
+            print(f"  t={p.header.sim_time_ns * 1e-9:6.2f} s  {line}", flush=True)
+
+    def spin(self, seconds: float) -> None:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.bus.handle(max(0.0, end - time.monotonic()))
+
+
+def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
+    """Where each product is in the world model, read back from its journal."""
+    from skillbus.bus import open_bus
+    from skillbus.world import WorldModelInterface
+    from skillbus.world.poses import world_pose
+    wm = subprocess.Popen([str(paths.build_dir() / "wm_server" / "wm_server"), "--wall-clock", "--data",
+                           str(run_dir / "wm"), "--name", "wm-readback"], stdout=subprocess.DEVNULL,
+                          stderr=subprocess.DEVNULL)
+    try:
+        wmi = WorldModelInterface(open_bus(), "demo-readback", timeout=10.0)
+        wmi.sync()
+        out = {}
+        for e in wmi.get_elements():
+            if e.type in ("skiros:Cube", "skiros:Cylinder", "skiros:Product"):
+                owner = [r["src"] for r in wmi.get_relations("", "skiros:contain", e.id)]
+                where = wmi.get_element(owner[0]) if owner else None
+                p, _ = world_pose(wmi, e.id)
+                out[e.label] = {"id": e.id, "in": where.label if where else "", "in_type": where.type if where else "",
+                                "pose": list(p)}
+        return out
+    finally:
+        wm.terminate()
+        wm.wait(10)
+
+
+def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
+    from skillbus import launch
+    from skillbus.system import Program, programs
+    if run_dir.exists():
+        shutil.rmtree(run_dir)
+    run_dir.mkdir(parents=True)
+    progs = programs(run_dir)
+    progs.append(Program("logger", [str(Path(sys.executable).parent / "lcm-logger"), "-f", str(run_dir / "demo.lcmlog")]))
+    conf = launch.write_config(run_dir, progs, lockstep=True)
+    watcher = None if quiet else Watcher()
+    t0 = time.monotonic()
+    launch.start(conf, wait_s=60)
+    try:
+        while True:
+            st = launch.status(conf)
+            if st.get("sim") in ("EXITED", "FATAL", "STOPPED"):
+                break
+            if watcher:
+                watcher.spin(0.2)
+            else:
+                time.sleep(0.2)
+            if time.monotonic() - t0 > 900:
+                raise RuntimeError("the demo did not end within 15 minutes")
+        logs = run_dir / "logs"
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and any(launch.status(conf).get(n) == "RUNNING"
+                                                  for n in ("wm", "skill_mgr", "skills", "gripper")):
+            time.sleep(0.2)
+    finally:
+        launch.shutdown(conf)
+    wall = time.monotonic() - t0
+    sim = _last_json(logs / "sim.out")
+    mgr = _last_json(logs / "skill_mgr.out")
+    result = {"sim": sim, "mgr": mgr, "wall_launch_s": wall, "run_dir": str(run_dir),
+              "participants": {n: _last_json(logs / f"{n}.out") for n in ("wm", "skills", "gripper")}}
+    result["world_model"] = world_model_after(run_dir)
+    task = (mgr.get("tasks") or {}).get("1", "no result")
+    physics = sim.get("objects", {})
+    result["task"] = task
+    result["ok"] = (task.startswith("Success") and bool(physics) and all(in_bin(p) for p in physics.values())
+                    and all(w["in_type"] == "skiros:Bin" for w in result["world_model"].values())
+                    and len(result["world_model"]) == len(physics))
+    return result
+
+
+def print_summary(r: dict[str, Any]) -> None:
+    sim = r["sim"]
+    print()
+    print("skillbus pick-and-place demo: ClearTable")
+    print(f"  result            {'ok' if r['ok'] else 'FAILED'}: {r['task']}")
+    print(f"  sim time          {sim.get('sim_time_s', 0):.2f} s ({sim.get('frames', 0)} frames of 10 ms)")
+    print(f"  wall time         {sim.get('wall_time_s', 0):.2f} s (the lockstep session; "
+          f"{r['wall_launch_s']:.1f} s with launch and shutdown)")
+    print(f"  real-time factor  {sim.get('real_time_factor', 0):.1f}x")
+    print(f"  physics           {sim.get('physics_us_per_step', 0):.0f} us per {sim.get('steps', 0)} steps, "
+          f"{sim.get('collision_detector', '?')} collision detector")
+    print("  objects           world model                      physics server (x, y, z)")
+    for name, p in sorted(sim.get("objects", {}).items()):
+        w = r["world_model"].get(name, {})
+        where = f"in {w.get('in', '?')} ({w.get('id', '?')})"
+        print(f"    {name:8s}        {where:32s} ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f})"
+              f"{'  in the bin' if in_bin(p) else '  NOT in the bin'}")
+    print(f"  state digest      {sim.get('state_digest')}")
+    print(f"  session digest    {sim.get('session_digest')}")
+    print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (skillbus replay; skillbus spy)")
+    print(f"  logs              {Path(r['run_dir']) / 'logs'}")
 
 
 def main(args) -> int:
-    with Sandbox() as box:
-        print(f"running {args.frames} frames with {args.python} Python and {args.cpp} C++ participants "
-              f"({box.mode}, {box.url})", flush=True)
-        s = run_session(box, args.frames, args.python, args.cpp, timeout=args.timeout)
-    print_summary(s)
-    ok = s.get("ok") and all(p.get("ok") for p in s["participant_results"].values())
-    return 0 if ok else 1
+    if not os.environ.get("SKILLBUS_NETNS"):
+        # LCM multicast stays inside a private network namespace (docs/transport.md).
+        netns = paths.REPO_ROOT / "deploy" / "netns-run"
+        return subprocess.call([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
+                                str(Path(args.run_dir).resolve())] + (["--json"] if args.json else []))
+    print("skillbus demo: launching the pick-and-place system under supervisord (lockstep) ...", flush=True)
+    r = run(Path(args.run_dir))
+    if args.json:
+        print(json.dumps(r))
+    else:
+        print_summary(r)
+    return 0 if r["ok"] else 1

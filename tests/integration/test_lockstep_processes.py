@@ -7,7 +7,7 @@ import time
 import pytest
 
 from conftest import last_json, python_tool
-from skillbus.demo import python_participant_argv, run_session
+from skillbus.lockstep_session import python_participant_argv, run_session
 from skillbus.netns import Sandbox
 
 

@@ -105,9 +105,12 @@ class SimFingers:
         self.blocked_for = 0.0
         self._start, self._elapsed, self._lagging = self.width, 0.0, 0.0
         self._commands = 0
+        self.acknowledged = True
 
-    def on_state(self, width_m: float, force_n: float, touching: set[str]) -> None:
+    def on_state(self, width_m: float, force_n: float, touching: set[str], width_target_m: float | None = None) -> None:
         self.width, self.force, self.touching = width_m * 1e6, force_n, touching
+        # Force and contacts say something about this move only once the physics has it.
+        self.acknowledged = width_target_m is None or abs(width_target_m * 1e6 - self.target) < 1.0
 
     def _send(self, target: float) -> None:
         from skillbus.sim.messages import gripper_command
@@ -120,6 +123,7 @@ class SimFingers:
         self.force_limit_n = max(0.1, force_limit / 10.0)
         self.moving, self.blocked_for = True, 0.0
         self._start, self._elapsed, self._lagging = self.width, 0.0, 0.0
+        self.acknowledged = False
         self._send(self.target)
 
     def halt(self) -> None:
@@ -132,7 +136,8 @@ class SimFingers:
 
     @property
     def stalled(self) -> bool:
-        return abs(self.width - self.target) > AT_TARGET_UM and self.force >= 0.9 * self.force_limit_n
+        return (self.acknowledged and abs(self.width - self.target) > AT_TARGET_UM
+                and self.force >= 0.9 * self.force_limit_n)
 
     @property
     def in_contact(self) -> bool:
@@ -142,6 +147,8 @@ class SimFingers:
         if not self.moving:
             return
         self._elapsed += dt
+        if not self.acknowledged:
+            return  # the physics has not taken the set-point yet
         if abs(self.width - self.target) <= AT_TARGET_UM:
             self.moving = False
             return
@@ -252,11 +259,17 @@ class GripperDevice:
                     self._fault(c.EMCY_OVER_CURRENT)
                 elif self.model.following_error():
                     self._fault(c.EMCY_FOLLOWING_ERROR)
-        self._publish_status()
+        self._publish_status(event=False)
 
-    def _publish_status(self) -> None:
-        """TPDO1 with the current state (event-driven, transmission type 255: on every
-        step, and at once when a controlword changes the state)."""
+    # Event timer of TPDO1 in steps: standalone every step (10 ms, the EDS's 0x1800sub5);
+    # under lockstep the TPDO goes out on every change and otherwise every 10th frame.
+    event_every = 1
+    _since_sent = 0
+    _last_sent: tuple | None = None
+
+    def _publish_status(self, event: bool = True) -> None:
+        """TPDO1 with the current state (event-driven, transmission type 255: at once
+        when the state changes, and on the event timer)."""
         with self.lock:
             sw = c.STATE_WORDS[self.state] | c.SW_REMOTE
             grip = self.grip_state()
@@ -272,7 +285,12 @@ class GripperDevice:
             self.node.sdo[0x6064].raw = int(round(self.model.width))
             self.node.sdo[0x2000].raw = grip
             operational = self.node.nmt.state == "OPERATIONAL"
-        if operational:
+            now = (sw, int(round(self.model.width)), grip)
+            self._since_sent += 1
+            due = now != self._last_sent or self._since_sent >= self.event_every or event
+            if operational and due:
+                self._last_sent, self._since_sent = now, 0
+        if operational and due:
             tpdo.transmit()
 
 
@@ -305,23 +323,37 @@ def run_lockstep(args) -> int:
                            sdo_ids(args.node_id))
     fingers = SimFingers(lambda m: p.publish(gripper_channel(), m))
     dev = GripperDevice(network, args.node_id, args.eds or EDS, fingers=fingers)
+    dev.event_every = 10
     bad = [0]
 
+    raw: list[bytes | None] = [None]
+
     def on_state(m) -> None:
-        s = decode(sim_state_t, m.data)
+        raw[0] = m.data
+
+    def take_state() -> None:
+        # Decoded only while the fingers move or were just told to: at rest nothing in
+        # the state can change what the device reports (it is the only one moving them).
+        if raw[0] is None or not (fingers.moving or not fingers.acknowledged or last_state[0] is None):
+            return
+        s = decode(sim_state_t, raw[0])
+        raw[0] = None
         if s is None:
             bad[0] += 1
             return
-        fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts})
+        last_state[0] = s
+        fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts}, s.finger_width_target)
 
     p.subscribe(state_channel(), on_state)
-    last = [None]
+    last: list[int | None] = [None]
+    last_state: list = [None]
 
     def on_frame(frame: int, sim_time_ns: int) -> None:
         if last[0] is None:
             dev.boot()  # boot-up in the first frame: nothing but SDO goes out before the run
         dt = (sim_time_ns - last[0]) * 1e-9 if last[0] is not None else 0.0
         last[0] = sim_time_ns
+        take_state()
         dev.step(dt)
         dev.heartbeat_if_due(sim_time_ns)
 
@@ -336,10 +368,47 @@ def run_lockstep(args) -> int:
     return 0 if r.ok else 1
 
 
+def run_physics_wall_clock(args) -> int:
+    """The device on the wall clock with the physics server's fingers (the physics server
+    in wall-clock mode): CAN through canopen's notifier, frames from a local timer."""
+    from skillbus.bus import open_bus
+    from skillbus.lockstep import LockstepParticipant
+    from skillbus.msgs import decode, sim_state_t
+    from skillbus.sim.messages import gripper_channel, state_channel
+
+    bus = open_bus(args.url)
+    p = LockstepParticipant(bus, args.name, kind="gripper-device", wall_clock=True,
+                            wall_frame_period_ns=int(args.period_ms * 1e6))
+    network = canopen.Network()
+    network.connect(interface=args.interface, channel=args.channel)
+    fingers = SimFingers(lambda m: bus.publish(gripper_channel(), m.encode()))
+    dev = GripperDevice(network, args.node_id, args.eds or EDS, fingers=fingers)
+
+    def on_state(m) -> None:
+        s = decode(sim_state_t, m.data)
+        if s is not None:
+            with dev.lock:
+                fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts}, s.finger_width_target)
+
+    p.subscribe(state_channel(), on_state)
+    dev.boot()
+    print(json.dumps({"node": args.node_id, "channel": args.channel, "physics": True}), flush=True)
+    p.on_frame = lambda frame, t: dev.step(args.period_ms / 1000.0)
+    try:
+        p.run()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        network.disconnect()
+    return 0
+
+
 def main(args) -> int:
     logging.basicConfig(level=logging.INFO)
     if getattr(args, "lockstep", False):
         return run_lockstep(args)
+    if getattr(args, "physics", False):
+        return run_physics_wall_clock(args)
     network = canopen.Network()
     network.connect(interface=args.interface, channel=args.channel)
     dev = GripperDevice(network, args.node_id, args.eds or EDS, args.object_width)

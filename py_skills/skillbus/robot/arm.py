@@ -32,7 +32,8 @@ class Arm:
         self.bus, self.participant = bus, participant
         self.motion = RpcClient(bus, "MOTION", name)
         self.motion_timeout = motion_timeout
-        self.state: sim_state_t | None = None
+        self._state: sim_state_t | None = None
+        self._raw: bytes | None = None  # decoded only when a skill asks (ticks are rarer than frames)
         self.replies: dict[str, sim_cmd_reply_t] = {}
         self.bad = 0
         if participant is not None:
@@ -43,11 +44,18 @@ class Arm:
             bus.subscribe(reply_channel(), lambda ch, d: self._on_reply(d))
 
     def _on_state(self, data: bytes) -> None:
-        s = decode(sim_state_t, data)
-        if s is None:
-            self.bad += 1
-            return
-        self.state = s
+        self._raw = data
+
+    @property
+    def state(self) -> sim_state_t | None:
+        if self._raw is not None:
+            s = decode(sim_state_t, self._raw)
+            self._raw = None
+            if s is None:
+                self.bad += 1
+            else:
+                self._state = s
+        return self._state
 
     def _on_reply(self, data: bytes) -> None:
         r = decode(sim_cmd_reply_t, data)

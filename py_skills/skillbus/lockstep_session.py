@@ -1,0 +1,58 @@
+"""`skillbus lockstep-session`: a lockstep session of the demo participants (no physics), the
+test and benchmark of the lockstep layer alone. It runs a short
+lockstep session of real processes (a C++ clock master, Python and C++ participants)
+in a private network namespace and prints its summary."""
+
+from __future__ import annotations
+
+import sys
+
+from skillbus import paths
+from skillbus.netns import Sandbox, last_json
+
+
+def python_participant_argv(name: str, *extra: str) -> list[str]:
+    return [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", name, *extra]
+
+
+def run_session(box: Sandbox, frames: int, n_python: int, n_cpp: int, timeout: float,
+                period_ms: float = 10.0) -> dict:
+    """Runs one demo session in `box`; returns the master's summary plus the participants'."""
+    names = [f"py{i + 1}" for i in range(n_python)] + [f"cpp{i + 1}" for i in range(n_cpp)]
+    clock = box.start("clock", [paths.binary("sb_clock"), "--demo", "--frames", str(frames),
+                                "--period-ms", str(period_ms), "--participants", ",".join(names)])
+    parts = []
+    for n in names:
+        argv = (python_participant_argv(n) if n.startswith("py")
+                else [str(paths.binary("sb_demo_participant")), "--name", n])
+        parts.append(box.start(n, argv))
+    box.wait(clock, timeout)
+    summary = last_json(clock.stdout()) or {"ok": False, "error": f"clock printed no summary: {clock.stderr()}"}
+    summary["participant_results"] = {}
+    for p in parts:
+        box.wait(p, 15)
+        summary["participant_results"][p.name] = last_json(p.stdout()) or {"ok": False}
+    return summary
+
+
+def print_summary(s: dict) -> None:
+    print("skillbus lockstep session")
+    print(f"  result            {'ok' if s.get('ok') else 'FAILED: ' + s.get('error', '?')}")
+    print(f"  participants      {s.get('participants')} ({', '.join(s.get('participant_results', {}))})")
+    print(f"  frames            {s.get('frames')}")
+    print(f"  sim time          {s.get('sim_time_s', 0):.3f} s")
+    print(f"  wall time         {s.get('wall_time_s', 0):.3f} s")
+    print(f"  real-time factor  {s.get('real_time_factor', 0):.1f}x")
+    print(f"  frame overhead    {s.get('us_per_frame', 0):.0f} us/frame")
+    print(f"  digest            {s.get('digest')}")
+    print(f"  bad input         {s.get('bad_input')}")
+
+
+def main(args) -> int:
+    with Sandbox() as box:
+        print(f"running {args.frames} frames with {args.python} Python and {args.cpp} C++ participants "
+              f"({box.mode}, {box.url})", flush=True)
+        s = run_session(box, args.frames, args.python, args.cpp, timeout=args.timeout)
+    print_summary(s)
+    ok = s.get("ok") and all(p.get("ok") for p in s["participant_results"].values())
+    return 0 if ok else 1
