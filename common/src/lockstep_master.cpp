@@ -80,6 +80,8 @@ void LockstepMaster::on_ack(const uint8_t* d, size_t n, const std::string& ch) {
   if (!decode_msg(d, n, a)) return bad_.record(ch, "not a lockstep_ack_t", n);
   if (a.header.frame != awaiting_frame_) return;  // a resent ack of an earlier frame
   if (!std::binary_search(expected_.begin(), expected_.end(), a.header.sender)) return;
+  if (!acks_.count(a.header.sender))
+    ack_seconds_[a.header.sender] += std::chrono::duration<double>(steady::now() - clock_sent_).count();
   Ack& ack = acks_[a.header.sender];
   ack.counts = std::move(a.counts);
   std::copy(std::begin(a.digest), std::end(a.digest), ack.digest.begin());
@@ -149,6 +151,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   acks_.clear();
   awaiting_frame_ = frame;
   const auto start = steady::now();
+  clock_sent_ = start;
   auto resend_at = start;
   while (acks_.size() < expected_.size()) {
     const auto now = steady::now();
@@ -169,6 +172,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
     bus_.handle(std::max(wait, std::chrono::milliseconds(0)));
   }
   awaiting_frame_ = -1;
+  wait_seconds_ += std::chrono::duration<double>(steady::now() - start).count();
   for (const auto& [name, ack] : acks_)
     if (!ack.error.empty()) {
       error = "lockstep: participant " + name + " failed in frame " + std::to_string(frame) + ": " + ack.error;

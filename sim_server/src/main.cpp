@@ -68,18 +68,34 @@ int main(int argc, char** argv) {
                   json_escape(o.name).c_str(), o.pose[0], o.pose[1], o.pose[2]);
     objects += buf;
   }
+  // Where a frame's wall time went, in ms per frame: publishing the state, the physics
+  // (and commands), the wait for the participants' acks (the slowest of each frame), and
+  // each participant's own clock-to-ack time (its work plus the transport both ways).
+  std::string breakdown;
+  {
+    const double f = rep.run.frames > 0 ? static_cast<double>(rep.run.frames) : 1.0;
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "\"state\": %.3f, \"physics\": %.3f, \"ack_wait\": %.3f, \"total\": %.3f",
+                  rep.frame_start_seconds * 1e3 / f, rep.frame_end_seconds * 1e3 / f, rep.ack_wait_seconds * 1e3 / f,
+                  rep.run.wall_seconds * 1e3 / f);
+    breakdown = buf;
+    for (const auto& [name, s] : rep.ack_seconds) {
+      std::snprintf(buf, sizeof buf, ", \"ack_%s\": %.3f", json_escape(name).c_str(), s * 1e3 / f);
+      breakdown += buf;
+    }
+  }
   const double rtf = r.wall_seconds > 0 ? r.sim_time_ns * 1e-9 / r.wall_seconds : 0.0;
   std::printf(
       "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"sim_time_s\": %.3f, \"wall_time_s\": %.3f, "
       "\"real_time_factor\": %.2f, \"steps\": %lld, \"physics_us_per_step\": %.1f, \"collision_detector\": \"%s\", "
       "\"participants\": %zu, \"state_digest\": \"%s\", \"session_digest\": \"%s\", \"commands_accepted\": %ld, "
       "\"commands_rejected\": %ld, \"bad_input\": %ld, \"finger_width\": %.5f, \"finger_force\": %.3f, "
-      "\"objects\": {%s}}\n",
+      "\"objects\": {%s}, \"frame_ms\": {%s}}\n",
       r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
       r.wall_seconds, rtf, static_cast<long long>(rep.steps), rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0,
       server->physics().collision_detector().c_str(), o.participants.size(), to_hex(rep.state_digest).c_str(),
       r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input, state.finger_width, state.finger_force,
-      objects.c_str());
+      objects.c_str(), breakdown.c_str());
   std::fflush(stdout);
   return r.ok ? 0 : 1;
 }

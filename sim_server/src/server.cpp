@@ -195,10 +195,14 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   master.subscribe(arm_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
   master.subscribe(gripper_channel(),
                    [this](const StampedMessage& m) { on_gripper(m.data.data(), m.data.size(), m.channel); });
+  double start_s = 0, end_s = 0;
+  using wall = std::chrono::steady_clock;
   master.on_frame_start = [&](int64_t frame, int64_t sim_time) {
+    const auto t0 = wall::now();
     frame_ = frame;
     sim_time_ns_ = sim_time;
     publish_frame([&](const std::string& ch, const auto& msg) { master.publish(ch, msg); });
+    start_s += std::chrono::duration<double>(wall::now() - t0).count();
   };
   if (opt_.stop_after_task >= 0) {
     // The run ends at a frame fixed by the task (its end, plus a grace for the last
@@ -215,14 +219,20 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
     });
   }
   master.on_frame_end = [&](int64_t frame, int64_t) {
+    const auto t0 = wall::now();
     play_script();
     physics_->step_frame();
+    end_s += std::chrono::duration<double>(wall::now() - t0).count();
     if (should_stop()) master.stop();  // a normal end: the participants finish cleanly
     if (task_done_at_ >= 0 && frame >= task_done_at_ + opt_.stop_grace_frames) master.stop();
   };
   const RunResult r = master.run();
   ServerReport rep = report(r);
   rep.bad_input += master.bad_input().total();
+  rep.frame_start_seconds = start_s;
+  rep.frame_end_seconds = end_s;
+  rep.ack_wait_seconds = master.wait_seconds();
+  rep.ack_seconds = master.ack_seconds();
   return rep;
 }
 

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <chrono>
+#include <map>
 #include <functional>
 #include <memory>
 #include <string>
@@ -50,6 +51,9 @@ struct ServerReport {
   double physics_seconds = 0;
   Digest state_digest{};
   long accepted = 0, rejected = 0, bad_input = 0;
+  // Where the wall time went (seconds, summed over the run): for benchmarks.
+  double frame_start_seconds = 0, frame_end_seconds = 0, ack_wait_seconds = 0;
+  std::map<std::string, double> ack_seconds;
 };
 
 class SimServer {

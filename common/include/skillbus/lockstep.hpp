@@ -59,6 +59,11 @@ class LockstepMaster {
   void stop(const std::string& reason = "");  // from a callback: end after this frame
   const BadInputCounter& bad_input() const { return bad_; }
   const MasterConfig& config() const { return cfg_; }
+  // Where frames' wall time went, for benchmarks (never behaviour): per participant the
+  // summed time from the clock going out to its ack arriving, and the summed time of the
+  // whole ack wait (the slowest participant of each frame).
+  const std::map<std::string, double>& ack_seconds() const { return ack_seconds_; }
+  double wait_seconds() const { return wait_seconds_; }
 
  private:
   bool wait_for_joins(std::string& error);
@@ -89,6 +94,9 @@ class LockstepMaster {
   Digest session_digest_{};
   bool stop_requested_ = false;
   std::string stop_reason_;
+  std::chrono::steady_clock::time_point clock_sent_{};
+  std::map<std::string, double> ack_seconds_;
+  double wait_seconds_ = 0;
 };
 
 enum class ClockMode { Lockstep, WallClock };
