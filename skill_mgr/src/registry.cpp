@@ -6,6 +6,7 @@ namespace skillbus::skills {
 
 std::vector<std::string> Registry::add(const skillbus_msgs::skill_register_t& reg) {
   std::vector<std::string> refused;
+  incarnations_[reg.process] = reg.incarnation;
   for (auto it = by_label_.begin(); it != by_label_.end();)
     it = it->second.process == reg.process ? by_label_.erase(it) : std::next(it);
   for (const auto& d : reg.skills) {
@@ -18,7 +19,7 @@ std::vector<std::string> Registry::add(const skillbus_msgs::skill_register_t& re
       refused.push_back("skill " + d.label + " of " + reg.process + ": the label is served by " + it->second.process);
       continue;
     }
-    by_label_[d.label] = Implementation{d, reg.process, reg.rpc_area};
+    by_label_[d.label] = Implementation{d, reg.process, reg.rpc_area, reg.incarnation};
   }
   return refused;
 }
@@ -39,6 +40,11 @@ std::vector<std::string> Registry::types() const {
   std::set<std::string> t;
   for (const auto& [l, impl] : by_label_) t.insert(impl.description.type);
   return {t.begin(), t.end()};
+}
+
+int64_t Registry::incarnation_of(const std::string& process) const {
+  auto it = incarnations_.find(process);
+  return it == incarnations_.end() ? 0 : it->second;
 }
 
 }  // namespace skillbus::skills

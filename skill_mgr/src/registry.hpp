@@ -15,6 +15,7 @@ struct Implementation {
   skillbus_msgs::skill_description_t description;
   std::string process;
   std::string rpc_area;
+  int64_t incarnation = 0;  // which run of the process announced it
 };
 
 class Registry {
@@ -24,11 +25,14 @@ class Registry {
   std::vector<std::string> add(const skillbus_msgs::skill_register_t& reg);
   // Implementations of a type, in label order; with a label, only that one.
   std::vector<const Implementation*> find(const std::string& type, const std::string& label = "") const;
+  // The incarnation a process last announced (0: never): a running skill of an older one is lost.
+  int64_t incarnation_of(const std::string& process) const;
   const Implementation* by_label(const std::string& label) const;
   const std::map<std::string, Implementation>& all() const { return by_label_; }
   std::vector<std::string> types() const;
 
  private:
+  std::map<std::string, int64_t> incarnations_;
   std::map<std::string, Implementation> by_label_;
 };
 

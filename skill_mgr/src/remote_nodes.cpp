@@ -199,12 +199,20 @@ bool RemotePrimitive::start() {
     return false;
   }
   instance_ = ctx_.next_instance++;
+  incarnation_ = ctx_.registry.incarnation_of(impl_.process);
   first_ = true;
   unresponsive_ = false;
   return true;
 }
 
 State RemotePrimitive::call(int8_t action) {
+  if (action != skill_tick_t::START && ctx_.registry.incarnation_of(impl_.process) != incarnation_) {
+    // The process announced itself again: it was restarted, and this instance with it.
+    set_result("skill process " + impl_.process + " was restarted while running " + impl_.description.label +
+                   ": the running skill was lost",
+               -1);
+    return State::Failure;
+  }
   skill_tick_t t{};
   t.label = impl_.description.label;
   t.instance = instance_;

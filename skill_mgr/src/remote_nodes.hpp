@@ -73,6 +73,7 @@ class RemotePrimitive : public Node {
   std::shared_ptr<Scope> scope_;
   std::vector<Param> params_;
   int64_t instance_ = 0;
+  int64_t incarnation_ = 0;  // of the skill process that runs this instance
   bool first_ = true;
   bool unresponsive_ = false;  // its process did not answer: do not wait for it again
   int64_t wm_version_ = -1;    // the world version the skill has seen (from its last reply)

@@ -6,6 +6,7 @@ another process: the same digests and the same final world model every time."""
 from __future__ import annotations
 
 import json
+import re
 import sys
 import time
 from pathlib import Path
@@ -59,3 +60,27 @@ def test_clear_table_is_reproducible_bit_for_bit_even_under_load(tmp_path):
         assert r["world_model"] == first["world_model"]
     # the loaded run really was slower (the load mattered), and still the same
     assert runs[2]["sim"]["wall_time_s"] > 0.8 * min(runs[0]["sim"]["wall_time_s"], runs[1]["sim"]["wall_time_s"])
+
+
+def test_a_skill_process_killed_during_pick_fails_the_task_and_is_restarted(sandbox, tmp_path):
+    """Under supervisord on the wall clock, as on a robot."""
+    run = tmp_path / "sup"
+    run.mkdir()
+    scenario = sandbox.start("scenario", python_tool("fault_scenario.py", str(run)))
+    assert sandbox.wait(scenario, 420) == 0, scenario.stdout()[-3000:] + scenario.stderr()[-3000:]
+    r = json.loads(scenario.stdout().strip().splitlines()[-1])
+    assert r["registered"] and r["pick_seen"]
+    assert r["first_exit"] != 0
+    # Named: the manager's tick times out, or reaches the restarted process (which has lost
+    # the instance), or the process's new announcement tells the manager it restarted.
+    assert re.search(r"task 1: Failure: .*skill process skills (did not answer the tick of|was restarted while running"
+                     r"|has no running instance)", r["first_output"]), r["first_output"]
+    assert r["failed_after_s"] < 10
+    assert r["restarted"] and r["registered_again"], r
+    assert r["second_exit"] == 0, r["second_output"]
+    assert r["physics_in_bin"] == {"red": True, "green": True, "blue": True}, r
+    assert r["world_model_bin"] == ["skiros:Cube-2", "skiros:Cube-3", "skiros:Cube-4"], r
+    # supervisord kept every process's output in one folder
+    logs = run / "logs"
+    assert {"sim.err", "wm.err", "skills.err", "skill_mgr.err", "gripper.err", "supervisord.log"} <= \
+        {p.name for p in logs.iterdir()}

@@ -137,7 +137,9 @@ class SkillProcess:
                 hook = "execute"
                 state = skill.execute()
             elif skill is None:
-                return self._reply(None, State.Failure, f"{t.label}: no running instance {t.instance}", -1)
+                return self._reply(None, State.Failure,
+                                   f"skill process {self.name} has no running instance {t.instance} of {t.label}: "
+                                   f"it was lost (this process was started after the skill was)", -1)
             elif t.action == skill_tick_t.EXECUTE:
                 hook = "execute"
                 apply_param_msgs(skill, t.params)

@@ -89,7 +89,7 @@ class ClearTable(SkillDescription):
         self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
         self.addParam("Table", Element("skiros:Table"), ParamTypes.Required)
         self.addParam("Bin", Element("skiros:Bin"), ParamTypes.Required)
-        self.addParam("Attempts", 2, ParamTypes.Optional, description="tries per object (RetryOnFail)")
+        self.addParam("Retries", 1, ParamTypes.Optional, description="retries per object (RetryOnFail); 0: none")
 
 
 # -- primitives -----------------------------------------------------------------------
@@ -219,23 +219,24 @@ class place(SkillBase):
 
 class clear_table(SkillBase):
     """Locate, then every product on the table into the bin, each Pick-and-Place retried
-    once on failure (RetryOnFail), then Locate again for the final poses."""
+    on failure (RetryOnFail(Retries), once by default), then Locate again for the final
+    poses."""
 
     def createDescription(self):
         self.setDescription(ClearTable(), "clear_table")
 
     def expand(self, skill):
         table = self.params["Table"].value
-        attempts = int(self.params["Attempts"].value)
+        retries = int(self.params["Retries"].value)
         products = [r["dst"] for r in self.wmi.get_relations(table.id, "skiros:contain", "")] if self.wmi else []
         steps = [self.skill("Locate", "", remap={"Location": "Table"})]
         for oid in products:
             obj = self.wmi.get_element(oid)
-            steps.append(self.skill(RetryOnFail(attempts))(
-                self.skill(SerialStar())(
-                    self.skill("Pick", "", specify={"Object": obj}),
-                    self.skill("Place", "", remap={"Location": "Bin"}, specify={"Object": obj}),
-                )))
+            pick_and_place = self.skill(SerialStar())(
+                self.skill("Pick", "", specify={"Object": obj}),
+                self.skill("Place", "", remap={"Location": "Bin"}, specify={"Object": obj}),
+            )
+            steps.append(self.skill(RetryOnFail(retries))(pick_and_place) if retries > 0 else pick_and_place)
         steps.append(self.skill("Locate", "", remap={"Location": "Bin"}))
         skill.setProcessor(SerialStar())
         skill(*steps)
