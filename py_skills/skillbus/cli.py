@@ -28,6 +28,13 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--no-task", action="store_true", help="start no task (run them with skillbus run)")
     sd = sub.add_parser("shutdown", help="stop a launched system")
     sd.add_argument("--run-dir", default="runs/launch")
+    sp = sub.add_parser("spy", help="lcm-spy with every skillbus message type decodable")
+    sp.add_argument("--url", default=None)
+    rp = sub.add_parser("replay", help="play a recorded LCM log back onto the bus")
+    rp.add_argument("log")
+    rp.add_argument("--url", default=None)
+    rp.add_argument("--speed", type=float, default=1.0)
+    rp.add_argument("--channels", default=None, help="a regular expression of the channels to play")
 
     p = sub.add_parser("lockstep-participant", help="run a demo lockstep participant")
     p.add_argument("--name", required=True)
@@ -91,6 +98,9 @@ def main(argv: list[str] | None = None) -> int:
             from skillbus.system import TASK
             args.task = TASK
         return launch.main_launch(args)
+    if args.command in ("spy", "replay"):
+        from skillbus import monitor
+        return monitor.main_spy(args) if args.command == "spy" else monitor.main_replay(args)
     if args.command == "shutdown":
         from skillbus import launch
         return launch.main_shutdown(args)

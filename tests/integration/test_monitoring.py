@@ -1,0 +1,93 @@
+"""Monitoring a run: the demo's LCM log decodes completely with the generated types jar
+(the way lcm-spy decodes), lcm-spy itself finds every type when started headless under
+Xvfb, and skillbus replay plays a log back onto the bus."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import last_json
+from skillbus import paths
+from skillbus.netns import Sandbox
+from skillbus.system import Program, programs
+
+HERE = Path(__file__).resolve().parent
+LCM_TYPES = len(list((paths.REPO_ROOT / "lcmtypes").glob("*.lcm")))
+
+
+@pytest.fixture(scope="module")
+def demo_log(tmp_path_factory) -> Path:
+    """An LCM log of a whole ClearTable run (lcm-logger from the lcm wheel)."""
+    run = tmp_path_factory.mktemp("logged")
+    log = run / "run.lcmlog"
+    with Sandbox(log_dir=run / "logs") as box:
+        box.start("logger", [str(Path(sys.executable).parent / "lcm-logger"), "-f", str(log)])
+        time.sleep(0.5)
+        procs = {}
+        for p in programs(run):
+            procs[p.name] = box.start(p.name, p.argv)
+            if p.name == "can_hub":
+                while not (run / "gripper0.sock").exists():
+                    time.sleep(0.02)
+        assert box.wait(procs["sim"], 600) == 0
+        assert box.wait(procs["skill_mgr"], 60) == 0
+        assert last_json(procs["skill_mgr"].stdout())["tasks"] == {"1": "Success: all succeeded"}
+        time.sleep(0.5)  # the logger writes out the last messages
+    return log
+
+
+def java_lcm_jar() -> str:
+    jar = Path(sys.executable).parent.parent / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / \
+        "site-packages" / "share" / "java" / "lcm.jar"
+    assert jar.exists(), jar
+    return str(jar)
+
+
+def test_every_message_of_a_run_decodes_with_the_types_jar(demo_log, tmp_path):
+    classes = tmp_path / "classes"
+    classes.mkdir()
+    cp = f"{java_lcm_jar()}:{paths.types_jar()}"
+    subprocess.run(["javac", "-nowarn", "-cp", cp, "-d", str(classes), str(HERE / "JarDecodeCheck.java")], check=True)
+    out = subprocess.run(["java", "-cp", f"{cp}:{classes}", "JarDecodeCheck", str(paths.types_jar()), str(demo_log)],
+                         capture_output=True, text=True, check=True).stdout
+    r = json.loads(out)
+    assert r["types"] == LCM_TYPES  # every .lcm file became a class in the jar
+    channels = r["channels"]
+    for ch in ("SB_SIM_STATE", "SB_SIM_ARM_CMD", "SB_SIM_GRIPPER_CMD", "SB_SKILL_PROGRESS", "SB_WM_TXN",
+               "SB_WM_CHANGES", "SB_CAN_SYNC", "SB_LOCKSTEP_CLOCK", "SB_MOTION_REQ", "SB_MOTION_REP"):
+        assert channels.get(ch, [0, 0])[0] > 0, (ch, channels)
+    assert all(bad == 0 for _, bad in channels.values()), channels
+
+
+@pytest.mark.skipif(not shutil.which("Xvfb") or not shutil.which("import"),
+                    reason="Xvfb and ImageMagick's import are needed to run lcm-spy headless")
+def test_lcm_spy_finds_every_type_and_shows_the_replayed_channels(demo_log, sandbox, tmp_path):
+    display = ":93"
+    sandbox.start("xvfb", ["Xvfb", display, "-screen", "0", "1200x800x24"])
+    time.sleep(1.0)
+    spy = sandbox.start("spy", [sys.executable, "-m", "skillbus.cli", "spy"], env={"DISPLAY": display})
+    deadline = time.monotonic() + 60
+    while not re.search(r"Found \d+ LCM types", spy.stdout() + spy.stderr()) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    found = re.search(r"Found (\d+) LCM types", spy.stdout() + spy.stderr())
+    assert found and int(found.group(1)) >= LCM_TYPES, spy.stdout()[-2000:] + spy.stderr()[-2000:]
+    replay = sandbox.start("replay", [sys.executable, "-m", "skillbus.cli", "replay", str(demo_log), "--speed", "20"])
+    assert sandbox.wait(replay, 120) == 0, replay.stderr()
+    shot = tmp_path / "spy.png"
+    grab = sandbox.start("import", ["import", "-display", display, "-window", "root", str(shot)])
+    assert sandbox.wait(grab, 30) == 0 and shot.stat().st_size > 10_000
+    assert "Exception" not in spy.stderr().replace("ClassDiscoverer", "")
+
+
+def test_replay_names_a_missing_log(sandbox, tmp_path):
+    p = sandbox.start("replay", [sys.executable, "-m", "skillbus.cli", "replay", str(tmp_path / "none.lcmlog")])
+    assert sandbox.wait(p, 30) == 2
+    assert "no such log file" in p.stderr()
