@@ -37,6 +37,7 @@ bench: build
 	$(PY) bench/skill_ticks.py
 	$(PY) bench/sim_physics.py
 	$(PY) bench/can_latency.py
+	$(PY) bench/pick_and_place.py
 
 clean:
 	rm -rf $(BUILD)

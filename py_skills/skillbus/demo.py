@@ -154,11 +154,12 @@ def print_summary(r: dict[str, Any]) -> None:
     print()
     print("skillbus pick-and-place demo: ClearTable")
     print(f"  result            {'ok' if r['ok'] else 'FAILED'}: {r['task']}")
-    print(f"  sim time          {sim.get('sim_time_s', 0):.2f} s ({sim.get('frames', 0)} frames of 10 ms)")
+    frame_ms = 1000 * sim.get("sim_time_s", 0) / max(1, sim.get("frames", 1))
+    print(f"  sim time          {sim.get('sim_time_s', 0):.2f} s ({sim.get('frames', 0)} frames of {frame_ms:.0f} ms)")
     print(f"  wall time         {sim.get('wall_time_s', 0):.2f} s (the lockstep session; "
           f"{r['wall_launch_s']:.1f} s with launch and shutdown)")
     print(f"  real-time factor  {sim.get('real_time_factor', 0):.1f}x")
-    print(f"  physics           {sim.get('physics_us_per_step', 0):.0f} us per {sim.get('steps', 0)} steps, "
+    print(f"  physics           {sim.get('physics_us_per_step', 0):.0f} us per step ({sim.get('steps', 0)} steps), "
           f"{sim.get('collision_detector', '?')} collision detector")
     print("  objects           world model                      physics server (x, y, z)")
     for name, p in sorted(sim.get("objects", {}).items()):

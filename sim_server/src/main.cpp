@@ -24,13 +24,14 @@ std::string json_escape(const std::string& s) {
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv,
-                  {"url", "scene", "script", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
+                  {"url", "scene", "script", "record-script", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
                    "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms", "stop-after-task"},
                   {"wall-clock"});
   sim::ServerOptions o;
   o.scene_file = args.str("scene");
   if (o.scene_file.empty()) apps::Args::die("--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
   o.script_file = args.str("script");
+  o.record_script = args.str("record-script");
   o.name = args.str("name", "sim");
   o.participants = args.list("participants");
   o.wall_clock = args.flag("wall-clock");

@@ -1,6 +1,8 @@
 #include "server.hpp"
 
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "skillbus/lockstep_frame.hpp"
@@ -83,7 +85,33 @@ void SimServer::on_arm(const uint8_t* data, size_t size, const std::string& ch) 
     w.qd = p.velocities;
     c.points.push_back(std::move(w));
   }
-  reply(m.id, "arm", physics_->command_arm(c));
+  const std::string err = physics_->command_arm(c);
+  if (err.empty()) record(&c, nullptr);
+  reply(m.id, "arm", err);
+}
+
+void SimServer::record(const ArmCommand* arm, const GripperCommand* gripper) {
+  if (opt_.record_script.empty()) return;
+  nlohmann::json step;
+  step["at_s"] = static_cast<double>(sim_time_ns_) * 1e-9;
+  if (arm) {
+    nlohmann::json pts = nlohmann::json::array();
+    for (const auto& w : arm->points) pts.push_back({static_cast<double>(w.t_ns) * 1e-9, w.q});
+    step["arm"] = {{"id", arm->id}, {"joints", arm->joints}, {"points", pts}};
+  } else {
+    step["gripper"] = {{"id", gripper->id}, {"width", gripper->width}, {"speed", gripper->speed},
+                       {"force_limit", gripper->force_limit}};
+  }
+  recorded_.push_back(step.dump());
+}
+
+void SimServer::write_recording() const {
+  if (opt_.record_script.empty()) return;
+  std::ofstream out(opt_.record_script);
+  out << "{\"record_every\": 10, \"steps\": [\n";
+  for (size_t i = 0; i < recorded_.size(); ++i) out << "  " << recorded_[i] << (i + 1 < recorded_.size() ? ",\n" : "\n");
+  out << "]}\n";
+  if (!out) SB_ERROR(kLog, "cannot write the recorded script to " << opt_.record_script);
 }
 
 void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& ch) {
@@ -94,7 +122,9 @@ void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& 
     return;
   }
   GripperCommand c{m.id, m.width, m.speed, m.force_limit};
-  reply(m.id, "gripper", physics_->command_gripper(c));
+  const std::string err = physics_->command_gripper(c);
+  if (err.empty()) record(nullptr, &c);
+  reply(m.id, "gripper", err);
 }
 
 void SimServer::play_script() {
@@ -227,6 +257,7 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
     if (task_done_at_ >= 0 && frame >= task_done_at_ + opt_.stop_grace_frames) master.stop();
   };
   const RunResult r = master.run();
+  write_recording();
   ServerReport rep = report(r);
   rep.bad_input += master.bad_input().total();
   rep.frame_start_seconds = start_s;

@@ -32,6 +32,7 @@ std::string reply_channel();    // SB_SIM_CMD_REPLY
 struct ServerOptions {
   std::string scene_file;
   std::string script_file;                 // commands played in-process (no participant needed)
+  std::string record_script;               // write every accepted command here, as a script
   std::string name = "sim";
   std::vector<std::string> participants;  // lockstep: who must join and ack every frame
   bool wall_clock = false;
@@ -89,6 +90,9 @@ class SimServer {
   int64_t task_done_at_ = -1;  // frame the watched task finished in
   int8_t task_state_ = 0;
   std::vector<ScriptStep> script_;
+  std::vector<std::string> recorded_;  // script steps (JSON) of the accepted commands
+  void record(const ArmCommand* arm, const GripperCommand* gripper);
+  void write_recording() const;
   size_t script_next_ = 0;
 };
 
