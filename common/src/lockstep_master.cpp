@@ -164,8 +164,18 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
       return false;
     }
     if (now >= resend_at) {
+      const bool first = resend_at == start;
       bus_.publish(clock_channel(), clock.data(), clock.size());
       resend_at = now + cfg_.resend_interval;
+      if (first && on_clock_sent) {
+        try {
+          on_clock_sent(frame, sim_time);
+        } catch (const std::exception& e) {
+          error = "lockstep: master " + cfg_.name + " failed in frame " + std::to_string(frame) + ": " + e.what();
+          return false;
+        }
+        resend_at = std::max(resend_at, steady::now() + std::chrono::milliseconds(1));
+      }
     }
     const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
         std::min(resend_at, start + cfg_.ack_timeout) - steady::now());

@@ -49,6 +49,8 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     b = paths.build_dir()
     sim = [str(b / "sim_server" / "sim_server"), "--scene", str(scene), "--frame-ms", str(frame_ms)]
     if lockstep:
+        sim.append("--pipeline")
+    if lockstep:
         sim += ["--participants", ",".join(PARTICIPANTS), "--join-timeout-ms", "60000"]
         if task and stop_after_task:
             sim += ["--stop-after-task", "1"]

@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   apps::Args args(argc, argv,
                   {"url", "scene", "script", "record-script", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
                    "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms", "stop-after-task"},
-                  {"wall-clock"});
+                  {"wall-clock", "pipeline"});
   sim::ServerOptions o;
   o.scene_file = args.str("scene");
   if (o.scene_file.empty()) apps::Args::die("--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   o.name = args.str("name", "sim");
   o.participants = args.list("participants");
   o.wall_clock = args.flag("wall-clock");
+  o.pipeline = args.flag("pipeline");
   o.speed = args.real("speed", 1.0);
   o.collision_detector = args.str("collision");
   o.step_ms = args.real("step-ms", 0);

@@ -127,6 +127,17 @@ void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& 
   reply(m.id, "gripper", err);
 }
 
+void SimServer::apply_pending() {
+  const auto cmds = std::move(pending_commands_);
+  pending_commands_.clear();
+  for (const auto& [ch, data] : cmds) {
+    if (ch == arm_channel())
+      on_arm(data.data(), data.size(), ch);
+    else
+      on_gripper(data.data(), data.size(), ch);
+  }
+}
+
 void SimServer::play_script() {
   while (script_next_ < script_.size() && script_[script_next_].at_ns <= sim_time_ns_) {
     const ScriptStep& s = script_[script_next_++];
@@ -222,9 +233,16 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   LockstepMaster master(bus_, cfg);
   // Commands come through the master: delivered after every ack of their frame, in
   // canonical order, so the order of arrival never reaches the physics.
-  master.subscribe(arm_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
-  master.subscribe(gripper_channel(),
-                   [this](const StampedMessage& m) { on_gripper(m.data.data(), m.data.size(), m.channel); });
+  if (opt_.pipeline) {
+    // Kept in canonical order for the next frame's step (apply_pending).
+    auto keep = [this](const StampedMessage& m) { pending_commands_.emplace_back(m.channel, m.data); };
+    master.subscribe(arm_channel(), keep);
+    master.subscribe(gripper_channel(), keep);
+  } else {
+    master.subscribe(arm_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
+    master.subscribe(gripper_channel(),
+                     [this](const StampedMessage& m) { on_gripper(m.data.data(), m.data.size(), m.channel); });
+  }
   double start_s = 0, end_s = 0;
   using wall = std::chrono::steady_clock;
   master.on_frame_start = [&](int64_t frame, int64_t sim_time) {
@@ -248,10 +266,21 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
       }
     });
   }
+  if (opt_.pipeline) {
+    master.on_clock_sent = [&](int64_t, int64_t) {
+      const auto t0 = wall::now();
+      apply_pending();
+      play_script();
+      physics_->step_frame();
+      end_s += std::chrono::duration<double>(wall::now() - t0).count();
+    };
+  }
   master.on_frame_end = [&](int64_t frame, int64_t) {
     const auto t0 = wall::now();
-    play_script();
-    physics_->step_frame();
+    if (!opt_.pipeline) {
+      play_script();
+      physics_->step_frame();
+    }
     end_s += std::chrono::duration<double>(wall::now() - t0).count();
     if (should_stop()) master.stop();  // a normal end: the participants finish cleanly
     if (task_done_at_ >= 0 && frame >= task_done_at_ + opt_.stop_grace_frames) master.stop();

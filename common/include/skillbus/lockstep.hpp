@@ -53,6 +53,11 @@ class LockstepMaster {
   void publish(const std::string& ch, const T& msg) { outbox_.publish(ch, msg); }
 
   FrameCallback on_frame_start;
+  // Runs once the clock of the frame is out, while the participants work on the frame
+  // (before their acks are awaited): work that needs nothing from this frame's
+  // participants, such as a physics step on the previous frame's commands, overlaps
+  // with theirs. It must not publish (the frame's counts are already announced).
+  FrameCallback on_clock_sent;
   FrameCallback on_frame_end;
 
   RunResult run();
