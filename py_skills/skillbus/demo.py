@@ -140,6 +140,10 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
     result = {"sim": sim, "mgr": mgr, "wall_launch_s": wall, "run_dir": str(run_dir),
               "participants": {n: _last_json(logs / f"{n}.out") for n in ("wm", "skills", "gripper")}}
     result["world_model"] = world_model_after(run_dir)
+    if watcher is not None and watcher.final is not None:
+        from skillbus.skill.cli import print_tree
+        print("\nthe skill tree at the end:")
+        print_tree(watcher.final)
     task = (mgr.get("tasks") or {}).get("1", "no result")
     physics = sim.get("objects", {})
     result["task"] = task
