@@ -18,22 +18,16 @@ from __future__ import annotations
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from skillbus import paths
 from skillbus.netns import Sandbox, last_json
-from skillbus.system import programs
+from skillbus.system import programs, start
 
 
 def demo(box: Sandbox, run: Path, frame_ms: float) -> dict:
     script = run / "applied.json"
-    procs = {}
-    for p in programs(run, frame_ms=frame_ms, extra_sim=("--record-script", str(script))):
-        procs[p.name] = box.start(p.name, p.argv)
-        if p.name == "can_hub":
-            while not (run / "gripper0.sock").exists():
-                time.sleep(0.02)
+    procs = start(box, programs(run, frame_ms=frame_ms, extra_sim=("--record-script", str(script))), run)
     box.wait(procs["sim"], 900)
     box.wait(procs["skill_mgr"], 60)
     sim = last_json(procs["sim"].stdout())

@@ -10,6 +10,21 @@
 
 namespace skillbus::apps {
 
+// A string as the inside of a JSON string literal (the tools' one-line summaries):
+// quotes and backslashes escaped, control characters as spaces.
+inline std::string json_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      o += ' ';
+      continue;
+    }
+    o += c;
+  }
+  return o;
+}
+
 class Args {
  public:
   // `flags` take no value; every other --key takes one. Unknown keys are an error.

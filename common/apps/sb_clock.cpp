@@ -22,15 +22,6 @@ using namespace skillbus;
 
 namespace {
 
-std::string json_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) { o += ' '; continue; }
-    o += c;
-  }
-  return o;
-}
 
 }  // namespace
 
@@ -84,7 +75,7 @@ int main(int argc, char** argv) {
       "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"participants\": %zu, \"sim_time_s\": %.3f, "
       "\"wall_time_s\": %.3f, \"real_time_factor\": %.2f, \"us_per_frame\": %.1f, \"digest\": \"%s\", "
       "\"commands\": %ld, \"bad_input\": %ld}\n",
-      r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), cfg.participants.size(),
+      r.ok ? "true" : "false", apps::json_escape(r.error).c_str(), static_cast<long long>(r.frames), cfg.participants.size(),
       r.sim_time_ns * 1e-9, r.wall_seconds, rtf, r.frames ? r.wall_seconds * 1e6 / r.frames : 0.0,
       r.digest_hex().c_str(), commands, master.bad_input().total());
   std::fflush(stdout);

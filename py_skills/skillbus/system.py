@@ -78,3 +78,20 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         Program("skill_mgr", mgr, participant=True),
         Program("skills", skills, participant=True),
     ]
+
+
+def start(box, progs: list[Program], run_dir: Path, timeout: float = 10.0) -> dict:
+    """Starts the programs in a sandbox (skillbus.netns.Sandbox) in order; the CAN hub's
+    socket must exist before the processes that open the CAN bus start. Returns the
+    processes by name."""
+    import time
+    procs = {}
+    for p in progs:
+        procs[p.name] = box.start(p.name, p.argv, env=p.env or None)
+        if p.name == "can_hub":
+            deadline = time.monotonic() + timeout
+            while not (run_dir / "gripper0.sock").exists():
+                if time.monotonic() > deadline:
+                    raise RuntimeError(f"the CAN hub did not start: {procs[p.name].stderr()[-1000:]}")
+                time.sleep(0.02)
+    return procs

@@ -11,15 +11,6 @@ namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
 
-std::string json_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) { o += ' '; continue; }
-    o += c;
-  }
-  return o;
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -67,7 +58,7 @@ int main(int argc, char** argv) {
   for (const auto& o : state.objects) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "%s\"%s\": [%.4f, %.4f, %.4f]", objects.empty() ? "" : ", ",
-                  json_escape(o.name).c_str(), o.pose[0], o.pose[1], o.pose[2]);
+                  apps::json_escape(o.name).c_str(), o.pose[0], o.pose[1], o.pose[2]);
     objects += buf;
   }
   // Where a frame's wall time went, in ms per frame: publishing the state, the physics
@@ -82,7 +73,7 @@ int main(int argc, char** argv) {
                   rep.run.wall_seconds * 1e3 / f);
     breakdown = buf;
     for (const auto& [name, s] : rep.ack_seconds) {
-      std::snprintf(buf, sizeof buf, ", \"ack_%s\": %.3f", json_escape(name).c_str(), s * 1e3 / f);
+      std::snprintf(buf, sizeof buf, ", \"ack_%s\": %.3f", apps::json_escape(name).c_str(), s * 1e3 / f);
       breakdown += buf;
     }
   }
@@ -93,7 +84,7 @@ int main(int argc, char** argv) {
       "\"participants\": %zu, \"state_digest\": \"%s\", \"session_digest\": \"%s\", \"commands_accepted\": %ld, "
       "\"commands_rejected\": %ld, \"bad_input\": %ld, \"finger_width\": %.5f, \"finger_force\": %.3f, "
       "\"objects\": {%s}, \"frame_ms\": {%s}}\n",
-      r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
+      r.ok ? "true" : "false", apps::json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
       r.wall_seconds, rtf, static_cast<long long>(rep.steps), rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0,
       server->physics().collision_detector().c_str(), o.participants.size(), to_hex(rep.state_digest).c_str(),
       r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input, state.finger_width, state.finger_force,

@@ -8,14 +8,6 @@
 using namespace skillbus;
 
 namespace {
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += (static_cast<unsigned char>(c) < 0x20) ? ' ' : c;
-  }
-  return out;
-}
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
 }  // namespace
@@ -50,9 +42,9 @@ int main(int argc, char** argv) {
   const RunResult r = mgr->run_until([] { return g_stop != 0; });
   std::string tasks;
   for (const auto& [id, result] : mgr->results())
-    tasks += (tasks.empty() ? "" : ", ") + std::string("\"") + std::to_string(id) + "\": \"" + json_escape(result) + "\"";
+    tasks += (tasks.empty() ? "" : ", ") + std::string("\"") + std::to_string(id) + "\": \"" + apps::json_escape(result) + "\"";
   std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"digest\": \"%s\", \"tasks\": {%s}}\n",
-              r.ok ? "true" : "false", json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.digest_hex().c_str(),
+              r.ok ? "true" : "false", apps::json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.digest_hex().c_str(),
               tasks.c_str());
   return r.ok ? 0 : 1;
 }

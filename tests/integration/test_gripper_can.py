@@ -11,6 +11,16 @@ from skillbus.can import cia402
 from skillbus.can.driver import GripperDriver
 
 
+def start_hub(sandbox, path):
+    """A virtual CAN hub on `path`, once its socket exists."""
+    sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
+    deadline = time.monotonic() + 10
+    while not path.exists():
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    return path
+
+
 def kernel_vcan0() -> str:
     """'' when the kernel's vcan0 is usable (created here if missing), else why not."""
     import socket
@@ -39,12 +49,7 @@ def rig(request, sandbox, tmp_path):
             pytest.skip(why)
         interface, channel, host = "socketcan", "vcan0", True
     else:
-        path = tmp_path / "grip.sock"
-        sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
-        deadline = time.monotonic() + 10
-        while not path.exists():
-            assert time.monotonic() < deadline
-            time.sleep(0.02)
+        path = start_hub(sandbox, tmp_path / "grip.sock")
         interface, channel, host = "skillbus_vcan", str(path), False
     networks = []
 
@@ -145,13 +150,8 @@ def test_malformed_frames_are_ignored_and_counted_by_both_sides(rig, sandbox):
 
 
 def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
-    path = tmp_path / "grip.sock"
+    path = start_hub(sandbox, tmp_path / "grip.sock")
     log_file = tmp_path / "traffic.log"
-    sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
     recorder = sandbox.start("recorder", [sys.executable, "-m", "skillbus.cli", "can-record", str(log_file),
                                           "--channel", str(path)])
     time.sleep(1.0)  # the recorder joins the hub before the device boots (a real logger is on first)

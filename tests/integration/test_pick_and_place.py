@@ -14,7 +14,7 @@ from pathlib import Path
 from conftest import last_json, python_tool
 from skillbus.demo import in_bin
 from skillbus.netns import Sandbox
-from skillbus.system import programs
+from skillbus.system import programs, start
 
 
 def clear_table(tmp: Path, name: str, load: bool = False) -> dict:
@@ -23,14 +23,7 @@ def clear_table(tmp: Path, name: str, load: bool = False) -> dict:
     with Sandbox(log_dir=run / "logs") as box:
         if load:  # another process keeps a core busy all along (and the other one now and then)
             box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
-        procs = {}
-        for p in programs(run):
-            procs[p.name] = box.start(p.name, p.argv)
-            if p.name == "can_hub":
-                deadline = time.monotonic() + 10
-                while not (run / "gripper0.sock").exists():
-                    assert time.monotonic() < deadline
-                    time.sleep(0.02)
+        procs = start(box, programs(run), run)
         assert box.wait(procs["sim"], 600) == 0, procs["sim"].stderr()[-3000:]
         out = {"sim": last_json(procs["sim"].stdout())}
         for n in ("wm", "skill_mgr", "skills", "gripper"):
