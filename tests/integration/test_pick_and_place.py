@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from conftest import last_json, python_tool
 from skillbus.demo import in_bin
 from skillbus.netns import Sandbox
@@ -77,3 +79,30 @@ def test_a_skill_process_killed_during_pick_fails_the_task_and_is_restarted(sand
     logs = run / "logs"
     assert {"sim.err", "wm.err", "skills.err", "skill_mgr.err", "gripper.err", "supervisord.log"} <= \
         {p.name for p in logs.iterdir()}
+
+
+def test_locate_adds_the_objects_the_world_model_does_not_know(tmp_path):
+    """The world model starts without the blue cube; Locate (the simulated camera) adds
+    it, contained in the table, at the pose the physics server reports."""
+    import shutil
+    from skillbus import paths
+    from skillbus.sim import scene as scene_file
+    run = tmp_path / "locate"
+    run.mkdir()
+    scene = run / "demo.scene.json"
+    scene.write_text(paths.demo_scene().read_text().replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    belief = scene_file.load(scene)
+    belief["objects"] = [o for o in belief["objects"] if o["name"] != "blue"]
+    (run / "demo.ttl").write_text(scene_file.to_turtle(belief))
+    with Sandbox(log_dir=run / "logs") as box:
+        procs = start(box, programs(run, scene=scene, task="Locate Location=skiros:Table-1"), run)
+        assert box.wait(procs["sim"], 300) == 0, procs["sim"].stderr()[-2000:]
+        assert box.wait(procs["skill_mgr"], 60) == 0
+        task = last_json(procs["skill_mgr"].stdout())["tasks"]["1"]
+        sim = last_json(procs["sim"].stdout())
+        where = box.start("where", python_tool("wm_where.py", str(run)))
+        assert box.wait(where, 60) == 0, where.stderr()[-2000:]
+        wm = json.loads(where.stdout().strip().splitlines()[-1])
+    assert task == "Success: located 3 object(s); new: blue", task
+    assert wm["blue"]["in"] == "table" and wm["blue"]["in_type"] == "skiros:Table"
+    assert wm["blue"]["pose"] == pytest.approx(sim["objects"]["blue"], abs=1e-3)

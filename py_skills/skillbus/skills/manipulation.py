@@ -17,6 +17,8 @@ from skillbus import tick_context
 from skillbus.robot import arm as arm_service
 from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SerialStar,
                             SkillBase, SkillDescription)
+from skillbus.msgs import wm_op_t
+from skillbus.world.convert import op
 from skillbus.world.poses import qmul, set_world_pose, world_pose, yaw_of
 
 DOWN = (0.0, 1.0, 0.0, 0.0)  # tool z pointing down: half a turn about y
@@ -95,7 +97,8 @@ class ClearTable(SkillDescription):
 # -- primitives -----------------------------------------------------------------------
 class locate(PrimitiveBase):
     """The simulated camera: every object the robot's state reports is written into the
-    world model with its pose (known elements by label; the rest are reported)."""
+    world model with its pose: known elements (by label) are updated; unknown ones are
+    added as products contained in the Location. Finishes when its replica shows it all."""
 
     def createDescription(self):
         self.setDescription(Locate(), "locate")
@@ -103,29 +106,63 @@ class locate(PrimitiveBase):
     def onStart(self):
         self.arm = arm_service.arm()
         self.expected: dict[str, tuple] = {}
-        self.unknown: list[str] = []
+        self.adding: dict[int, tuple] = {}  # lockstep: request id -> (name, position, orientation)
+        self.added: list[str] = []
+        self.started = False
         return True
 
+    def _add(self, name: str, p: tuple, q: tuple, location: str) -> None:
+        new = Element("skiros:Product", name)
+        if self.wmi.participant is None:  # wall clock: committed at once, with the relation
+            new.addRelation(location, "skiros:contain", "-1")
+            eid = self.wmi.add_element(new).id
+            set_world_pose(self.wmi, eid, p, q)
+            self.expected[eid] = p
+        else:  # lockstep: the id comes with the transaction's result, a few frames later
+            self.adding[self.wmi.commit_async([op(wm_op_t.ADD_ELEMENT, element=new)])] = (name, p, q)
+        self.added.append(name)
+
     def execute(self):
-        if not self.expected:
+        location = self.params["Location"].value.id
+        if not self.started:
+            self.started = True
             by_label = {e.label: e for e in self.wmi.get_elements() if e.label}
             for o in self.arm.objects():
+                p, q = tuple(o.pose[:3]), tuple(o.pose[3:])
                 e = by_label.get(o.name)
                 if e is None:
-                    self.unknown.append(o.name)
+                    self._add(o.name, p, q, location)
                     continue
-                p, q = tuple(o.pose[:3]), tuple(o.pose[3:])
                 set_world_pose(self.wmi, e.id, p, q)
                 self.expected[e.id] = p
-            if not self.expected:
-                return self.fail(f"located nothing known to the world model (seen: {', '.join(self.unknown) or 'none'})",
-                                 -1)
-            return self.step(f"writing {len(self.expected)} object pose(s)")
+            if not self.expected and not self.adding:
+                return self.fail("located nothing (the robot reports no objects)", -1)
+            return self.step(f"writing {len(self.expected) + len(self.adding)} object pose(s)")
+        for rid, (name, p, q) in list(self.adding.items()):
+            r = self.wmi.results.get(rid)
+            if r is None:
+                continue
+            if r.error or not r.ids:
+                return self.fail(f"locate: the world model refused {name}: {r.error}", -1)
+            eid = r.ids[0]
+            try:
+                self.wmi.get_element(eid)
+            except Exception:
+                continue  # the change has not reached the replica yet
+            self.wmi.write([op(wm_op_t.ADD_RELATION, relation=(location, "skiros:contain", eid))])
+            set_world_pose(self.wmi, eid, p, q, parent=location)
+            self.expected[eid] = p
+            del self.adding[rid]
+        if self.adding:
+            return self.step(f"adding {', '.join(n for n, _, _ in self.adding.values())} to the world model")
         for eid, p in self.expected.items():
-            got, _ = world_pose(self.wmi, eid)
+            try:
+                got, _ = world_pose(self.wmi, eid)
+            except Exception:  # not in the replica yet
+                return self.step(f"waiting for the world model to show {eid}")
             if max(abs(a - b) for a, b in zip(got, p)) > 1e-4:
                 return self.step(f"waiting for the world model to show {eid}")
-        extra = f"; not in the world model: {', '.join(self.unknown)}" if self.unknown else ""
+        extra = f"; new: {', '.join(self.added)}" if self.added else ""
         return self.success(f"located {len(self.expected)} object(s){extra}")
 
 

@@ -72,9 +72,10 @@ def world_pose(wmi: Any, eid: str) -> tuple[Vec, Quat]:
     return p, q
 
 
-def set_world_pose(wmi: Any, eid: str, p: Vec, q: Quat) -> None:
-    """Writes the pose of `eid` given in the world frame, relative to its container."""
-    parent = parent_of(wmi, eid)
+def set_world_pose(wmi: Any, eid: str, p: Vec, q: Quat, parent: str | None = None) -> None:
+    """Writes the pose of `eid` given in the world frame, relative to its container (or
+    to `parent`, when the containment is being written in the same breath)."""
+    parent = parent or parent_of(wmi, eid)
     if parent is not None:
         pp, pq = world_pose(wmi, parent)
         d = rotate(qconj(pq), (p[0] - pp[0], p[1] - pp[1], p[2] - pp[2]))
