@@ -5,6 +5,9 @@ which the build puts on the virtual environment's path. Import messages from her
 get a clear error instead of a bare ModuleNotFoundError when the build has not run.
 """
 
+import importlib
+import io
+
 try:
     import skillbus_msgs  # noqa: F401
     from skillbus_msgs import *  # noqa: F401,F403  (every generated type)
@@ -15,18 +18,44 @@ except ImportError as e:  # pragma: no cover - exercised only on a broken instal
     ) from e
 
 
+def _ends_in_fixed_bytes(msg_type) -> bool:
+    """True when the type's encoding ends with a fixed-size byte array (at any nesting
+    depth): the one place LCM's Python decoder does not notice missing bytes."""
+    cached = _ENDS_IN_BYTES.get(msg_type)
+    if cached is None:
+        last, dims = msg_type.__typenames__[-1], msg_type.__dimensions__[-1]
+        if last == "byte" and dims is not None and all(isinstance(d, int) for d in dims):
+            cached = True
+        elif "." in last:
+            module, name = last.rsplit(".", 1)
+            cached = _ends_in_fixed_bytes(getattr(importlib.import_module(module), name))
+        else:
+            cached = False
+        _ENDS_IN_BYTES[msg_type] = cached
+    return cached
+
+
+_ENDS_IN_BYTES: dict = {}
+
+
 def decode(msg_type, data: bytes):
     """Decodes ``data`` as ``msg_type``; returns None for anything that is not one.
 
     LCM's generated Python raises ValueError on a wrong fingerprint and struct.error,
     IndexError or UnicodeDecodeError on truncated or corrupt bytes; all mean "bad input".
-    It does not notice a message cut short inside a trailing fixed-size byte array (it
-    reads fewer bytes without complaint), so the result is re-encoded and must give back
-    exactly as many bytes as arrived, as the C++ side demands.
+    The message must use exactly the bytes that arrived, as the C++ side demands: the
+    decoder must end at the last byte. It does not notice a message cut short inside a
+    trailing fixed-size byte array (it reads fewer bytes without complaint), so for the
+    types that end in one the result is re-encoded and must give back as many bytes.
     """
     try:
-        msg = msg_type.decode(data)
-        if len(msg.encode()) != len(data):
+        buf = io.BytesIO(data)
+        if buf.read(8) != msg_type._get_packed_fingerprint():
+            return None
+        msg = msg_type._decode_one(buf)
+        if buf.tell() != len(data):
+            return None
+        if _ends_in_fixed_bytes(msg_type) and len(msg.encode()) != len(data):
             return None
         return msg
     except Exception:
