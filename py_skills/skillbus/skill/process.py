@@ -14,6 +14,7 @@ import inspect
 import json
 import logging
 import os
+import struct
 import sys
 import time
 import traceback
@@ -71,6 +72,8 @@ class SkillProcess:
         self.server = RpcServer(bus, self.area)
         self.server.add_method("tick", self.on_tick, skill_tick_t, skill_tick_reply_t)
         self.server.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
+        for name in ("tick", "expand"):  # defer before decoding: a tick is decoded once
+            self.server.methods[name] = self._frame_gate(self.server.methods[name])
         if participant is not None:
             # A tick of frame n is answered only after this process has finished its own
             # frame n, so the skill always sees the world-model replica and the devices as
@@ -110,6 +113,17 @@ class SkillProcess:
             r.params = [param_msg(p) for _, p in skill.params.items()]
             r.num_params = len(r.params)
         return r
+
+    def _frame_gate(self, method):
+        """A tick's frame and sim time are the last 16 bytes of its encoding: a tick that
+        comes before this process has finished that frame is deferred undecoded."""
+        def gated(payload: bytes) -> bytes:
+            if self.participant is not None and len(payload) >= 24:
+                frame = struct.unpack(">q", payload[-16:-8])[0]
+                if frame >= 0 and self.participant.completed_frame < frame:
+                    raise RpcDefer()
+            return method(payload)
+        return gated
 
     def _wait_for_frame(self, t: skill_tick_t) -> None:
         if self.participant is not None and t.frame >= 0 and self.participant.completed_frame < t.frame:
