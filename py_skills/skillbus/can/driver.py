@@ -72,6 +72,7 @@ class GripperDriver:
         self._startup_deadline = 0.0
         self._snapshots: dict[int, GripperStatus] = {}
         self._fresh_after: tuple[str, int] = ("updates", 0)
+        self.lockstep = False  # set by begin_startup: frames, not arrivals, decide then
         self.velocity, self.force_limit = velocity_um_s, force_limit
         self.node = canopen.RemoteNode(node_id, str(eds))
         network.add_node(self.node)
@@ -141,6 +142,7 @@ class GripperDriver:
     def begin_startup(self, timeout_s: float = 5.0) -> None:
         """Lockstep: NMT start, then shutdown, switch on, enable operation, one step per
         frame once the device shows the state the last step asked for (advance())."""
+        self.lockstep = True
         self._startup = [(c.CW_SHUTDOWN, c.READY_TO_SWITCH_ON), (c.CW_SWITCH_ON, c.SWITCHED_ON),
                          (c.CW_ENABLE_OPERATION, c.OPERATION_ENABLED)]
         self._startup_timeout = timeout_s
@@ -213,7 +215,7 @@ class GripperDriver:
         tick four frames later (a tick of frame n: sent at n + 1, seen by the device at
         n + 2, its answer here at n + 3, shown to ticks of n + 4), on the wall clock after
         two more status updates."""
-        tick = tick_context.current_tick()
+        tick = tick_context.current_tick() if self.lockstep else None
         with self._lock:
             self._fresh_after = (("frame", tick.frame + 4) if tick is not None
                                  else ("updates", self._status.updates + 2))
@@ -252,7 +254,7 @@ class GripperDriver:
 
     def status(self) -> GripperStatus:
         """The latest status; in a tick of frame n under lockstep, the status of frame n - 1."""
-        tick = tick_context.current_tick()
+        tick = tick_context.current_tick() if self.lockstep else None
         if tick is None or not self._snapshots:
             return self._copy()
         older = [f for f in self._snapshots if f < tick.frame]
