@@ -13,6 +13,7 @@ Run: .venv/bin/python bench/can_latency.py   (in `make bench`)
 from __future__ import annotations
 
 import json
+import select
 import statistics
 import subprocess
 import sys
@@ -42,7 +43,10 @@ def start(argv: list[str]) -> subprocess.Popen:
 
 def raw_pingpong(sock: str) -> list[float]:
     echo = start([str(HERE / "can_echo.py"), "skillbus_vcan", sock])
-    assert echo.stdout.readline().strip() == "ready"
+    ready = select.select([echo.stdout], [], [], 10.0)[0]
+    if not ready or echo.stdout.readline().strip() != "ready":
+        echo.kill()
+        raise RuntimeError("the echo process did not start within 10 s")
     bus = can.Bus(interface="skillbus_vcan", channel=sock)
     out = []
     try:
@@ -51,7 +55,9 @@ def raw_pingpong(sock: str) -> list[float]:
             bus.send(can.Message(arbitration_id=0x100, data=i.to_bytes(8, "little"), is_extended_id=False))
             while True:
                 m = bus.recv(2.0)
-                if m is not None and m.arbitration_id == 0x101:
+                if m is None:
+                    raise RuntimeError(f"round trip {i}: no echo within 2 s")
+                if m.arbitration_id == 0x101:
                     break
             if i >= 200:  # warm-up
                 out.append((time.perf_counter() - t0) * 1e6)

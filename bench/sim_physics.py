@@ -20,27 +20,19 @@ import tempfile
 from pathlib import Path
 
 from skillbus import paths
+from skillbus.sim import scene as scene_file
 from skillbus.netns import Sandbox, last_json
+from skillbus.quat import relative
 from skillbus.sim.scripts import CUBE, grasp_and_carry
 from skillbus.sim.session import run_script_session
 
 DURATION = 13.0
 
 
-def rotate_inv(q, v):
-    """v rotated by the inverse of unit quaternion q (x y z w)."""
-    x, y, z, w = q
-    # R^T v via the rotation matrix of q
-    r = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    return [sum(r[i][j] * v[i] for i in range(3)) for j in range(3)]
-
-
 def slip(record) -> float:
     def in_tool(s):
         t, c = s["tool_pose"], s["objects"]["green"]["pose"]
-        return rotate_inv(t[3:], [c[i] - t[i] for i in range(3)])
+        return relative(t, c)[0]  # the cube's position in the tool frame
     held = [s for s in record["states"] if 4.9 <= s["t"] <= 10.9]
     ref = in_tool(held[0])
     return max(math.dist(in_tool(s), ref) for s in held)
@@ -50,8 +42,7 @@ def scene_with(step_ms: float, detector: str, work: Path) -> Path:
     s = json.loads(paths.demo_scene().read_text())
     s["physics"].update(step_ms=step_ms, collision_detector=detector)
     f = work / f"scene_{step_ms}_{detector}.json"
-    f.write_text(json.dumps(s).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
-    return f
+    return scene_file.save(s, f, paths.demo_scene())
 
 
 def alone(box: Sandbox, scene: Path, script: Path | None, duration: float) -> dict:

@@ -1,6 +1,8 @@
 // Tiny `--key value` / `--flag` parser for the command-line tools in apps/.
 #pragma once
 
+#include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
@@ -9,6 +11,31 @@
 #include <vector>
 
 namespace skillbus::apps {
+
+// The flag SIGTERM and SIGINT set once stop_on_signals() has been called: the servers'
+// run loops end cleanly on it (and print their summary).
+inline volatile std::sig_atomic_t& stop_requested() {
+  static volatile std::sig_atomic_t flag = 0;
+  return flag;
+}
+inline void stop_on_signals() {
+  stop_requested();  // created before any handler can run
+  auto handler = [](int) { stop_requested() = 1; };
+  std::signal(SIGTERM, handler);
+  std::signal(SIGINT, handler);
+}
+
+// Runs a server's start-up; what it throws is printed as "<program>: cannot start: why"
+// and ends the process with exit code 2.
+template <class F>
+void start_or_exit(const char* program, F&& start) {
+  try {
+    start();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: cannot start: %s\n", program, e.what());
+    std::exit(2);
+  }
+}
 
 // A string as the inside of a JSON string literal (the tools' one-line summaries):
 // quotes and backslashes escaped, control characters as spaces.

@@ -4,7 +4,6 @@
 // Not a lockstep participant: it holds no state, and the same request always gets the
 // same answer (Ceres single-threaded, fixed seeds), so skills may call it from a tick.
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 
 #include "../../common/apps/args.hpp"
@@ -18,9 +17,6 @@
 using namespace skillbus;
 
 namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
-
 skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_msgs::motion_request_t& req) {
   skillbus_msgs::motion_plan_t out{};
   const auto& joints = k.joints();
@@ -71,21 +67,17 @@ int main(int argc, char** argv) {
   if (scene_file.empty()) apps::Args::die("--scene FILE is required (the robot comes from it)");
   std::unique_ptr<Bus> bus;
   std::unique_ptr<motion::Kinematics> kin;
-  try {
+  apps::start_or_exit("motion_server", [&] {
     kin = std::make_unique<motion::Kinematics>(sim::load_scene(scene_file));
     bus = open_bus(args.str("url"));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "motion_server: cannot start: %s\n", e.what());
-    return 2;
-  }
+  });
   RpcServer rpc(*bus, "MOTION");
   rpc.add_method<skillbus_msgs::motion_request_t, skillbus_msgs::motion_plan_t>(
       "plan", [&](const skillbus_msgs::motion_request_t& r) { return handle(*kin, r); });
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGINT, on_signal);
+  apps::stop_on_signals();
   SB_INFO("motion_server", "serving " << rpc_request_channel("MOTION") << " for " << kin->joints().size()
                                       << " arm joints of " << scene_file);
-  while (!g_stop) bus->handle(std::chrono::milliseconds(100));
+  while (!apps::stop_requested()) bus->handle(std::chrono::milliseconds(100));
   std::printf("{\"ok\": true, \"served\": %ld, \"bad_input\": %ld}\n", rpc.served(), rpc.bad_input().total());
   return 0;
 }

@@ -36,3 +36,10 @@ def ticking(frame: int, sim_time_ns: int) -> Iterator[None]:
         yield
     finally:
         _current = prev
+
+
+def now_s() -> float:
+    """A skill's "now" in seconds: the tick's sim time under lockstep, the monotonic clock
+    otherwise (only differences of it mean anything)."""
+    import time
+    return _current.sim_time_ns * 1e-9 if _current is not None else time.monotonic()

@@ -1,5 +1,4 @@
 // sim_server: the DART physics server. See sim_server/README.md.
-#include <csignal>
 #include <cstdio>
 
 #include "../../common/apps/args.hpp"
@@ -8,8 +7,6 @@
 using namespace skillbus;
 
 namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
 
 }  // namespace
 
@@ -40,16 +37,12 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<Bus> bus;
   std::unique_ptr<sim::SimServer> server;
-  try {
+  apps::start_or_exit("sim_server", [&] {
     bus = open_bus(args.str("url"));
     server = std::make_unique<sim::SimServer>(*bus, o);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "sim_server: cannot start: %s\n", e.what());
-    return 2;
-  }
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGINT, on_signal);
-  const sim::ServerReport rep = server->run_until([] { return g_stop != 0; });
+  });
+  apps::stop_on_signals();
+  const sim::ServerReport rep = server->run_until([] { return apps::stop_requested() != 0; });
   const auto& r = rep.run;
   // Where each object ended (x y z in the world), for people and for the demo's summary.
   skillbus_msgs::sim_state_t state{};

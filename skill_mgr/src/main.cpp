@@ -1,16 +1,10 @@
 // skill_mgr: the skill manager. See skill_mgr/README.md.
-#include <csignal>
 #include <cstdio>
 
 #include "../../common/apps/args.hpp"
 #include "manager.hpp"
 
 using namespace skillbus;
-
-namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
-}  // namespace
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology", "start", "robot"}, {"wall-clock"});
@@ -30,16 +24,12 @@ int main(int argc, char** argv) {
   if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<skills::Manager> mgr;
-  try {
+  apps::start_or_exit("skill_mgr", [&] {
     bus = open_bus(args.str("url"));
     mgr = std::make_unique<skills::Manager>(*bus, o);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "skill_mgr: cannot start: %s\n", e.what());
-    return 2;
-  }
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGINT, on_signal);
-  const RunResult r = mgr->run_until([] { return g_stop != 0; });
+  });
+  apps::stop_on_signals();
+  const RunResult r = mgr->run_until([] { return apps::stop_requested() != 0; });
   std::string tasks;
   for (const auto& [id, result] : mgr->results())
     tasks += (tasks.empty() ? "" : ", ") + std::string("\"") + std::to_string(id) + "\": \"" + apps::json_escape(result) + "\"";

@@ -142,7 +142,10 @@ def test_malformed_frames_are_ignored_and_counted_by_both_sides(rig, sandbox):
     with pytest.raises(canopen.SdoAbortedError) as e:
         driver.node.sdo.upload(0x1234, 0)  # an object the device does not have
     assert e.value.code == 0x06020000  # "object does not exist"
-    time.sleep(0.2)
+    deadline = time.monotonic() + 5  # both sides count what reached them
+    while (driver.malformed < 1 or "RPDO1 of 3 bytes (6 expected) ignored" not in device.stderr()) \
+            and time.monotonic() < deadline:
+        time.sleep(0.02)
     assert driver.malformed == 1
     assert "RPDO1 of 3 bytes (6 expected) ignored" in device.stderr()
     driver.command(30000)  # and both still work
@@ -154,7 +157,10 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
     log_file = tmp_path / "traffic.log"
     recorder = sandbox.start("recorder", [sys.executable, "-m", "skillbus.cli", "can-record", str(log_file),
                                           "--channel", str(path)])
-    time.sleep(1.0)  # the recorder joins the hub before the device boots (a real logger is on first)
+    deadline = time.monotonic() + 30  # the recorder is on the bus before the device boots
+    while "recording" not in recorder.stderr():
+        assert time.monotonic() < deadline and recorder.returncode is None, recorder.stderr()[-2000:]
+        time.sleep(0.05)
     sandbox.start("device", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", path,
                              "--node-id", "5", "--object-width", "40000"])
     net = canopen.Network()

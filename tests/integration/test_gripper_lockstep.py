@@ -31,7 +31,7 @@ def grasp_scene(tmp: Path, object_width_ok: bool = True) -> tuple[Path, Path]:
     if not object_width_ok:
         s["objects"] = [o for o in s["objects"] if o["name"] != "green"]
     f = tmp / "grasp.scene.json"
-    f.write_text(json.dumps(s).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    scene_file.save(s, f, paths.demo_scene())
     ttl = tmp / "grasp.ttl"
     ttl.write_text(scene_file.to_turtle(scene_file.load(f)))
     return f, ttl

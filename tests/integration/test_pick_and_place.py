@@ -23,11 +23,14 @@ def clear_table(tmp: Path, name: str, load: bool = False) -> dict:
     run = tmp / name
     run.mkdir(parents=True)
     with Sandbox(log_dir=run / "logs") as box:
+        hog = None
         if load:  # another process keeps a core busy all along (and the other one now and then)
-            box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
+            hog = box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
         procs = start(box, programs(run), run)
         assert box.wait(procs["sim"], 600) == 0, procs["sim"].stderr()[-3000:]
         out = {"sim": last_json(procs["sim"].stdout())}
+        # the load ran for the whole session (it is never told to stop)
+        out["load_ran_throughout"] = hog is not None and hog.returncode is None
         for n in ("wm", "skill_mgr", "skills", "gripper"):
             assert box.wait(procs[n], 60) == 0, procs[n].stderr()[-3000:]
             out[n] = last_json(procs[n].stdout())
@@ -53,8 +56,8 @@ def test_clear_table_is_reproducible_bit_for_bit_even_under_load(tmp_path):
         for n in ("wm", "skill_mgr", "skills", "gripper"):
             assert r[n]["digest"] == first[n]["digest"], n
         assert r["world_model"] == first["world_model"]
-    # the loaded run really was slower (the load mattered), and still the same
-    assert runs[2]["sim"]["wall_time_s"] > 0.8 * min(runs[0]["sim"]["wall_time_s"], runs[1]["sim"]["wall_time_s"])
+    # the third run really shared the machine with the load from start to end
+    assert runs[2]["load_ran_throughout"] and not runs[0]["load_ran_throughout"]
 
 
 def test_a_skill_process_killed_during_pick_fails_the_task_and_is_restarted(sandbox, tmp_path):
@@ -90,7 +93,7 @@ def test_locate_adds_the_objects_the_world_model_does_not_know(tmp_path):
     run = tmp_path / "locate"
     run.mkdir()
     scene = run / "demo.scene.json"
-    scene.write_text(paths.demo_scene().read_text().replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    scene_file.save(json.loads(paths.demo_scene().read_text()), scene, paths.demo_scene())
     belief = scene_file.load(scene)
     belief["objects"] = [o for o in belief["objects"] if o["name"] != "blue"]
     (run / "demo.ttl").write_text(scene_file.to_turtle(belief))

@@ -14,6 +14,7 @@ import pytest
 from conftest import last_json
 from skillbus.sim.scripts import CUBE, HOME, ARM, arm, gripper, grasp_lift_release, sweep
 from skillbus import paths
+from skillbus.sim import scene as scene_file
 from skillbus.sim.session import run_script_session
 
 
@@ -172,7 +173,7 @@ def test_a_bad_scene_file_is_refused_with_the_field_named(sandbox, binary, tmp_p
     bad = json.loads(paths.demo_scene().read_text())
     bad["objects"][1]["mass"] = 0
     f = tmp_path / "bad.scene.json"
-    f.write_text(json.dumps(bad).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    scene_file.save(bad, f, paths.demo_scene())
     sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(f), "--frames", "1"])
     assert sandbox.wait(sim, 30) == 2
     assert f"{f}: objects[1].mass must be > 0" in sim.stderr()
@@ -209,7 +210,7 @@ def test_control_services_in_wall_clock_mode(sandbox, binary, tmp_path):
     two = json.loads(paths.demo_scene().read_text())
     two["objects"] = two["objects"][:2]
     f = tmp_path / "two.scene.json"
-    f.write_text(json.dumps(two).replace("../../sim_server", str(paths.REPO_ROOT / "sim_server")))
+    scene_file.save(two, f, paths.demo_scene())
     assert sim_cli(sandbox, "load-scene", str(f))[1]["num_objects"] == 2
     sandbox.kill(sim, 15)
     assert sandbox.wait(sim, 15) == 0

@@ -1,16 +1,10 @@
 // wm_server: the world model server. See wm_server/README.md.
-#include <csignal>
 #include <cstdio>
 
 #include "../../common/apps/args.hpp"
 #include "server.hpp"
 
 using namespace skillbus;
-
-namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
-}  // namespace
 
 int main(int argc, char** argv) {
   apps::Args args(argc, argv,
@@ -27,16 +21,12 @@ int main(int argc, char** argv) {
   o.crash_after_commits = args.num("crash-after-commits", -1);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<wm::WorldModelServer> server;
-  try {
+  apps::start_or_exit("wm_server", [&] {
     bus = open_bus(args.str("url"));
     server = std::make_unique<wm::WorldModelServer>(*bus, o);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "wm_server: cannot start: %s\n", e.what());
-    return 2;
-  }
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGINT, on_signal);
-  const RunResult r = server->run_until([&] { return g_stop != 0; });
+  });
+  apps::stop_on_signals();
+  const RunResult r = server->run_until([] { return apps::stop_requested() != 0; });
   std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"version\": %lld, \"elements\": %zu, \"digest\": \"%s\", "
               "\"rejected\": %ld}\n",
               r.ok ? "true" : "false", r.error.c_str(), static_cast<long long>(r.frames),

@@ -43,6 +43,7 @@ def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: f
     signal.signal(signal.SIGINT, on_signal)
     n = 0
     end = time.monotonic() + seconds if seconds else None
+    print(f"recording {channel} to {path}", file=sys.stderr, flush=True)  # the bus has us from here on
     with can.Logger(path) as log:  # nothing is lost on a stop: the file is flushed and closed
         while not stop[0] and (end is None or time.monotonic() < end):
             msg = bus.recv(0.1)

@@ -15,37 +15,15 @@ import math
 from pathlib import Path
 from typing import Any
 
-Quat = tuple[float, float, float, float]  # x y z w
-
+from skillbus.quat import relative
 
 class SceneError(ValueError):
     pass
 
 
-def _qmul(a: Quat, b: Quat) -> Quat:
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
-
-
-def _qconj(q: Quat) -> Quat:
-    return (-q[0], -q[1], -q[2], q[3])
-
-
-def _rotate(q: Quat, v: tuple[float, float, float]) -> tuple[float, float, float]:
-    x, y, z, _ = _qmul(_qmul(q, (v[0], v[1], v[2], 0.0)), _qconj(q))
-    return (x, y, z)
-
-
 def relative_pose(parent: list[float], child: list[float]) -> list[float]:
     """child's pose in parent's frame (both x y z qx qy qz qw in the world frame)."""
-    pq: Quat = tuple(parent[3:7])  # type: ignore[assignment]
-    d = (child[0] - parent[0], child[1] - parent[1], child[2] - parent[2])
-    p = _rotate(_qconj(pq), d)
-    q = _qmul(_qconj(pq), tuple(child[3:7]))  # type: ignore[arg-type]
+    p, q = relative(parent, child)
     return [*p, *q]
 
 
@@ -146,3 +124,15 @@ def to_turtle(scene: dict[str, Any]) -> str:
     out.append(f"skiros:{gid} a skiros:Gripper, owl:NamedIndividual ; rdfs:label \"{robot.get('gripper', 'gripper')}\" .")
     out.append(f"skiros:{aid} a skiros:Arm, owl:NamedIndividual ; rdfs:label \"{robot.get('arm', 'arm')}\" .")
     return "\n".join(out) + "\n"
+
+
+def save(doc: dict[str, Any], path: str | Path, source: str | Path) -> Path:
+    """Writes a scene document (read from `source`, perhaps changed) to `path`, with its
+    URDF paths made absolute, since they are relative to the file they came from."""
+    base = Path(source).resolve().parent
+    doc = json.loads(json.dumps(doc))
+    for part in [doc.get("robot", {}), *doc.get("fixtures", [])]:
+        if isinstance(part, dict) and part.get("urdf"):
+            part["urdf"] = str((base / part["urdf"]).resolve())
+    Path(path).write_text(json.dumps(doc, indent=1))
+    return Path(path)

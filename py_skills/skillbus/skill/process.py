@@ -125,12 +125,7 @@ class SkillProcess:
             return method(payload)
         return gated
 
-    def _wait_for_frame(self, t: skill_tick_t) -> None:
-        if self.participant is not None and t.frame >= 0 and self.participant.completed_frame < t.frame:
-            raise RpcDefer()
-
     def on_tick(self, t: skill_tick_t) -> skill_tick_reply_t:
-        self._wait_for_frame(t)
         with context.ticking(t.frame, t.sim_time_ns):
             return self._tick(t)
 
@@ -179,7 +174,6 @@ class SkillProcess:
             return self._reply(skill, State.Failure, f"{t.label}.{hook}() raised {type(e).__name__}: {e}", -1)
 
     def on_expand(self, t: skill_tick_t) -> skill_tree_t:
-        self._wait_for_frame(t)
         cls = self.classes.get(t.label)
         if cls is None or not issubclass(cls, SkillBase):
             out = skill_tree_t()

@@ -3,8 +3,6 @@ module so that the library registers only its three bindings."""
 
 from __future__ import annotations
 
-import time
-
 from skillbus import tick_context
 from skillbus.can import cia402 as c
 from skillbus.can import gripper_service
@@ -21,10 +19,6 @@ class GripperPrimitive(PrimitiveBase):
     def createDescription(self):  # each binding sets its description
         raise NotImplementedError
 
-    def _now(self) -> float:
-        tick = tick_context.current_tick()
-        return tick.sim_time_ns * 1e-9 if tick is not None else time.monotonic()
-
     def onStart(self):
         try:
             self.gripper = gripper_service.driver()
@@ -37,12 +31,12 @@ class GripperPrimitive(PrimitiveBase):
             return False
         self.sent = False
         self.written = False
-        self.started_at = self._now()
+        self.started_at = tick_context.now_s()
         return True
 
     def execute(self):
         cmd = self.command
-        if self._now() - self.started_at > TIMEOUT_S:
+        if tick_context.now_s() - self.started_at > TIMEOUT_S:
             return self.fail(f"{cmd}: no result within {TIMEOUT_S:.0f} s", -2)
         s = self.gripper.status()
         if s.faults:
@@ -60,14 +54,8 @@ class GripperPrimitive(PrimitiveBase):
             if not s.target_reached:
                 return self.step(f"release: width {width}")
             obj, location = self.params["Object"].value, self.params["Location"].value
-            if self.wmi is None:
-                return self.success(f"release: opened at {width} (no world model)")
-            if not self.written:
-                self.wmi.set_parent(obj.id, location.id)
-                self.written = True
-            if self.wmi.get_relations(location.id, "skiros:contain", obj.id):
-                return self.success(f"release: {location.id} contains {obj.id}")
-            return self.step(f"release: opened; writing that {location.id} contains {obj.id}")
+            return self._contained(obj, location, f"release: {location.id} contains {obj.id}",
+                                   f"release: opened at {width}")
         if cmd != "grasp":
             if s.target_reached:
                 return self.success(f"{cmd}: width {width}" + (", holding an object" if s.gripped else ""))
@@ -75,11 +63,17 @@ class GripperPrimitive(PrimitiveBase):
         if not s.gripped:
             return self.fail(f"grasp: nothing gripped (the fingers closed to {width})", -1)
         gripper, obj = self.params["Gripper"].value, self.params["Object"].value
+        return self._contained(obj, gripper, f"grasp: {gripper.id} holds {obj.id} at {width}",
+                               f"grasp: holding {obj.id or obj.label} at {width}")
+
+    def _contained(self, obj, parent, done: str, without_wm: str):
+        """Writes that `parent` contains `obj` (once) and succeeds when this process's
+        replica shows it, so the manager's post-condition sees it too."""
         if self.wmi is None:
-            return self.success(f"grasp: holding {obj.id or obj.label} at {width} (no world model)")
+            return self.success(f"{without_wm} (no world model)")
         if not self.written:
-            self.wmi.set_parent(obj.id, gripper.id)
+            self.wmi.set_parent(obj.id, parent.id)
             self.written = True
-        if self.wmi.get_relations(gripper.id, "skiros:contain", obj.id):
-            return self.success(f"grasp: {gripper.id} holds {obj.id} at {width}")
-        return self.step(f"grasp: holding {obj.id} at {width}; writing it to the world model")
+        if self.wmi.get_relations(parent.id, "skiros:contain", obj.id):
+            return self.success(done)
+        return self.step(f"{self.command}: writing that {parent.id} contains {obj.id}")

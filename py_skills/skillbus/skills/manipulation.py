@@ -19,7 +19,8 @@ from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBas
                             SkillBase, SkillDescription)
 from skillbus.msgs import wm_op_t
 from skillbus.world.convert import op
-from skillbus.world.poses import qmul, set_world_pose, world_pose, yaw_of
+from skillbus.quat import qmul, yaw_of
+from skillbus.world.poses import set_world_pose, world_pose
 
 DOWN = (0.0, 1.0, 0.0, 0.0)  # tool z pointing down: half a turn about y
 MOVE_TIMEOUT_S = 20.0
@@ -34,11 +35,6 @@ def top_down(yaw: float) -> tuple[float, float, float, float]:
 def fold(yaw: float) -> float:
     """The yaw within [-45, 45] degrees that grasps a square the same way."""
     return (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
-
-
-def now() -> float:
-    tick = tick_context.current_tick()
-    return tick.sim_time_ns * 1e-9 if tick is not None else time.monotonic()
 
 
 def command_id(label: str) -> str:
@@ -175,7 +171,7 @@ class _ArmMotion(PrimitiveBase):
     def onStart(self):
         self.arm = arm_service.arm()
         self.cmd = None
-        self.started_at = now()
+        self.started_at = tick_context.now_s()
         return True
 
     def target(self) -> tuple[list[float], bool, str]:
@@ -196,7 +192,7 @@ class _ArmMotion(PrimitiveBase):
             return self.fail(f"{self.label}: the robot rejected the trajectory: {error}", -2)
         if done:
             return self.success(f"at {self.what}")
-        if now() - self.started_at > MOVE_TIMEOUT_S:
+        if tick_context.now_s() - self.started_at > MOVE_TIMEOUT_S:
             return self.fail(f"{self.label}: not at {self.what} after {MOVE_TIMEOUT_S:.0f} s", -3)
         return self.step(f"moving to {self.what}")
 

@@ -12,33 +12,11 @@ import math
 from typing import Any
 
 from skillbus.msgs import wm_op_t
+from skillbus.quat import Quat, Vec, qconj, qmul, rotate
 from skillbus.world.convert import op
 
-Vec = tuple[float, float, float]
-Quat = tuple[float, float, float, float]  # x y z w
 POS = ("skiros:PositionX", "skiros:PositionY", "skiros:PositionZ")
 ORI = ("skiros:OrientationX", "skiros:OrientationY", "skiros:OrientationZ", "skiros:OrientationW")
-
-
-def qmul(a: Quat, b: Quat) -> Quat:
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
-
-
-def qconj(q: Quat) -> Quat:
-    return (-q[0], -q[1], -q[2], q[3])
-
-
-def rotate(q: Quat, v: Vec) -> Vec:
-    x, y, z, _ = qmul(qmul(q, (v[0], v[1], v[2], 0.0)), qconj(q))
-    return (x, y, z)
-
-
-def yaw_of(q: Quat) -> float:
-    x, y, z, w = q
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 def local_pose(e: Any) -> tuple[Vec, Quat]:
