@@ -15,7 +15,7 @@ from typing import Any
 from skillbus.bus import Bus
 from skillbus.lockstep import StampedMessage
 from skillbus.msgs import (decode, motion_plan_t, motion_request_t, sim_arm_cmd_t, sim_cmd_reply_t, sim_object_t,
-                           sim_state_t)
+                           sim_state_t, sim_traj_point_t)
 from skillbus.rpc import RpcClient
 from skillbus.sim.messages import arm_channel, reply_channel, state_channel
 
@@ -94,10 +94,28 @@ class Arm:
         return self.motion.call("plan", req, motion_plan_t, timeout=self.motion_timeout)
 
     def execute(self, plan: motion_plan_t, cmd_id: str) -> None:
+        self._send(cmd_id, list(plan.joint_names), list(plan.points))
+
+    def hold(self, cmd_id: str) -> list[float]:
+        """Stops the arm where it is: a position target (one point at time 0) at the
+        measured joint positions, which replaces the trajectory in progress. The physics
+        server (like a robot driver's stop) brakes at once, within the joints' effort
+        limits, and settles on that target; the arm ends within a few millimetres of
+        where the state showed it (it brakes past it and comes back). Returns the
+        target."""
+        q = self.joints()
+        p = sim_traj_point_t()
+        p.time_from_start_ns = 0
+        p.positions, p.num_positions = list(q), len(q)
+        p.velocities, p.num_velocities = [], 0
+        self._send(cmd_id, self.joint_names(), [p])
+        return q
+
+    def _send(self, cmd_id: str, joint_names: list[str], points: list[sim_traj_point_t]) -> None:
         m = sim_arm_cmd_t()
         m.id = cmd_id
-        m.joint_names, m.num_joints = list(plan.joint_names), plan.num_joints
-        m.points, m.num_points = list(plan.points), plan.num_points
+        m.joint_names, m.num_joints = joint_names, len(joint_names)
+        m.points, m.num_points = points, len(points)
         if self.participant is not None:
             self.participant.publish(arm_channel(), m)
         else:

@@ -66,6 +66,18 @@ class GripperPrimitive(PrimitiveBase):
         return self._contained(obj, gripper, f"grasp: {gripper.id} holds {obj.id} at {width}",
                                f"grasp: holding {obj.id or obj.label} at {width}")
 
+    def onPreempt(self):
+        """Stopped: fingers that are moving halt where they are (CiA 402 halt). Fingers that
+        grip an object keep their grip: dropping what the robot holds is no way to stop."""
+        cmd = self.command
+        if not self.sent:
+            return self.fail(f"preempted: {cmd} had not moved the fingers", -1)
+        s = self.gripper.status()
+        if s.gripped:
+            return self.fail(f"preempted: {cmd}: the fingers keep their grip", -1)
+        self.gripper.stop()
+        return self.fail(f"preempted: {cmd} stopped the fingers at {s.position_um / 1000:.1f} mm", -1)
+
     def _contained(self, obj, parent, done: str, without_wm: str):
         """Writes that `parent` contains `obj` (once) and succeeds when this process's
         replica shows it, so the manager's post-condition sees it too."""

@@ -196,6 +196,14 @@ class _ArmMotion(PrimitiveBase):
             return self.fail(f"{self.label}: not at {self.what} after {MOVE_TIMEOUT_S:.0f} s", -3)
         return self.step(f"moving to {self.what}")
 
+    def onPreempt(self):
+        """Stopped (`skillbus stop`, a broken hold-condition, a parent preempted): the arm
+        holds where it is instead of going on with the trajectory."""
+        if self.cmd is None:
+            return self.fail(f"preempted: {self.label} had not moved yet", -1)
+        self.arm.hold(command_id(f"{self.label}-hold"))
+        return self.fail(f"preempted: {self.label} stopped on the way to {self.what}, holding", -1)
+
 
 class move_arm(_ArmMotion):
     def createDescription(self):
