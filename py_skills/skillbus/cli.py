@@ -86,6 +86,19 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     setup_logging(args.log_level)
+    from skillbus.bus import BusError
+    from skillbus.rpc import RpcTimeout
+    try:
+        return dispatch(args)
+    except RpcTimeout as e:  # a server that does not answer: one line, not a traceback
+        print(f"error: no answer: {e}: is the system running, in this network namespace?", file=sys.stderr)
+        return 1
+    except BusError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+
+
+def dispatch(args: argparse.Namespace) -> int:
     if args.command == "demo":
         from skillbus import demo
         return demo.main(args)

@@ -3,18 +3,105 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import signal
 import sys
 import time
 
-from skillbus.bus import channel, open_bus
+from skillbus.bus import BusError, channel, open_bus
 from skillbus.msgs import decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t
-from skillbus.rpc import RpcClient, RpcError
+from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, request_channel
 from skillbus.skill.convert import value_msg
 from skillbus.world.element import Element
 
 STATES = {0: "Uninitialized", 1: "Idle", 2: "Running", 3: "Success", 4: "Failure"}
 PARAM_TYPES = {0: "Required", 1: "Optional", 2: "Inferred"}
+
+MANAGER_TIMEOUT = 2.0   # s: how long a command waits for the skill manager's answer
+STOP_ACK_TIMEOUT = 2.0  # s: for the acknowledgement of the stop of an interrupted run
+FINAL_TIMEOUT = 5.0     # s: then for the task's final progress (the manager preempts at its next tick)
+EXIT_TIMEOUT = 3
+
+
+class NoManager(RuntimeError):
+    """No skill manager answered: one line for the user instead of a traceback."""
+
+    def __init__(self, timeout: float) -> None:
+        super().__init__(f"no skill manager answered on {request_channel('SKILL')} within {timeout:g} s: "
+                         f"is the system running, in this network namespace?")
+
+
+class Interrupts:
+    """SIGINT and SIGTERM set a flag instead of raising (KeyboardInterrupt in the middle of
+    LCM's dispatch loses the task and the traceback); the loops look at it. Exit code
+    128 + the signal (130, 143)."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.count = 0
+        self._old: dict[int, object] = {}
+
+    def _on_signal(self, signum, frame) -> None:
+        self.signum = signum if self.signum is None else self.signum
+        self.count += 1
+
+    def __enter__(self) -> "Interrupts":
+        for s in self.SIGNALS:
+            self._old[s] = signal.signal(s, self._on_signal)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for s, h in self._old.items():
+            signal.signal(s, h)
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + (self.signum or 0)
+
+    @property
+    def name(self) -> str:
+        return signal.Signals(self.signum).name if self.signum else ""
+
+    @contextlib.contextmanager
+    def held(self):
+        """Signals wait (blocked) while an RPC is in flight, at most its timeout: a start
+        interrupted halfway would leave a task whose id we never learn. They are handled
+        (the flag set) when the block ends."""
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, self.SIGNALS)
+        try:
+            yield
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)  # runs the handlers of held signals
+
+    def handle(self, bus, timeout: float) -> None:
+        """bus.handle(timeout), ended early by a signal. LCM's select fails with EINTR when a
+        signal arrives and lcm_handle_timeout() returns -1 (the bus raises BusError, the lcm
+        module OSError): with the flag set that is an interruption, not an error."""
+        seen = self.count
+        try:
+            bus.handle(timeout)
+        except (BusError, OSError):
+            if not self._arrived(seen):
+                raise
+
+    def _arrived(self, seen: int) -> bool:
+        # The Python-level handler runs at the next check of the interpreter (at the latest
+        # once the signal mask is read back here); look again after it.
+        signal.pthread_sigmask(signal.SIG_BLOCK, [])
+        return self.count > seen
+
+
+def call(client: RpcClient, method: str, req, reply_type, intr: Interrupts | None = None,
+         timeout: float = MANAGER_TIMEOUT):
+    """One call to the skill manager; NoManager when it does not answer."""
+    with intr.held() if intr else contextlib.nullcontext():
+        try:
+            return client.call(method, req, reply_type, timeout=timeout)
+        except RpcTimeout:
+            raise NoManager(timeout) from None
 
 
 def add_parsers(sub) -> None:
@@ -33,13 +120,17 @@ def add_parsers(sub) -> None:
     ls = sub.add_parser("skills", help="the skills the manager knows, with parameters and conditions")
     ls.add_argument("--url", default=None)
     ls.add_argument("--json", action="store_true")
-    run = sub.add_parser("run", help="run a skill; exit 0 on success")
+    run = sub.add_parser("run", help="run a skill; exit 0 on success; interrupted (130, 143) or timed out (3): "
+                                     "the task is stopped")
     run.add_argument("skill", help="skill type (or implementation label with --label)")
     run.add_argument("--label", default="")
     run.add_argument("-p", "--param", action="append", default=[], metavar="KEY=VALUE")
     run.add_argument("--watch", action="store_true", help="show the live tree while it runs")
     run.add_argument("-v", "--verbose", action="store_true", help="show each primitive's parameters")
-    run.add_argument("--timeout", type=float, default=0.0, help="give up after this many seconds (0: never)")
+    run.add_argument("--timeout", type=float, default=0.0,
+                     help="stop the task after this many seconds and exit 3 (0: never)")
+    run.add_argument("--detach", action="store_true",
+                     help="print the task id and return at once, leaving the task running (skillbus stop ID)")
     run.add_argument("--url", default=None)
     for verb, text in (("stop", "preempt a running task"), ("pause", "stop ticking a task"),
                        ("resume", "tick a paused task again"), ("step", "tick a paused task once")):
@@ -111,9 +202,23 @@ def print_tree(p: skill_progress_t, verbose: bool = False) -> None:
 
 
 def run(args) -> int:
+    if args.detach and (args.watch or args.timeout > 0):
+        print("error: --detach returns at once: it takes neither --watch nor --timeout", file=sys.stderr)
+        return 2
+    with Interrupts() as intr:
+        try:
+            return _run(args, intr)
+        except NoManager as e:
+            print(f"error: {e}", file=sys.stderr)
+            return intr.exit_code if intr.signum else 1
+
+
+def _run(args, intr: Interrupts) -> int:
     bus = open_bus(args.url)
     client = RpcClient(bus, "SKILL", "cli")
-    lst = skill_list(client)
+    lst = call(client, "list", skill_start_t(), skill_list_t, intr)
+    if intr.signum:
+        return intr.exit_code
     req = skill_start_t()
     known = {d.type for d in lst.skills} | {d.label for d in lst.skills}
     if args.skill not in known:
@@ -145,62 +250,110 @@ def run(args) -> int:
         if p.state in (3, 4):
             final.append(p)
 
+    # The bus layer's queue (DEFAULT_QUEUE_CAPACITY) holds the progress that arrives while
+    # an RPC is in flight; nothing else keeps this loop from the bus.
     bus.subscribe(channel("SB_SKILL_PROGRESS"), on_progress)
     try:
-        task = client.call("start", req, skill_task_t)
+        task = call(client, "start", req, skill_task_t, intr)
     except RpcError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     task_id[0] = task.task
+    if args.detach:
+        print(f"task {task.task}: {req.type} started, detached (stop it with: skillbus stop {task.task})",
+              file=sys.stderr, flush=True)
+        print(task.task, flush=True)
+        return 0
     print(f"task {task.task}: {req.type} started", flush=True)
     deadline = time.monotonic() + args.timeout if args.timeout > 0 else None
+    code = None
+    while not final:
+        if intr.signum:
+            print(f"interrupted ({intr.name}): stopping task {task.task}", file=sys.stderr, flush=True)
+            code = intr.exit_code
+            break
+        if deadline and time.monotonic() > deadline:
+            print(f"error: task {task.task} did not end within {args.timeout} s: stopping it", file=sys.stderr,
+                  flush=True)
+            code = EXIT_TIMEOUT
+            break
+        intr.handle(bus, 0.2 if deadline is None else max(0.0, min(0.2, deadline - time.monotonic())))
+    if code is not None and not final:
+        _stop(client, bus, task.task, final, intr)
+    if final:
+        p = final[0]
+        if not args.watch:
+            print_tree(p, args.verbose)
+        root = p.nodes[0]
+        print(f"task {p.task}: {STATES[p.state]}" + (f": {root.message}" if root.message else ""), flush=True)
+    if code is not None:
+        return code
+    return 0 if final[0].state == 3 else 1
+
+
+def _stop(client: RpcClient, bus, task: int, final: list, intr: Interrupts) -> None:
+    """Preempts an abandoned task: SKILL.stop, acknowledged within STOP_ACK_TIMEOUT, then
+    its final progress, within FINAL_TIMEOUT (a further signal ends that wait)."""
+    req = skill_start_t()
+    req.task = task
     try:
-        while not final:
-            if deadline and time.monotonic() > deadline:
-                print(f"error: task {task.task} did not end within {args.timeout} s", file=sys.stderr)
-                return 3
-            bus.handle(0.2)
-    except KeyboardInterrupt:
-        stop = skill_start_t()
-        stop.task = task.task
-        client.call("stop", stop, skill_task_t)
-        print(f"stopping task {task.task}", file=sys.stderr)
-        return 130
-    p = final[0]
-    if not args.watch:
-        print_tree(p, args.verbose)
-    root = p.nodes[0]
-    print(f"task {p.task}: {STATES[p.state]}" + (f": {root.message}" if root.message else ""))
-    return 0 if p.state == 3 else 1
+        call(client, "stop", req, skill_task_t, intr, timeout=STOP_ACK_TIMEOUT)
+    except RpcRemoteError as e:  # it ended meanwhile ("no running task"): its progress may be in
+        if not final:
+            intr.handle(bus, 0.0)
+        if not final:
+            print(f"error: stop task {task}: {e}", file=sys.stderr)
+        return
+    except NoManager as e:
+        print(f"error: task {task} may still be running: {e}", file=sys.stderr)
+        return
+    seen = intr.count
+    deadline = time.monotonic() + FINAL_TIMEOUT
+    while not final and time.monotonic() < deadline and intr.count == seen:
+        intr.handle(bus, min(0.2, max(0.0, deadline - time.monotonic())))
+    if not final:
+        print(f"task {task}: stop acknowledged; its end was not seen"
+              + (f" within {FINAL_TIMEOUT:g} s" if intr.count == seen else " (interrupted again)"), file=sys.stderr)
 
 
 def main(args: argparse.Namespace) -> int:
     if args.command == "skills-process":
         from skillbus.skill import process
         return process.main(args)
+    if args.command == "run":
+        return run(args)
+    if args.command in ("skills", "stop", "pause", "resume", "step"):
+        with Interrupts() as intr:
+            try:
+                return _command(args, intr)
+            except NoManager as e:
+                print(f"error: {e}", file=sys.stderr)
+                return intr.exit_code if intr.signum else 1
+    return 2
+
+
+def _command(args, intr: Interrupts) -> int:
+    """skills, stop, pause, resume, step: one call to the manager each."""
+    client = RpcClient(open_bus(args.url), "SKILL", "cli")
     if args.command == "skills":
-        client = RpcClient(open_bus(args.url), "SKILL", "cli")
         try:
-            lst = skill_list(client)
+            lst = call(client, "list", skill_start_t(), skill_list_t, intr)
         except RpcError as e:
             print(f"error: {e}", file=sys.stderr)
             return 1
+        if intr.signum:
+            return intr.exit_code
         if args.json:
             print(json.dumps([{"type": d.type, "label": d.label, "compound": d.compound, "process": p,
                                "params": [x.key for x in d.params]} for d, p in zip(lst.skills, lst.processes)]))
         else:
             print_skills(lst)
         return 0
-    if args.command == "run":
-        return run(args)
-    if args.command in ("stop", "pause", "resume", "step"):
-        client = RpcClient(open_bus(args.url), "SKILL", "cli")
-        req = skill_start_t()
-        req.task = args.task
-        try:
-            print(f"task {args.task}: {client.call(args.command, req, skill_task_t).message}")
-        except RpcError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 1
-        return 0
-    return 2
+    req = skill_start_t()
+    req.task = args.task
+    try:
+        print(f"task {args.task}: {call(client, args.command, req, skill_task_t, intr).message}")
+    except RpcError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    return intr.exit_code if intr.signum else 0

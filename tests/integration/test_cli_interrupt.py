@@ -1,0 +1,100 @@
+"""`skillbus run` interrupted (SIGINT, SIGTERM) or timed out preempts its task; with
+--detach it leaves it running for `skillbus stop`; a command without a manager says so in
+one line. Real processes: the C++ skill manager on the wall clock, a Python skill process
+with flow_skills (Wait runs for Ticks ticks at 25 Hz), the CLI."""
+
+import re
+import signal
+import sys
+import time
+
+from test_skills import LIBS, cli, start_system
+
+
+def wait_for(what, cond, timeout, info=lambda: ""):
+    deadline = time.monotonic() + timeout
+    while not cond():
+        assert time.monotonic() < deadline, f"{what} not within {timeout} s\n{info()}"
+        time.sleep(0.05)
+
+
+def start_wait_run(sandbox, *extra):
+    run = sandbox.start(f"run-{len(sandbox.procs)}",
+                        [sys.executable, "-m", "skillbus.cli", "run", "Wait", "-p", "Ticks=1000", *extra],
+                        env={"PYTHONPATH": str(LIBS)})
+    return run
+
+
+def wait_running(sandbox, run):
+    """Until the task has been ticked a few times (watch the manager's log: ticks are
+    only shown with --watch)."""
+    wait_for("task 1 running", lambda: re.search(r"task 1: Wait \(wait\) started", sandbox.procs[0].stderr()),
+             20, lambda: run.stdout() + run.stderr() + sandbox.procs[0].stderr()[-2000:])
+    time.sleep(0.5)
+    assert run.returncode is None, run.stdout() + run.stderr()
+
+
+def assert_preempted(sandbox, mgr, run, code):
+    rc = sandbox.wait(run, 15)
+    out, err = run.stdout(), run.stderr()
+    assert rc == code, f"exit {rc}\n{out}\n{err}"
+    assert "Traceback" not in err and "lost sys.stderr" not in err, err
+    assert "OSError" not in err and "BusError" not in err, err
+    # The manager ended the task (preempted), and the client showed its end.
+    assert re.search(r"task 1: Wait Failure: preempted at tick \d+", mgr.stderr()), mgr.stderr()[-2000:]
+    assert re.search(r"task 1: Failure: preempted at tick \d+", out), out + err
+    rc, _, err = cli(sandbox, "stop", "1")
+    assert rc == 1 and "no running task 1" in err, err
+
+
+def test_sigint_preempts_the_task(sandbox):
+    mgr, _ = start_system(sandbox, "flow_skills")
+    run = start_wait_run(sandbox, "--watch")
+    wait_running(sandbox, run)
+    sandbox.kill(run, signal.SIGINT)
+    assert_preempted(sandbox, mgr, run, 130)
+
+
+def test_sigterm_preempts_the_task(sandbox):
+    mgr, _ = start_system(sandbox, "flow_skills")
+    run = start_wait_run(sandbox)
+    wait_running(sandbox, run)
+    sandbox.kill(run, signal.SIGTERM)
+    assert_preempted(sandbox, mgr, run, 143)
+
+
+def test_timeout_preempts_the_task(sandbox):
+    mgr, _ = start_system(sandbox, "flow_skills")
+    run = start_wait_run(sandbox, "--timeout", "1")
+    assert_preempted(sandbox, mgr, run, 3)
+    assert "did not end within 1.0 s" in run.stderr()
+
+
+def test_detach_leaves_the_task_running_for_stop(sandbox):
+    mgr, _ = start_system(sandbox, "flow_skills")
+    t0 = time.monotonic()
+    rc, out, err = cli(sandbox, "run", "Wait", "-p", "Ticks=1000", "--detach", timeout=20)
+    assert rc == 0, out + err
+    assert out.strip().splitlines()[-1] == "1", out  # the task id, alone on the last line
+    assert time.monotonic() - t0 < 10
+    time.sleep(1.0)  # the client is gone; the task runs on
+    assert "Failure" not in mgr.stderr() and "Success" not in mgr.stderr(), mgr.stderr()[-2000:]
+    rc, out, err = cli(sandbox, "pause", "1")
+    assert rc == 0 and "paused" in out, out + err
+    rc, out, err = cli(sandbox, "stop", "1")
+    assert rc == 0 and "stopping" in out, out + err
+    wait_for("the preempted task", lambda: re.search(r"task 1: Wait Failure: preempted at tick \d+", mgr.stderr()),
+             10, lambda: mgr.stderr()[-2000:])
+
+
+def test_no_manager_is_one_line(sandbox):
+    for args in (("skills",), ("run", "Wait"), ("stop", "1")):
+        t0 = time.monotonic()
+        rc, out, err = cli(sandbox, *args, timeout=20)
+        assert rc != 0, out + err
+        assert "Traceback" not in err, err
+        lines = err.strip().splitlines()
+        assert len(lines) == 1, err
+        assert lines[0].startswith("error: no skill manager answered on SB_SKILL_REQ within"), err
+        assert "is the system running, in this network namespace?" in lines[0]
+        assert time.monotonic() - t0 < 10
