@@ -20,6 +20,11 @@ void Blackboard::set(const std::string& key, const Param& p) {
   values_[key] = std::move(copy);
 }
 
+void Blackboard::give(const std::string& key, const Param& p) {
+  set(key, p);
+  given_.insert(key);
+}
+
 std::shared_ptr<Scope> Scope::child(std::map<std::string, std::string> remap, std::map<std::string, Param> specify) const {
   auto s = std::make_shared<Scope>();
   s->parent_ = std::make_shared<Scope>(*this);

@@ -8,6 +8,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -22,10 +23,15 @@ class Blackboard {
   bool has(const std::string& key) const;  // holds at least one value
   const Param* get(const std::string& key) const;
   void set(const std::string& key, const Param& p);
+  // A value the user gave when starting the task: it overrides a static value (a Required
+  // parameter with a value in its description) wherever that key is read.
+  void give(const std::string& key, const Param& p);
+  bool given(const std::string& key) const { return given_.count(key) > 0; }
   const std::map<std::string, Param>& all() const { return values_; }
 
  private:
   std::map<std::string, Param> values_;
+  std::set<std::string> given_;
 };
 
 class Scope {

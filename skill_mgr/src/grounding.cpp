@@ -38,6 +38,28 @@ std::string ground(std::vector<Param>& params, const std::vector<Condition>& pre
   for (size_t i = 0; i < params.size(); ++i)
     if (abstract_element(params[i]) && !skip.count(params[i].key)) todo.push_back(i);
   if (todo.empty()) return "";
+  // A Required parameter that no pre-condition constrains is grounded only when the
+  // world has exactly one candidate (the robot's one arm); among several, the first
+  // would be an arbitrary pick: a wrong target, not a choice. Inferred parameters are
+  // the skill's explicit wish to be filled in, so they take the first that fits.
+  for (size_t i : todo) {
+    const Param& p = params[i];
+    if (p.param_type == skill_param_t::INFERRED) continue;
+    bool constrained = false;
+    for (const auto& c : pre) constrained |= keys_of(c).count(p.key) > 0;
+    if (constrained) continue;
+    const skill_value_t wanted = p.values.empty() ? skill_value_t{} : p.values[0];
+    wm::Query q;
+    q.type = !wanted.element.type.empty() ? wanted.element.type : p.concept;
+    q.label = wanted.element.label;
+    const auto found = world.query(q);
+    if (found.size() <= 1) continue;
+    std::string some;
+    for (size_t k = 0; k < found.size() && k < 4; ++k) some += (k ? ", " : "") + found[k]->id;
+    return "cannot ground parameter " + p.key + ": " + std::to_string(found.size()) + " elements are a " + q.type +
+           (q.label.empty() ? "" : " labelled " + q.label) + " (" + some + (found.size() > 4 ? ", ..." : "") +
+           ") and no pre-condition says which; give one (" + p.key + "=ID)";
+  }
   // Assigned: parameters with a concrete value (an unset optional one is not: conditions
   // about it cannot be judged while grounding).
   std::set<std::string> assigned;

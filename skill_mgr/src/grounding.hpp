@@ -2,7 +2,11 @@
 // still abstract (no id) is filled in from the world model with the first element (in
 // id order) of its concept (or a subclass) and label that satisfies the pre-conditions
 // that concern it, jointly for parameters linked by conditions (a backtracking search
-// in declaration order). If nothing fits: "cannot ground parameter X".
+// in declaration order). If nothing fits: "cannot ground parameter X". A Required
+// parameter that no pre-condition mentions is grounded only if exactly one element fits
+// (else the error lists the candidates); an Inferred one takes the first that fits.
+// Only abstract values are grounded: a concrete id that is not in the world is an error
+// of the caller (param_check.hpp), never a value to replace.
 #pragma once
 
 #include <set>

@@ -7,7 +7,7 @@
 using namespace skillbus;
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology", "start", "robot"}, {"wall-clock"});
+  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology", "start", "robot", "liveness-ms"}, {"wall-clock"});
   skills::ManagerOptions o;
   o.name = args.str("name", "skill_mgr");
   o.wall_clock = args.flag("wall-clock");
@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   o.ontology_files = args.list("ontology");
   o.start_at_first_tick = args.str("start");
   o.robot = args.str("robot");
+  o.liveness_timeout = std::chrono::milliseconds(args.num("liveness-ms", 3000));
+  if (o.liveness_timeout.count() <= 0) apps::Args::die("--liveness-ms must be positive");
   if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<skills::Manager> mgr;

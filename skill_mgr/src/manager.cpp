@@ -2,6 +2,8 @@
 
 #include <sstream>
 
+#include "param_check.hpp"
+#include "skillbus_msgs/skill_alive_t.hpp"
 #include "skillbus_msgs/skill_list_t.hpp"
 #include "skillbus_msgs/skill_register_t.hpp"
 
@@ -57,10 +59,22 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     req.num_params = static_cast<int32_t>(req.params.size());
     starts_.emplace_back(next_task_++, req);
   }
+  incarnation_ = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                     std::chrono::system_clock::now().time_since_epoch()).count();
+  if (opt_.wall_clock) {
+    bus_.subscribe(channel("SB_SKILL_HEARTBEAT"), [this](const std::string&, const uint8_t* data, size_t size) {
+      skill_alive_t a;
+      if (!decode_msg(data, size, a)) return;
+      // A heartbeat of an unknown process or of an older run of it is not a registration.
+      if (registry_.incarnation_of(a.sender) == a.incarnation) heard_from_[a.sender] = std::chrono::steady_clock::now();
+    });
+  }
   // RPC handlers only record requests: they can run while a tick waits for a skill
   // process, so they must not touch running trees.
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
     skill_register_t out = reg;
+    heard_from_[reg.process] = std::chrono::steady_clock::now();
+    for (const auto& d : reg.skills) dropped_.erase(d.type);
     out.errors = registry_.add(reg);
     out.num_errors = static_cast<int32_t>(out.errors.size());
     SB_INFO(kLog, "process " << reg.process << " registered " << reg.num_skills << " skill(s)"
@@ -77,13 +91,12 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     return out;
   });
   rpc_.add_method<skill_start_t, skill_task_t>("start", [this](const skill_start_t& req) {
-    if (registry_.find(req.type, req.label).empty())
-      throw RpcError("unknown skill " + req.type + (req.label.empty() ? "" : " with label " + req.label) +
-                     " (available: " + [this] {
-                       std::string s;
-                       for (const auto& t : registry_.types()) s += (s.empty() ? "" : ", ") + t;
-                       return s.empty() ? std::string("none") : s;
-                     }() + ")");
+    const auto impls = registry_.find(req.type, req.label);
+    if (impls.empty()) throw RpcError(unknown_skill_error(req.type, req.label));
+    // Keys and value types are checked here, so a wrong one never starts; elements need
+    // the world and are checked when the skill starts (the task then fails naming them).
+    const std::string bad = check_given(impls.front()->description, req.params);
+    if (!bad.empty()) throw RpcError(bad);
     skill_task_t out{};
     out.task = next_task_++;
     out.state = state_code(State::Idle);
@@ -136,65 +149,35 @@ RpcClient& Manager::client(const std::string& area) {
   return *c;
 }
 
-namespace {
-// A parameter given as text (--start KEY=VALUE), typed by the skill's description.
-void type_from_text(const skillbus_msgs::skill_description_t& d, skillbus_msgs::skill_param_t& p) {
-  const std::string text = p.values.empty() ? "" : p.values[0].s;
-  for (const auto& decl : d.params) {
-    if (decl.key != p.key) continue;
-    p.data_type = decl.data_type;
-    p.concept = decl.concept;
-    skillbus_msgs::skill_value_t v{};
-    try {
-      if (decl.data_type == "element") {
-        v.type = skillbus_msgs::skill_value_t::ELEMENT;
-        v.element.id = text;
-        v.element.type = decl.concept;
-      } else if (decl.data_type == "float") {
-        v.type = skillbus_msgs::skill_value_t::FLOAT;
-        v.f = std::stod(text);
-      } else if (decl.data_type == "int") {
-        v.type = skillbus_msgs::skill_value_t::INT;
-        v.i = std::stoll(text);
-      } else if (decl.data_type == "bool") {
-        v.type = skillbus_msgs::skill_value_t::BOOL;
-        v.b = text == "true" || text == "1" || text == "yes";
-      } else {
-        v.type = skillbus_msgs::skill_value_t::STRING;
-        v.s = text;
-      }
-    } catch (const std::exception&) {
-      SB_WARN("skill_mgr", "--start " << p.key << "=" << text << ": not a " << decl.data_type << "; ignored");
-      p.values.clear();
-      p.num_values = 0;
-      return;
-    }
-    p.values = {v};
-    p.num_values = 1;
-    return;
-  }
-  SB_WARN("skill_mgr", "--start: " << d.type << " has no parameter " << p.key << "; ignored");
-}
-}  // namespace
-
 void Manager::begin(const skill_start_t& req, int64_t id) {
   auto t = std::make_unique<Task>();
   t->id = id;
   t->type = req.type;
   t->label = req.label;
   auto impls = registry_.find(req.type, req.label);
-  for (auto p : req.params) {  // a fresh blackboard per task
-    if (p.data_type.empty() && !impls.empty()) type_from_text(impls.front()->description, p);
-    t->blackboard.set(p.key, p);
+  std::string bad;
+  for (auto p : req.params) {  // a fresh blackboard per task; the user's values override static ones
+    if (impls.empty()) break;
+    if (p.data_type.empty() && bad.empty()) bad = parse_text(impls.front()->description, p);  // --start KEY=VALUE
+    if (bad.empty()) bad = check_given(impls.front()->description, {p});
+    t->blackboard.give(p.key, p);
   }
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
                                                         opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot});
   // (instance ids name running primitives in skill processes: unique across tasks)
-  if (impls.empty()) {
-    SB_WARN(kLog, "task " << id << ": skill " << req.type << " is not available");
-    results_[id] = "Failure: skill " + req.type + " is not available";
+  if (impls.empty() || !bad.empty()) {
+    const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;
+    SB_WARN(kLog, "task " << id << ": " << req.type << " cannot start: " << why);
+    results_[id] = "Failure: " + why;
     return;
+  }
+  if (!world_.ready() && opt_.wall_clock && std::chrono::steady_clock::now() - last_world_try_ > std::chrono::seconds(5)) {
+    // The world copy is loaded before a task starts (its element parameters are checked
+    // and filled from it); with no world model server the task runs without one.
+    last_world_try_ = std::chrono::steady_clock::now();
+    std::string why;
+    world_.ensure(std::chrono::milliseconds(500), &why);
   }
   if (impls.size() > 1 && req.label.empty()) {  // by type only: the first implementation that can start
     std::vector<Implementation> copies;
@@ -244,10 +227,45 @@ void Manager::publish_progress(const Task& t) {
   participant_.publish(channel("SB_SKILL_PROGRESS"), p);
 }
 
+void Manager::end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator& it) {
+  Task& t = *it->second;
+  if (finished(t.root->state())) {
+    SB_INFO(kLog, "task " << t.id << ": " << t.type << " " << to_string(t.root->state()) << ": " << t.root->message());
+    results_[t.id] = std::string(to_string(t.root->state())) + ": " + t.root->message();
+    it = tasks_.erase(it);
+  } else {
+    ++it;
+  }
+}
+
 void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
-  if (sim_time_ns % opt_.tick_period_ns != 0) return;  // skills tick at 25 Hz of (sim) time
+  if (frame == 0 && !world_.ready()) {
+    // The world copy before the first task: its element parameters are checked and
+    // filled from it (without a world model server skills run without one).
+    std::string why;
+    if (!world_.ensure(std::chrono::milliseconds(2000), &why)) SB_INFO(kLog, "no world model yet: " << why);
+    last_world_try_ = std::chrono::steady_clock::now();
+  }
+  if (opt_.wall_clock) {
+    announce();
+    drop_silent_processes();
+  }
   frame_ = frame;
   sim_time_ns_ = sim_time_ns;
+  if (sim_time_ns % opt_.tick_period_ns != 0) {
+    // Between skill ticks only a stop is served: a stop reaches the skills (and the arm)
+    // at the next frame, not up to a tick period later.
+    for (auto it = tasks_.begin(); it != tasks_.end();) {
+      if (!it->second->stop_requested) {
+        ++it;
+        continue;
+      }
+      tick(*it->second);
+      publish_progress(*it->second);
+      end_if_finished(it);
+    }
+    return;
+  }
   while (!starts_.empty()) {
     auto [id, req] = starts_.front();
     starts_.pop_front();
@@ -262,13 +280,47 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     t.step_once = false;
     tick(t);
     publish_progress(t);
-    if (finished(t.root->state())) {
-      SB_INFO(kLog, "task " << t.id << ": " << t.type << " " << to_string(t.root->state()) << ": " << t.root->message());
-      results_[t.id] = std::string(to_string(t.root->state())) + ": " + t.root->message();
-      it = tasks_.erase(it);
-    } else {
-      ++it;
+    end_if_finished(it);
+  }
+}
+
+std::string Manager::unknown_skill_error(const std::string& type, const std::string& label) const {
+  std::string avail;
+  for (const auto& t : registry_.types()) avail += (avail.empty() ? "" : ", ") + t;
+  std::string out = "unknown skill " + type + (label.empty() ? "" : " with label " + label) +
+                    " (available: " + (avail.empty() ? std::string("none") : avail) + ")";
+  auto it = dropped_.find(type);
+  if (it != dropped_.end()) out += "; " + it->second;
+  return out;
+}
+
+void Manager::announce() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_announce_ < std::chrono::seconds(1)) return;
+  last_announce_ = now;
+  skill_alive_t a{};
+  a.header.frame = -1;
+  a.sender = opt_.name;
+  a.incarnation = incarnation_;
+  a.processes = registry_.processes();
+  a.num_processes = static_cast<int32_t>(a.processes.size());
+  publish_msg(bus_, channel("SB_SKILL_MANAGER"), a);
+}
+
+void Manager::drop_silent_processes() {
+  const auto now = std::chrono::steady_clock::now();
+  for (const auto& process : registry_.processes()) {
+    auto it = heard_from_.find(process);
+    if (it == heard_from_.end()) {
+      heard_from_[process] = now;  // registered before any heartbeat: count from now
+      continue;
     }
+    if (now - it->second < opt_.liveness_timeout) continue;
+    const std::string why = "skill process " + process + " stopped answering (no heartbeat for " +
+                            std::to_string(opt_.liveness_timeout.count()) + " ms)";
+    for (const auto& type : registry_.remove(process)) dropped_[type] = why;
+    heard_from_.erase(it);
+    SB_WARN(kLog, why << ": its skills are dropped until it registers again");
   }
 }
 

@@ -1,6 +1,7 @@
 // The skill manager process (see skill_mgr/README.md for its RPCs and channels).
 #pragma once
 
+#include <chrono>
 #include <deque>
 #include <map>
 #include <memory>
@@ -25,6 +26,8 @@ struct ManagerOptions {
   std::vector<std::string> ontology_files;  // for the world replica (conditions, grounding)
   std::string start_at_first_tick;           // "TYPE" or "TYPE:LABEL": a task started at the first tick
   std::string robot;                         // element id of the agent this manager drives
+  // Wall clock: a skill process without a heartbeat for this long has its skills dropped.
+  std::chrono::milliseconds liveness_timeout{3000};
 };
 
 struct Task {
@@ -49,6 +52,11 @@ class Manager {
 
  private:
   void on_frame(int64_t frame, int64_t sim_time_ns);
+  void end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator& it);
+  // Liveness (wall clock): announce this manager, drop the skills of silent processes.
+  void announce();
+  void drop_silent_processes();
+  std::string unknown_skill_error(const std::string& type, const std::string& label) const;
   void begin(const skillbus_msgs::skill_start_t& req, int64_t id);
   void tick(Task& t);
   void publish_progress(const Task& t);
@@ -66,6 +74,11 @@ class Manager {
   std::deque<std::pair<int64_t, skillbus_msgs::skill_start_t>> starts_;  // applied at the next tick
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;
+  int64_t incarnation_ = 0;  // this run of the manager (not behaviour: an identity)
+  std::map<std::string, std::chrono::steady_clock::time_point> heard_from_;  // process -> last heartbeat
+  std::map<std::string, std::string> dropped_;  // skill type -> why its process's skills were dropped
+  std::chrono::steady_clock::time_point last_announce_{};
+  std::chrono::steady_clock::time_point last_world_try_{};
 };
 
 }  // namespace skillbus::skills

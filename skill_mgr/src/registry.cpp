@@ -47,4 +47,24 @@ int64_t Registry::incarnation_of(const std::string& process) const {
   return it == incarnations_.end() ? 0 : it->second;
 }
 
+std::vector<std::string> Registry::remove(const std::string& process) {
+  std::set<std::string> gone;
+  for (auto it = by_label_.begin(); it != by_label_.end();) {
+    if (it->second.process == process) {
+      gone.insert(it->second.description.type);
+      it = by_label_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  incarnations_.erase(process);
+  return {gone.begin(), gone.end()};
+}
+
+std::vector<std::string> Registry::processes() const {
+  std::vector<std::string> out;
+  for (const auto& [p, inc] : incarnations_) out.push_back(p);
+  return out;
+}
+
 }  // namespace skillbus::skills

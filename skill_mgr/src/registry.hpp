@@ -30,6 +30,9 @@ class Registry {
   const Implementation* by_label(const std::string& label) const;
   const std::map<std::string, Implementation>& all() const { return by_label_; }
   std::vector<std::string> types() const;
+  // Forgets a process and its skills; returns the skill types that went with it.
+  std::vector<std::string> remove(const std::string& process);
+  std::vector<std::string> processes() const;  // those that announced themselves, sorted
 
  private:
   std::map<std::string, int64_t> incarnations_;

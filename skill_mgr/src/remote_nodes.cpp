@@ -1,9 +1,11 @@
 #include "remote_nodes.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "convert.hpp"
 #include "grounding.hpp"
+#include "param_check.hpp"
 #include "skillbus_msgs/skill_tree_t.hpp"
 
 namespace skillbus::skills {
@@ -19,6 +21,39 @@ State to_state(int8_t s) {
     case 3: return State::Success;
     default: return State::Failure;
   }
+}
+
+// Values compared by their encoding: what a skill sent back unchanged.
+std::vector<uint8_t> encoded(const Param& p) {
+  std::vector<uint8_t> out;
+  for (const auto& v : p.values) {
+    std::vector<uint8_t> buf(static_cast<size_t>(v.getEncodedSize()));
+    v.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    out.insert(out.end(), buf.begin(), buf.end());
+  }
+  return out;
+}
+
+// "" or which remap or specify key of a tree node the child skill does not have.
+std::string unknown_keys(const skillbus_msgs::skill_description_t& d, const skillbus_msgs::skill_tree_node_t& n) {
+  auto has = [&d](const std::string& key) {
+    for (const auto& p : d.params)
+      if (p.key == key) return true;
+    return false;
+  };
+  std::string keys;
+  for (const auto& p : d.params) keys += (keys.empty() ? "" : ", ") + p.key;
+  for (int r = 0; r < n.num_remaps && r < static_cast<int>(n.remap_from.size()); ++r)
+    if (!has(n.remap_from[r]))
+      return "remap " + n.remap_from[r] + " -> " + n.remap_to[r] + ": " + d.type + " has no parameter " +
+             n.remap_from[r] + " (it has: " + keys + ")";
+  for (const auto& sp : n.specify)
+    if (!has(sp.key)) return "specify " + sp.key + ": " + d.type + " has no parameter " + sp.key + " (it has: " + keys + ")";
+  return "";
+}
+
+bool same_values(const Param& a, const Param& b) {
+  return a.values.size() == b.values.size() && encoded(a) == encoded(b);
 }
 
 std::string seconds(std::chrono::milliseconds d) {
@@ -37,8 +72,9 @@ std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, co
     const std::string key = scope.key(decl.key);
     if (const Param* fixed = scope.specified(decl.key)) {
       p.values = fixed->values;
-    } else if (decl.param_type == skill_param_t::REQUIRED && decl.num_defaults > 0 && decl.data_type != "element") {
-      p.values = decl.defaults;  // static: overwrites the blackboard every run
+    } else if (decl.param_type == skill_param_t::REQUIRED && decl.num_defaults > 0 && decl.data_type != "element" &&
+               !bb.given(key)) {
+      p.values = decl.defaults;  // static: overwrites the blackboard every run, unless the user gave it
       bb.set(key, p);
     } else if (bb.has(key)) {
       p.values = bb.get(key)->values;
@@ -100,11 +136,12 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
   Blackboard scratch = ctx.blackboard;  // a dry run must leave the task's blackboard alone
   Blackboard& bb = dry_run ? scratch : ctx.blackboard;
   std::string missing;
-  params = gather_params(impl.description, scope, bb, &missing, world_if_ready(ctx));
+  params = gather_params(impl.description, scope, bb, &missing, nullptr);
   // Robot (added to every description): the manager's own agent when it was given one;
   // else grounded like the rest, but only from a world model that is already there, so
   // that skills run without a world model when nothing else needs one.
   std::set<std::string> skip;
+  std::vector<std::string> unchecked;  // the manager's own Robot, when there is no world to check it in
   for (auto& p : params) {
     if (p.key != "Robot" || p.data_type != "element" || (!p.values.empty() && !p.values[0].element.id.empty())) continue;
     if (!ctx.robot.empty()) {
@@ -114,9 +151,23 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
       v.element.type = p.concept;
       p.values = {v};
       p.num_values = 1;
+      if (!world_if_ready(ctx)) unchecked.push_back(p.key);
     } else if (!world_if_ready(ctx)) {
       skip.insert(p.key);
     }
+  }
+  // Every concrete element must be in the world and of the parameter's concept: a wrong
+  // id fails the start here, before grounding could mistake it for an abstract value.
+  bool concrete = false;
+  for (const auto& p : params)
+    for (const auto& v : p.values)
+      concrete |= concrete_element(v) && std::find(unchecked.begin(), unchecked.end(), p.key) == unchecked.end();
+  if (concrete) {
+    std::string why;
+    const wm::WorldStore* world = world_for(ctx, &why);
+    if (!world) return "cannot check the element parameters of " + impl.description.type + ": " + why;
+    const std::string err = check_elements(params, *world, unchecked);
+    if (!err.empty()) return err + " (" + impl.description.type + ")";
   }
   if (needs_grounding(params, skip)) {
     std::string why;
@@ -130,7 +181,11 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
     gather_params(impl.description, scope, bb, &missing, nullptr);
   }
   if (!missing.empty()) return missing;
-  return conditions_error("pre", impl.description.pre, params, ctx);
+  const std::string pre = conditions_error("pre", impl.description.pre, params, ctx);
+  if (!pre.empty()) return pre;
+  // A hold-condition that is already false would stop the skill at its first check:
+  // stop it before it acts at all.
+  return conditions_error("hold", impl.description.hold, params, ctx);
 }
 
 std::string infer_invalid(TaskContext& ctx, const Implementation& impl, const Scope& scope) {
@@ -206,6 +261,13 @@ bool RemotePrimitive::start() {
 }
 
 State RemotePrimitive::call(int8_t action) {
+  if (action != skill_tick_t::START && ctx_.registry.incarnation_of(impl_.process) == 0) {
+    // The manager dropped the process: it stopped sending heartbeats.
+    set_result("skill process " + impl_.process + " stopped answering while running " + impl_.description.label +
+                   ": the running skill was lost",
+               -1);
+    return State::Failure;
+  }
   if (action != skill_tick_t::START && ctx_.registry.incarnation_of(impl_.process) != incarnation_) {
     // The process announced itself again: it was restarted, and this instance with it.
     set_result("skill process " + impl_.process + " was restarted while running " + impl_.description.label +
@@ -228,8 +290,14 @@ State RemotePrimitive::call(int8_t action) {
     const auto reply = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tick_reply_t>("tick", t, opts);
     set_result(reply.message, reply.code, reply.progress);
     wm_version_ = reply.wm_version;
+    // What the skill changed goes to the blackboard, an emptied value included; what it
+    // sent back unchanged is not written (a parallel sibling may have written that key).
     for (const auto& p : reply.params) {
-      if (scope_->specified(p.key) || p.values.empty()) continue;
+      if (scope_->specified(p.key)) continue;
+      const Param* sent = nullptr;
+      for (const auto& q : params_)
+        if (q.key == p.key) sent = &q;
+      if (sent && same_values(*sent, p)) continue;
       ctx_.blackboard.set(scope_->key(p.key), p);
     }
     if (!reply.params.empty()) params_ = reply.params;
@@ -248,7 +316,7 @@ State RemotePrimitive::call(int8_t action) {
 
 State RemotePrimitive::step() {
   params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
-  if (!first_) {  // hold-conditions, checked on every tick of a running skill
+  if (!first_) {  // hold-conditions, checked on every later tick (the first was checked at start)
     const std::string broken = check_hold(ctx_, impl_, params_);
     if (!broken.empty()) {
       call(skill_tick_t::PREEMPT);
@@ -415,6 +483,13 @@ bool RemoteCompound::start() {
           set_result("no skill of type " + n.type + (n.label.empty() ? "" : " with label " + n.label) +
                          " is available (in " + impl_.description.label + ")",
                      -1);
+          return false;
+        }
+        // A remap or specify of a key the child does not have would be ignored silently
+        // (SkiROS2 does): a typo in a tree is an error that names it.
+        const std::string bad = unknown_keys(impls.front()->description, n);
+        if (!bad.empty()) {
+          set_result("expand of " + impl_.description.label + ": " + bad, -1);
           return false;
         }
         if (impls.size() > 1 && n.label.empty()) {

@@ -71,11 +71,18 @@ def specify_msg(key: str, value: Any) -> skill_param_t:
 
 
 def apply_param_msgs(skill: SkillCore, params: list[skill_param_t]) -> None:
-    """Sets the skill's parameter values from the manager's (unknown keys are ignored)."""
+    """Sets the skill's parameter values from the manager's (unknown keys are ignored).
+    Element values come with the properties the manager has; with a world-model client
+    they also get the relations of this process's replica. Either way they remember what
+    they carried, so an update writes only what the skill changed."""
     for m in params:
         if skill.params.hasParam(m.key):
             p = skill.params[m.key]
             values = [value_from_msg(v) for v in m.values]
+            for i, v in enumerate(values):
+                if isinstance(v, Element) and not v.isAbstract():
+                    values[i] = skill.wmi.with_relations(v) if skill.wmi is not None else v
+                    values[i].mark_loaded()
             p._values = values  # from the blackboard, already checked by the manager
 
 

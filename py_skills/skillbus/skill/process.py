@@ -222,5 +222,49 @@ def main(args) -> int:
         r = participant.run()
         print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex}), flush=True)
         return 0 if r.ok else 1
-    while True:
-        bus.handle(1.0)
+    Liveness(bus, proc).serve_forever()
+
+
+class Liveness:
+    """On the wall clock: a heartbeat to the manager twice a second (a silent process has
+    its skills dropped), and a new registration whenever the manager's announcement does
+    not list this process (the manager restarted and forgot it)."""
+
+    HEARTBEAT_S = 0.5
+
+    def __init__(self, bus: Bus, proc: "SkillProcess") -> None:
+        from skillbus.bus import channel
+        from skillbus.msgs import skill_alive_t
+        self.bus, self.proc = bus, proc
+        self.reregister = False
+        self._alive_t = skill_alive_t
+        self._heartbeat_channel = channel("SB_SKILL_HEARTBEAT")
+        bus.subscribe(channel("SB_SKILL_MANAGER"), self._on_manager)
+
+    def _on_manager(self, ch: str, data: bytes) -> None:
+        from skillbus.msgs import decode
+        a = decode(self._alive_t, data)
+        if a is not None and self.proc.name not in a.processes:
+            self.reregister = True  # not here: an RPC call must not run inside a handler
+
+    def heartbeat(self) -> None:
+        m = self._alive_t()
+        m.header.frame = -1
+        m.sender, m.incarnation = self.proc.name, self.proc.incarnation
+        self.bus.publish(self._heartbeat_channel, m.encode())
+
+    def serve_forever(self) -> None:
+        next_beat = 0.0
+        while True:
+            now = time.monotonic()
+            if now >= next_beat:
+                self.heartbeat()
+                next_beat = now + self.HEARTBEAT_S
+            if self.reregister:
+                self.reregister = False
+                try:
+                    self.proc.register(timeout=2.0)
+                    log.info("registered again: the skill manager did not list this process")
+                except RpcError as e:
+                    log.warning("registering again failed (%s); will retry at the next announcement", e)
+            self.bus.handle(max(0.0, min(self.HEARTBEAT_S, next_beat - time.monotonic())))

@@ -144,7 +144,14 @@ class WorldModelInterface:
         out = e.clone()
         for (s, p, o) in sorted(self._by_node.get(e.id, ())):
             out.addRelation(s, p, o)
+        out.mark_loaded()
         return out
+
+    def with_relations(self, e: Element) -> Element:
+        """`e` (e.g. a skill's element parameter, which carries properties only) with the
+        relations the replica has for its id, marked as loaded (see update_element)."""
+        self._fresh()
+        return self._with_relations(e) if e.id and e.id in self._elements else e
 
     def get_element(self, eid: str) -> Element:
         self._fresh()
@@ -224,17 +231,49 @@ class WorldModelInterface:
         return self.get_element(eid)
 
     def update_element(self, e: Element) -> Element:
-        """Writes type, label, properties and relations of `e` (relations touching it are
-        made to match e's)."""
+        """Writes what changed in `e` since it was read (type, label, properties and the
+        relations touching it); what `e` never carried stays as the world model has it.
+        An element made by hand (never read) adds and overwrites what it carries and
+        removes nothing."""
         if e.isAbstract():
             raise WorldModelError(f"cannot update {e.printState()}: it has no id (add it first)")
-        self.commit([op(wm_op_t.UPDATE_ELEMENT, element=e)] + self._relation_ops(e, e.id))
+        self.commit(self._update_ops(e, relations=True))
         return self.get_element(e.id)
 
     def update_properties(self, e: Element) -> Element:
-        """Writes type, label and properties only."""
-        self.commit([op(wm_op_t.UPDATE_ELEMENT, element=e)])
+        """As update_element, for type, label and properties only."""
+        self.commit(self._update_ops(e, relations=False))
         return self.get_element(e.id)
+
+    def _update_ops(self, e: Element, relations: bool) -> list[wm_op_t]:
+        self._fresh()
+        current = self._elements.get(e.id)
+        loaded = e.loaded()
+        if current is None:
+            merged = e  # not in the replica: the server says whether it exists
+        else:
+            merged = current.clone()
+            base_type, base_label, base_props, _ = loaded or ("", "", {}, frozenset())
+            if loaded is None or e.type != base_type:
+                merged.type = e.type
+            if loaded is None or e.label != base_label:
+                merged.label = e.label
+            for key, prop in e._properties.items():
+                if loaded is None or base_props.get(key) != prop:
+                    merged._properties[key] = prop
+            if loaded is not None:
+                for key in base_props:
+                    if key not in e._properties:
+                        merged._properties.pop(key, None)
+        ops = [op(wm_op_t.UPDATE_ELEMENT, element=merged)]
+        if relations:
+            mine = set(e._resolved_relations())
+            base = set(loaded[3]) if loaded is not None else set()
+            have = set(self._by_node.get(e.id, ()))
+            want = (have - (base - mine)) | (mine - base)
+            ops += ([op(wm_op_t.REMOVE_RELATION, relation=r) for r in sorted(have - want)] +
+                    [op(wm_op_t.ADD_RELATION, relation=r) for r in sorted(want - have)])
+        return ops
 
     def remove_element(self, e: Element | str) -> None:
         eid = e if isinstance(e, str) else e.id

@@ -84,6 +84,9 @@ class Element:
         self._type, self._label, self._id = etype, elabel, eid
         self._properties: dict[str, Property] = {}
         self._relations: list[dict] = []
+        # What the element carried when it was read from the world model (or received as
+        # a parameter): an update writes only what changed since (see mark_loaded).
+        self._loaded: tuple[str, str, dict[str, Property], frozenset] | None = None
 
     # -- identity ---------------------------------------------------------
     @property
@@ -132,6 +135,16 @@ class Element:
 
     def clone(self) -> "Element":
         return copy.deepcopy(self)
+
+    def mark_loaded(self) -> None:
+        """Remembers type, label, properties and relations as they are now: what the world
+        model holds. ``WorldModelInterface.update_element`` then writes only the
+        differences, so a property or relation this copy never carried is never erased."""
+        self._loaded = (self._type, self._label, copy.deepcopy(self._properties),
+                        frozenset(self._resolved_relations()))
+
+    def loaded(self) -> tuple[str, str, dict[str, Property], frozenset] | None:
+        return self._loaded
 
     # -- properties -------------------------------------------------------
     def available_properties(self) -> list[str]:
