@@ -18,7 +18,9 @@ speaks LCM here.
 from __future__ import annotations
 
 import os
+import re
 import shlex
+import signal
 import subprocess
 import sys
 import time
@@ -27,6 +29,7 @@ from pathlib import Path
 from skillbus import paths
 from skillbus.system import Program
 
+STARTRETRIES = 3
 PRIORITY = {"can_hub": 10, "sim": 20, "motion": 20, "wm": 30, "gripper": 40, "skill_mgr": 50, "skills": 60,
             "logger": 5}
 
@@ -56,7 +59,7 @@ def write_config(run_dir: Path, programs: list[Program], lockstep: bool, bus_url
             f"autorestart={'unexpected' if lockstep else 'true'}",
             "exitcodes=0",
             "startsecs=1",
-            "startretries=3",
+            f"startretries={STARTRETRIES}",
             "stopsignal=TERM",
             "stopwaitsecs=10",
             "stopasgroup=true",
@@ -89,54 +92,187 @@ def status(conf: Path) -> dict[str, str]:
     return states
 
 
+class LaunchError(RuntimeError):
+    pass
+
+
+class Interrupted(Exception):
+    """SIGINT or SIGTERM during a launch (raised by the handler main_launch installs)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _hold_signals():
+    """SIGINT and SIGTERM wait while a shutdown is under way (it is bounded)."""
+    return signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, signal.SIGTERM))
+
+
+def log_tail(path: Path, lines: int = 10) -> str:
+    try:
+        text = path.read_text(errors="replace").rstrip().splitlines()
+    except OSError as e:
+        return f"({path}: {e.strerror})"
+    return "\n".join("    " + line for line in text[-lines:]) if text else f"({path} is empty)"
+
+
+def supervisord_pid(conf: Path) -> int | None:
+    """The pid of the supervisord of this configuration, if it is running."""
+    try:
+        pid = int((conf.parent / "supervisord.pid").read_text().strip())
+        os.kill(pid, 0)
+    except (OSError, ValueError):
+        return None
+    return pid
+
+
 def start(conf: Path, wait_s: float = 30.0, expect: list[str] | None = None) -> dict[str, str]:
     """Starts supervisord (it daemonizes) and waits until every program has started
-    (RUNNING, or already EXITED cleanly). Raises RuntimeError naming what did not."""
-    subprocess.run([sys.executable, "-m", "supervisor.supervisord", "-c", str(conf)], check=True)
+    (RUNNING, or already EXITED cleanly). A program that will not start (FATAL, after its
+    retries), or a launch that does not complete within wait_s or is interrupted, shuts
+    supervisord and every program down again; LaunchError then names the programs that
+    did not start and shows the end of their logs."""
+    conf = conf.resolve()
+    if supervisord_pid(conf):
+        raise LaunchError(f"a system is already launched in {conf.parent} "
+                          f"(skillbus shutdown --run-dir {shlex.quote(str(conf.parent))})")
+    r = subprocess.run([sys.executable, "-m", "supervisor.supervisord", "-c", str(conf)],
+                       capture_output=True, text=True, timeout=60)
+    if r.returncode != 0:  # it did not daemonize: nothing was started
+        raise LaunchError(f"supervisord did not start (exit {r.returncode}): {(r.stderr or r.stdout).strip()}")
+    try:
+        return _wait_started(conf, wait_s, expect)
+    except BaseException:  # a failure, Ctrl-C or SIGTERM: never leave half a system behind
+        old = _hold_signals()
+        try:
+            shutdown(conf)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        raise
+
+
+def _wait_started(conf: Path, wait_s: float, expect: list[str] | None) -> dict[str, str]:
+    logs = conf.parent / "logs"
     deadline = time.monotonic() + wait_s
     while True:
         st = status(conf)
-        bad = {n: s for n, s in st.items() if s in ("FATAL", "BACKOFF")}
-        if bad:
-            raise RuntimeError(f"supervisord could not start: {bad} (logs in {conf.parent / 'logs'})")
+        fatal = sorted(n for n, s in st.items() if s == "FATAL")
+        if fatal:
+            raise LaunchError("\n".join(
+                f"program {n}: FATAL (it would not start, {STARTRETRIES} retries); the end of {logs / (n + '.err')}:\n"
+                + log_tail(logs / f"{n}.err") for n in fatal))
         if st and all(s in ("RUNNING", "EXITED") for s in st.values()) and (not expect or set(expect) <= set(st)):
             return st
         if time.monotonic() > deadline:
-            raise RuntimeError(f"not started within {wait_s:.0f} s: {st}")
+            if not st and not supervisord_pid(conf):
+                raise LaunchError(f"supervisord ended; the end of {logs / 'supervisord.log'}:\n"
+                                  + log_tail(logs / "supervisord.log"))
+            late = sorted(n for n, s in st.items() if s not in ("RUNNING", "EXITED"))
+            raise LaunchError(f"not started within {wait_s:.0f} s: " + (", ".join(
+                f"{n} {st[n]}" for n in late) or str(st)) + "".join(
+                f"\nthe end of {logs / (n + '.err')}:\n" + log_tail(logs / f"{n}.err") for n in late))
         time.sleep(0.2)
 
 
-def shutdown(conf: Path) -> None:
+def program_pids(conf: Path) -> dict[str, int]:
+    """Program name -> pid of the programs that are running."""
+    pids = {}
+    for line in ctl(conf, "status").stdout.splitlines():
+        m = re.match(r"^(\S+)\s+\S+\s+pid (\d+),", line)
+        if m:
+            pids[m.group(1)] = int(m.group(2))
+    return pids
+
+
+def shutdown(conf: Path, timeout: float = 40.0) -> list[str]:
+    """Stops every program and supervisord (supervisord TERMs each program's process
+    group, KILLs it after stopwaitsecs), and waits until they are gone. A supervisord that
+    does not answer is terminated, and whatever is left of its programs killed. Returns
+    what could not be stopped (empty when everything is gone)."""
+    pid = supervisord_pid(conf)
+    if pid is None:
+        return []
+    pids = program_pids(conf)
     ctl(conf, "shutdown")
-    pid_file = conf.parent / "supervisord.pid"
-    deadline = time.monotonic() + 15
-    while pid_file.exists() and time.monotonic() < deadline:
+    deadline = time.monotonic() + timeout
+    while _alive(pid) and time.monotonic() < deadline:
         time.sleep(0.1)
+    if _alive(pid):
+        _kill(pid, signal.SIGTERM, group=False)
+        end = time.monotonic() + 5
+        while _alive(pid) and time.monotonic() < end:
+            time.sleep(0.1)
+        _kill(pid, signal.SIGKILL, group=False)
+    for p in pids.values():  # (each program leads a process group of its own)
+        _kill(p, signal.SIGKILL, group=True)
+    end = time.monotonic() + 5
+    while any(_alive(p) for p in [pid, *pids.values()]) and time.monotonic() < end:
+        time.sleep(0.1)
+    return [f"{n} (pid {p})" for n, p in [("supervisord", pid), *pids.items()] if _alive(p)]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # a zombie is as good as gone
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True
+
+
+def _kill(pid: int, sig: int, group: bool) -> None:
+    try:
+        (os.killpg if group else os.kill)(pid, sig)
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 def main_launch(args) -> int:
     from skillbus.system import programs
-    run_dir = Path(args.run_dir)
+    run_dir = Path(args.run_dir).resolve()  # the programs run in the repository: every path absolute
     task = None if args.no_task else args.task
     progs = programs(run_dir, task=task, lockstep=not args.wall_clock)
     conf = write_config(run_dir, progs, lockstep=not args.wall_clock)
+
+    def on_signal(signum, frame):
+        raise Interrupted(signum)
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         st = start(conf)
-    except (RuntimeError, subprocess.CalledProcessError) as e:
-        print(f"error: {e}", file=sys.stderr)
+    except LaunchError as e:
+        print(f"error: launch failed: {e}\n(supervisord and every program were shut down; logs in {run_dir / 'logs'})",
+              file=sys.stderr)
         return 1
+    except Interrupted as e:
+        print(f"interrupted ({e}): supervisord and every program were shut down", file=sys.stderr)
+        return 128 + e.signum
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
     print(f"launched {len(st)} programs under supervisord ({conf}); logs in {run_dir / 'logs'}")
     for n, s in sorted(st.items()):
         print(f"  {n:10s} {s}")
-    print(f"stop with: skillbus shutdown --run-dir {shlex.quote(str(run_dir))}")
+    print(f"stop with: skillbus shutdown --run-dir {shlex.quote(args.run_dir)}")
     return 0
 
 
 def main_shutdown(args) -> int:
-    conf = Path(args.run_dir) / "supervisord.conf"
+    conf = Path(args.run_dir).resolve() / "supervisord.conf"
     if not conf.exists():
         print(f"error: no launched system in {args.run_dir} ({conf} is missing)", file=sys.stderr)
         return 1
-    shutdown(conf)
+    if supervisord_pid(conf) is None:
+        print(f"not running (no supervisord for {conf})")
+        return 0
+    left = shutdown(conf)
+    if left:
+        print(f"error: still running: {', '.join(left)}", file=sys.stderr)
+        return 1
     print("stopped")
     return 0

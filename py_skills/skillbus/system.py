@@ -41,12 +41,15 @@ FRAME_MS = 20.0
 
 def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, lockstep: bool = True,
              stop_after_task: bool = True, extra_sim: tuple[str, ...] = (), frame_ms: float = FRAME_MS) -> list[Program]:
-    """The processes, in start order. `task` is started at the manager's first tick."""
-    scene = scene or paths.demo_scene()
+    """The processes, in start order. `task` is started at the manager's first tick.
+    Every path is absolute: supervisord runs the programs in the repository's folder,
+    not where the run folder was named."""
+    run_dir = Path(run_dir).resolve()
+    scene = Path(scene or paths.demo_scene()).resolve()
     ttl = scene.with_suffix("").with_suffix(".ttl") if scene.name.endswith(".scene.json") else scene.with_suffix(".ttl")
     can = str(run_dir / "gripper0.sock")
     py = [sys.executable, "-m", "skillbus.cli"]
-    b = paths.build_dir()
+    b = paths.build_dir().resolve()
     sim = [str(b / "sim_server" / "sim_server"), "--scene", str(scene), "--frame-ms", str(frame_ms)]
     if lockstep:
         sim.append("--pipeline")
