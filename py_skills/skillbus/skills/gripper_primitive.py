@@ -7,7 +7,9 @@ from skillbus import tick_context
 from skillbus.can import cia402 as c
 from skillbus.can import gripper_service
 from skillbus.can.driver import GripperError
+from skillbus.robot import arm as arm_service
 from skillbus.skill import PrimitiveBase
+from skillbus.world import poses
 
 OPEN_UM, CLOSED_UM = 80_000, 0
 TIMEOUT_S = 10.0
@@ -79,13 +81,53 @@ class GripperPrimitive(PrimitiveBase):
         return self.fail(f"preempted: {cmd} stopped the fingers at {s.position_um / 1000:.1f} mm", -1)
 
     def _contained(self, obj, parent, done: str, without_wm: str):
-        """Writes that `parent` contains `obj` (once) and succeeds when this process's
-        replica shows it, so the manager's post-condition sees it too."""
+        """Writes that `parent` contains `obj`, with its pose (once), and succeeds when this
+        process's replica shows it, so the manager's post-condition sees it too."""
         if self.wmi is None:
             return self.success(f"{without_wm} (no world model)")
         if not self.written:
-            self.wmi.set_parent(obj.id, parent.id)
+            self.wmi.write(self._containment_ops(obj.id, parent.id))
             self.written = True
         if self.wmi.get_relations(parent.id, "skiros:contain", obj.id):
             return self.success(done)
         return self.step(f"{self.command}: writing that {parent.id} contains {obj.id}")
+
+    def _containment_ops(self, oid: str, parent: str) -> list:
+        """One transaction: the new container and the object's pose in it.
+
+        The gripper's frame is the tool's (the arm state's tool pose: the robot's own
+        joints, not a camera). A grasp writes the gripper's pose (the tool pose now) and
+        the object's pose relative to it (the grasp offset, from the object's world pose in
+        the world model). A release puts the object where the tool has carried it: the
+        tool pose now composed with that offset, relative to the location (and writes the
+        gripper's pose again). So the world model never holds a pose relative to the old
+        container under the new one. Where it falls from there is for an observation to
+        say (Place ends with Locate).
+
+        In a process without an arm (no ``--arm``) the tool pose is unknown: the object
+        keeps the world pose the world model has for it (where it was grasped), which is
+        stale after a carry but never a phantom made of another container's numbers."""
+        gripper = self.params["Gripper"].value.id
+        tool = self._tool_pose()
+        if tool is None:
+            return poses.reparent_ops(self.wmi, oid, parent)
+        ops = [poses.world_pose_op(self.wmi, gripper, *tool)]
+        if self.command == "grasp":
+            return ops + poses.reparent_ops(self.wmi, oid, parent, parent_pose=tool)
+        if poses.parent_of(self.wmi, oid) == gripper:  # released: carried by the tool
+            world = poses.compose(tool, poses.local_pose(self.wmi.get_element(oid)))
+        else:  # the world model did not know it was held: it stays where it is
+            world = poses.world_pose(self.wmi, oid)
+        return ops + poses.reparent_ops(self.wmi, oid, parent, world)
+
+    @staticmethod
+    def _tool_pose():
+        """The tool's world pose from the arm state, or None (no arm, no state yet)."""
+        try:
+            state = arm_service.arm().state
+        except arm_service.ArmError:
+            return None
+        if state is None:
+            return None
+        t = tuple(state.tool_pose)
+        return (t[0], t[1], t[2]), (t[3], t[4], t[5], t[6])

@@ -20,7 +20,7 @@ from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBas
 from skillbus.msgs import wm_op_t
 from skillbus.world.convert import op
 from skillbus.quat import qmul, yaw_of
-from skillbus.world.poses import set_world_pose, world_pose
+from skillbus.world.poses import reparent, set_world_pose, world_pose
 
 DOWN = (0.0, 1.0, 0.0, 0.0)  # tool z pointing down: half a turn about y
 MOVE_TIMEOUT_S = 20.0
@@ -145,8 +145,7 @@ class locate(PrimitiveBase):
                 self.wmi.get_element(eid)
             except Exception:
                 continue  # the change has not reached the replica yet
-            self.wmi.write([op(wm_op_t.ADD_RELATION, relation=(location, "skiros:contain", eid))])
-            set_world_pose(self.wmi, eid, p, q, parent=location)
+            reparent(self.wmi, eid, location, (p, q))  # the containment and the pose in it, in one write
             self.expected[eid] = p
             del self.adding[rid]
         if self.adding:
@@ -255,6 +254,9 @@ class place(SkillBase):
             self.skill("MoveArm", "", remap={"Target": "Location"}, specify={"Height": BIN_RELEASE, "Cartesian": True}),
             self.skill("Release", ""),
             self.skill("LiftArm", "", specify={"Height": LIFT}),
+            # The object fell from the fingers (released BIN_RELEASE above the location's
+            # origin): the world model learns where it landed from an observation.
+            self.skill("Locate", ""),
         )
 
 
