@@ -74,7 +74,6 @@ Manager::Manager(Bus& bus, ManagerOptions options)
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
     skill_register_t out = reg;
     heard_from_[reg.process] = std::chrono::steady_clock::now();
-    for (const auto& d : reg.skills) dropped_.erase(d.type);
     out.errors = registry_.add(reg);
     out.num_errors = static_cast<int32_t>(out.errors.size());
     SB_INFO(kLog, "process " << reg.process << " registered " << reg.num_skills << " skill(s)"
@@ -289,9 +288,8 @@ std::string Manager::unknown_skill_error(const std::string& type, const std::str
   for (const auto& t : registry_.types()) avail += (avail.empty() ? "" : ", ") + t;
   std::string out = "unknown skill " + type + (label.empty() ? "" : " with label " + label) +
                     " (available: " + (avail.empty() ? std::string("none") : avail) + ")";
-  auto it = dropped_.find(type);
-  if (it != dropped_.end()) out += "; " + it->second;
-  return out;
+  const std::string gone = registry_.gone(type);
+  return gone.empty() ? out : out + "; " + gone;
 }
 
 void Manager::announce() {
@@ -318,7 +316,7 @@ void Manager::drop_silent_processes() {
     if (now - it->second < opt_.liveness_timeout) continue;
     const std::string why = "skill process " + process + " stopped answering (no heartbeat for " +
                             std::to_string(opt_.liveness_timeout.count()) + " ms)";
-    for (const auto& type : registry_.remove(process)) dropped_[type] = why;
+    registry_.remove(process, why);
     heard_from_.erase(it);
     SB_WARN(kLog, why << ": its skills are dropped until it registers again");
   }

@@ -76,7 +76,6 @@ class Manager {
   std::map<int64_t, std::string> results_;
   int64_t incarnation_ = 0;  // this run of the manager (not behaviour: an identity)
   std::map<std::string, std::chrono::steady_clock::time_point> heard_from_;  // process -> last heartbeat
-  std::map<std::string, std::string> dropped_;  // skill type -> why its process's skills were dropped
   std::chrono::steady_clock::time_point last_announce_{};
   std::chrono::steady_clock::time_point last_world_try_{};
 };

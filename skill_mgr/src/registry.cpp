@@ -20,6 +20,7 @@ std::vector<std::string> Registry::add(const skillbus_msgs::skill_register_t& re
       continue;
     }
     by_label_[d.label] = Implementation{d, reg.process, reg.rpc_area, reg.incarnation};
+    gone_.erase(d.type);
   }
   return refused;
 }
@@ -47,18 +48,21 @@ int64_t Registry::incarnation_of(const std::string& process) const {
   return it == incarnations_.end() ? 0 : it->second;
 }
 
-std::vector<std::string> Registry::remove(const std::string& process) {
-  std::set<std::string> gone;
+void Registry::remove(const std::string& process, const std::string& why) {
   for (auto it = by_label_.begin(); it != by_label_.end();) {
     if (it->second.process == process) {
-      gone.insert(it->second.description.type);
+      gone_[it->second.description.type] = why;
       it = by_label_.erase(it);
     } else {
       ++it;
     }
   }
   incarnations_.erase(process);
-  return {gone.begin(), gone.end()};
+}
+
+std::string Registry::gone(const std::string& type) const {
+  auto it = gone_.find(type);
+  return it == gone_.end() ? "" : it->second;
 }
 
 std::vector<std::string> Registry::processes() const {

@@ -30,13 +30,17 @@ class Registry {
   const Implementation* by_label(const std::string& label) const;
   const std::map<std::string, Implementation>& all() const { return by_label_; }
   std::vector<std::string> types() const;
-  // Forgets a process and its skills; returns the skill types that went with it.
-  std::vector<std::string> remove(const std::string& process);
+  // Forgets a process and its skills, remembering `why` for each skill type that went
+  // with it (until a process registers that type again).
+  void remove(const std::string& process, const std::string& why);
+  // Why no process serves `type` any more ("" if none was dropped).
+  std::string gone(const std::string& type) const;
   std::vector<std::string> processes() const;  // those that announced themselves, sorted
 
  private:
   std::map<std::string, int64_t> incarnations_;
   std::map<std::string, Implementation> by_label_;
+  std::map<std::string, std::string> gone_;  // skill type -> why its process was dropped
 };
 
 }  // namespace skillbus::skills

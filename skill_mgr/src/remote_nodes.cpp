@@ -480,8 +480,9 @@ bool RemoteCompound::start() {
       } else {
         auto impls = ctx_.registry.find(n.type, n.label);
         if (impls.empty()) {
+          const std::string gone = ctx_.registry.gone(n.type);
           set_result("no skill of type " + n.type + (n.label.empty() ? "" : " with label " + n.label) +
-                         " is available (in " + impl_.description.label + ")",
+                         " is available (in " + impl_.description.label + ")" + (gone.empty() ? "" : ": " + gone),
                      -1);
           return false;
         }

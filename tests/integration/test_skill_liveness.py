@@ -1,0 +1,85 @@
+"""Liveness between the skill manager and its skill processes, on the wall clock: a
+restarted manager gets every skill back without restarting the processes; a process that
+stops is dropped, and a task that needs its skills says so."""
+
+import signal
+import sys
+import time
+
+from test_skills import LIBS, cli, mgr_binary, start_system
+
+
+def skills_listed(sandbox) -> str:
+    rc, out, err = cli(sandbox, "skills", timeout=20)
+    return out if rc == 0 else ""
+
+
+def test_a_restarted_manager_lists_every_skill_again_within_5_s(sandbox):
+    mgr, proc = start_system(sandbox, "flow_skills")
+    before = skills_listed(sandbox)
+    assert "Chain (chain, compound, process proc1)" in before, before
+    sandbox.kill(mgr, signal.SIGKILL)
+    sandbox.wait(mgr, 10)
+    sandbox.start("skill_mgr-again", [mgr_binary(), "--wall-clock"])
+    t0 = time.monotonic()
+    while True:
+        rc, out, _ = cli(sandbox, "skills", timeout=20)
+        if rc == 0 and out == before:
+            break
+        assert time.monotonic() - t0 < 5.0, f"after {time.monotonic() - t0:.1f} s the manager lists:\n{out}"
+        time.sleep(0.1)
+    rc, out, _ = cli(sandbox, "run", "Chain", "--timeout", "30")
+    assert rc == 0, out
+    assert proc.returncode is None  # the process was never restarted
+
+
+def registered(sandbox, name, library):
+    proc = sandbox.start(name, [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
+                                "--library", library], env={"PYTHONPATH": str(LIBS)})
+    deadline = time.monotonic() + 30
+    while "registered" not in proc.stderr():
+        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
+        time.sleep(0.05)
+    return proc
+
+
+FORGED_START = """
+from skillbus.bus import open_bus
+from skillbus.msgs import skill_start_t, skill_task_t
+from skillbus.rpc import RpcClient, RpcRemoteError
+req = skill_start_t(); req.type = "Echo"
+try:
+    RpcClient(open_bus(), "SKILL", "t").call("start", req, skill_task_t, timeout=5.0)
+    print("accepted")
+except RpcRemoteError as e:
+    print(e)
+"""
+
+
+def test_a_process_that_stops_is_dropped_and_a_task_that_needs_it_names_it(sandbox):
+    mgr, _ = start_system(sandbox, "liveness_skills", name="users")
+    echo = registered(sandbox, "echoes", "safety_skills")
+    rc, out, _ = cli(sandbox, "run", "UsesEcho", "--timeout", "20")
+    assert rc == 0, out
+    sandbox.kill(echo, signal.SIGKILL)
+    sandbox.wait(echo, 10)
+    t0 = time.monotonic()
+    while "Echo (echo" in skills_listed(sandbox):
+        assert time.monotonic() - t0 < 3.0 + 3.0, "the dead process's skills are still listed"
+        time.sleep(0.2)
+    gone = "skill process echoes stopped answering (no heartbeat for 3000 ms)"
+    rc, out, _ = cli(sandbox, "run", "UsesEcho", "--timeout", "20")
+    assert rc == 1 and "no skill of type Echo is available (in uses_echo): " + gone in out, out
+    p = sandbox.start("forge", [sys.executable, "-c", FORGED_START])
+    assert sandbox.wait(p, 30) == 0, p.stderr()
+    assert "unknown skill Echo" in p.stdout() and gone in p.stdout(), p.stdout()
+    # it comes back by registering again
+    registered(sandbox, "echoes", "safety_skills")
+    rc, out, _ = cli(sandbox, "run", "UsesEcho", "--timeout", "20")
+    assert rc == 0, out
+
+
+def test_a_live_process_is_never_dropped(sandbox):
+    mgr, proc = start_system(sandbox, "flow_skills")
+    time.sleep(4.5)  # longer than the liveness timeout: heartbeats keep it listed
+    assert "Chain" in skills_listed(sandbox)
