@@ -238,9 +238,11 @@ void Manager::end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator
 }
 
 void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
-  if (frame == 0 && !world_.ready()) {
+  if (frame == 0 && opt_.wall_clock && !world_.ready()) {
     // The world copy before the first task: its element parameters are checked and
-    // filled from it (without a world model server skills run without one).
+    // filled from it (without a world model server skills run without one). Under
+    // lockstep it is fetched when a task first needs it: a frame must not wait on a
+    // server that may not be there (the master's ack timeout is short).
     std::string why;
     if (!world_.ensure(std::chrono::milliseconds(2000), &why)) SB_INFO(kLog, "no world model yet: " << why);
     last_world_try_ = std::chrono::steady_clock::now();
