@@ -16,8 +16,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -40,13 +42,27 @@ def in_bin(p: list[float]) -> bool:
 
 
 class Watcher:
-    """The live skill tree: one line whenever the running path changes."""
+    """The live skill tree: one line whenever the running path changes, and the task's
+    final progress for the tree at the end.
+
+    It handles the bus on a thread of its own: LCM reads a datagram only when the bus is
+    handled, so a watcher that also waits for other things (the supervisorctl calls that
+    tell the demo the session has ended) leaves the socket unread, the kernel's receive
+    buffer overflows at several times real time, and progress is lost, the end of the task
+    included. Its socket has a large receive buffer too (monitor.watch_url), for the
+    moments this thread is not scheduled."""
 
     def __init__(self) -> None:
         from skillbus.bus import channel, open_bus
-        self.bus = open_bus()
+        from skillbus.monitor import watch_url
+        self.bus = open_bus(watch_url())
         self.last = ""
-        self.final = None
+        self.final = None   # the task's final progress (Success or Failure)
+        self.latest = None  # the last progress seen
+        self.task = None
+        self.error: Exception | None = None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, name="watcher", daemon=True)
         self.bus.subscribe(channel("SB_SKILL_PROGRESS"), self.on_progress)
 
     def on_progress(self, ch: str, data: bytes) -> None:
@@ -54,7 +70,13 @@ class Watcher:
         p = decode(skill_progress_t, data)
         if p is None:
             return
-        self.final = p
+        if self.task is None:
+            self.task = p.task  # the demo's one task (started by the manager at its first tick)
+        if p.task != self.task or self.final is not None:
+            return
+        self.latest = p
+        if p.state in (3, 4):
+            self.final = p
         names = {n.id: n for n in p.nodes}
         running = [n for n in p.nodes if n.state == 2 and n.type]
         if not running:
@@ -73,10 +95,30 @@ class Watcher:
             self.last = line
             print(f"  t={p.header.sim_time_ns * 1e-9:6.2f} s  {line}", flush=True)
 
-    def spin(self, seconds: float) -> None:
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.bus.handle(max(0.0, end - time.monotonic()))
+    def start(self) -> "Watcher":
+        self._thread.start()
+        return self
+
+    def _spin(self) -> None:
+        # Signals are for the main thread (it shuts the system down); here they would only
+        # interrupt LCM's select (EINTR: lcm_handle_timeout() returns -1).
+        signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, signal.SIGTERM))
+        while not self._stop.is_set():
+            try:
+                self.bus.handle(0.1)
+            except Exception as e:  # (BusError, OSError) reported at the end, never a lost thread
+                self.error = e
+                return
+
+    def stop(self, wait_final: float = 2.0) -> None:
+        """Stops the thread once the task's final progress is in (or wait_final has passed:
+        whatever is still in the socket is read first)."""
+        deadline = time.monotonic() + wait_final
+        while self.final is None and self._thread.is_alive() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(5)
 
 
 def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
@@ -113,37 +155,46 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
     progs = programs(run_dir)
     progs.append(Program("logger", [str(Path(sys.executable).parent / "lcm-logger"), "-f", str(run_dir / "demo.lcmlog")]))
     conf = launch.write_config(run_dir, progs, lockstep=True)
-    watcher = None if quiet else Watcher()
+    watcher = None if quiet else Watcher().start()
     t0 = time.monotonic()
-    launch.start(conf, wait_s=60)
+    logs = run_dir / "logs"
     try:
-        while True:
-            st = launch.status(conf)
-            if st.get("sim") in ("EXITED", "FATAL", "STOPPED"):
-                break
-            if watcher:
-                watcher.spin(0.2)
-            else:
+        launch.start(conf, wait_s=60)  # (shuts down what it started when it fails)
+        try:
+            while True:
+                st = launch.status(conf)
+                if st.get("sim") in ("EXITED", "FATAL", "STOPPED"):
+                    break
                 time.sleep(0.2)
-            if time.monotonic() - t0 > 900:
-                raise RuntimeError("the demo did not end within 15 minutes")
-        logs = run_dir / "logs"
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and any(launch.status(conf).get(n) == "RUNNING"
-                                                  for n in ("wm", "skill_mgr", "skills", "gripper")):
-            time.sleep(0.2)
+                if time.monotonic() - t0 > 900:
+                    raise RuntimeError("the demo did not end within 15 minutes")
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline and any(launch.status(conf).get(n) == "RUNNING"
+                                                      for n in ("wm", "skill_mgr", "skills", "gripper")):
+                time.sleep(0.2)
+        finally:
+            held = signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, signal.SIGTERM))
+            try:
+                launch.shutdown(conf)
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, held)
     finally:
-        launch.shutdown(conf)
+        if watcher is not None:
+            watcher.stop()
     wall = time.monotonic() - t0
     sim = _last_json(logs / "sim.out")
     mgr = _last_json(logs / "skill_mgr.out")
     result = {"sim": sim, "mgr": mgr, "wall_launch_s": wall, "run_dir": str(run_dir),
               "participants": {n: _last_json(logs / f"{n}.out") for n in ("wm", "skills", "gripper")}}
     result["world_model"] = world_model_after(run_dir)
-    if watcher is not None and watcher.final is not None:
+    if watcher is not None and (watcher.final or watcher.latest) is not None:
         from skillbus.skill.cli import print_tree
-        print("\nthe skill tree at the end:")
-        print_tree(watcher.final)
+        # The task's final progress; only if it never came, the last one seen, said so.
+        print("\nthe skill tree at the end:" if watcher.final else
+              "\nthe skill tree as last seen (the task's final progress was not seen):")
+        print_tree(watcher.final or watcher.latest)
+    if watcher is not None and watcher.error is not None:
+        print(f"(the live view stopped early: {watcher.error})")
     task = (mgr.get("tasks") or {}).get("1", "no result")
     physics = sim.get("objects", {})
     result["task"] = task
@@ -177,16 +228,58 @@ def print_summary(r: dict[str, Any]) -> None:
     print(f"  logs              {Path(r['run_dir']) / 'logs'}")
 
 
+class Interrupted(Exception):
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _raise_interrupted(signum, frame):
+    raise Interrupted(signum)
+
+
 def main(args) -> int:
     if not os.environ.get("SKILLBUS_NETNS"):
         # LCM multicast stays inside a private network namespace (docs/transport.md).
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
-        return subprocess.call([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
-                                str(Path(args.run_dir).resolve())] + (["--json"] if args.json else []))
-    print("skillbus demo: launching the pick-and-place system under supervisord (lockstep) ...", flush=True)
-    r = run(Path(args.run_dir))
+        return _run_child([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
+                           str(Path(args.run_dir).resolve())] + (["--json"] if args.json else []))
+    # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
+    old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        print("skillbus demo: launching the pick-and-place system under supervisord (lockstep) ...", flush=True)
+        try:
+            r = run(Path(args.run_dir))
+        except Interrupted as e:
+            print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
+            return 128 + e.signum
+        except RuntimeError as e:  # (a launch that failed: it names the program and shows its log)
+            print(f"error: {e}", file=sys.stderr)
+            return 1
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
     if args.json:
         print(json.dumps(r))
     else:
         print_summary(r)
     return 0 if r["ok"] else 1
+
+
+def _run_child(argv: list[str]) -> int:
+    """Runs the demo in its network namespace and waits for it. Ctrl-C reaches the child
+    from the terminal (same process group) and it shuts its system down: this process
+    waits for that (subprocess.call would SIGKILL the child and leave supervisord
+    running). SIGTERM is passed on to the child."""
+    child = subprocess.Popen(argv)
+
+    def on_signal(signum, frame):
+        if signum == signal.SIGTERM and child.poll() is None:
+            child.send_signal(signum)
+
+    old = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        return child.wait()
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)

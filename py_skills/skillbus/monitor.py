@@ -20,6 +20,26 @@ from pathlib import Path
 from skillbus import paths
 from skillbus.bus import resolve_url
 
+WATCH_RECV_BUF = 8 << 20  # bytes of socket receive buffer a watcher asks for (the kernel's cap applies)
+
+
+def watch_url(url: str | None = None) -> str:
+    """The bus URL for a process that watches the bus (the demo's live view, `skillbus run
+    --watch`): with udpm://, a large socket receive buffer. Every process on the multicast
+    group receives every datagram of its lane; with the kernel's default buffer (about
+    200 KB, under 100 ms of a lockstep run at several times real time) a watcher that is
+    not scheduled for a moment loses messages. Asks for at most net.core.rmem_max, so that
+    LCM has no reason to warn."""
+    url = resolve_url(url)
+    if not url.startswith("udpm://") or "recv_buf_size=" in url:
+        return url
+    try:
+        cap = int(Path("/proc/sys/net/core/rmem_max").read_text())
+    except (OSError, ValueError):
+        return url
+    size = min(WATCH_RECV_BUF, cap)
+    return url + ("&" if "?" in url else "?") + f"recv_buf_size={size}"
+
 
 def lcm_tool(name: str) -> str:
     return str(Path(sys.executable).parent / name)
