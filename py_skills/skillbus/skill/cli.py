@@ -13,6 +13,7 @@ from skillbus.bus import BusError, channel, open_bus
 from skillbus.msgs import decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, request_channel
 from skillbus.skill.convert import value_msg
+from skillbus.skill.values import parse_text
 from skillbus.world.element import Element
 
 STATES = {0: "Uninitialized", 1: "Idle", 2: "Running", 3: "Success", 4: "Failure"}
@@ -171,15 +172,10 @@ def parse_param(text: str, lst: skill_list_t, skill: str) -> skill_param_t:
     decl = next((p for d in lst.skills if skill in (d.type, d.label) for p in d.params if p.key == key), None)
     if decl is None:
         raise ValueError(f"-p {key}: {skill} has no parameter {key!r}")
-    conv = {"float": float, "int": int, "str": str, "bool": lambda s: s.lower() in ("1", "true", "yes"),
-            "list": json.loads, "dict": json.loads}
-    if decl.data_type == "element":
-        value = Element(decl.concept or "Unknown", "", raw)
-    else:
-        try:
-            value = conv[decl.data_type](raw)
-        except (ValueError, KeyError) as e:
-            raise ValueError(f"-p {key}: {raw!r} is not a {decl.data_type}: {e}") from None
+    try:
+        value = parse_text(decl.data_type, decl.concept, raw)
+    except ValueError as e:
+        raise ValueError(f"-p {key}: {e}") from None
     m = skill_param_t()
     m.key, m.data_type = key, decl.data_type
     m.values = [value_msg(value)]
