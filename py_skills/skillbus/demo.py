@@ -242,8 +242,9 @@ def main(args) -> int:
     if not os.environ.get("SKILLBUS_NETNS"):
         # LCM multicast stays inside a private network namespace (docs/transport.md).
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
-        return _run_child([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
-                           str(Path(args.run_dir).resolve())] + (["--json"] if args.json else []))
+        from skillbus.monitor import run_foreground
+        return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
+                               str(Path(args.run_dir).resolve())] + (["--json"] if args.json else []))
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -264,22 +265,3 @@ def main(args) -> int:
     else:
         print_summary(r)
     return 0 if r["ok"] else 1
-
-
-def _run_child(argv: list[str]) -> int:
-    """Runs the demo in its network namespace and waits for it. Ctrl-C reaches the child
-    from the terminal (same process group) and it shuts its system down: this process
-    waits for that (subprocess.call would SIGKILL the child and leave supervisord
-    running). SIGTERM is passed on to the child."""
-    child = subprocess.Popen(argv)
-
-    def on_signal(signum, frame):
-        if signum == signal.SIGTERM and child.poll() is None:
-            child.send_signal(signum)
-
-    old = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        return child.wait()
-    finally:
-        for sig, h in old.items():
-            signal.signal(sig, h)

@@ -13,6 +13,7 @@ multicast group of the bus URL: to look at a recorded demo run,
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -54,13 +55,33 @@ def spy_command(url: str | None = None) -> tuple[list[str], dict[str, str]]:
     return [lcm_tool("lcm-spy"), "--lcm-url", resolve_url(url)], env
 
 
+def run_foreground(argv: list[str], env: dict[str, str] | None = None) -> int:
+    """Runs a program in the foreground and returns its exit code. Ctrl-C reaches it from
+    the terminal (same process group) and it ends in its own way: this process waits for
+    that, without a traceback (subprocess.call would SIGKILL it, which leaves whatever it
+    started behind: the demo's supervisord). SIGTERM is passed on to it."""
+    child = subprocess.Popen(argv, env=env)
+
+    def on_signal(signum, frame):
+        if signum == signal.SIGTERM and child.poll() is None:
+            child.send_signal(signum)
+
+    old = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        rc = child.wait()
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
+    return 128 - rc if rc < 0 else rc  # (killed by a signal: 128 + its number, as a shell says)
+
+
 def main_spy(args) -> int:
     try:
         argv, env = spy_command(args.url)
     except FileNotFoundError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    return subprocess.call(argv, env=env)
+    return run_foreground(argv, env=env)
 
 
 def main_replay(args) -> int:
@@ -71,4 +92,4 @@ def main_replay(args) -> int:
     argv = [lcm_tool("lcm-logplayer"), "--lcm-url", resolve_url(args.url), "--speed", str(args.speed)]
     if args.channels:
         argv += ["--regexp", args.channels]
-    return subprocess.call(argv + [str(log)])
+    return run_foreground(argv + [str(log)])

@@ -18,6 +18,16 @@ def wait_for(what, cond, timeout, info=lambda: ""):
         time.sleep(0.05)
 
 
+def ready_system(sandbox):
+    """The manager and a skill process, past the manager's start (on the wall clock its
+    first frame waits up to 2 s for a world model; tasks queue meanwhile): task 1 has
+    run, the task under test is task 2."""
+    mgr, _ = start_system(sandbox, "flow_skills")
+    rc, out, err = cli(sandbox, "run", "Wait", "-p", "Ticks=1", "--timeout", "30")
+    assert rc == 0 and "task 1: Success" in out, out + err
+    return mgr
+
+
 def start_wait_run(sandbox, *extra):
     run = sandbox.start(f"run-{len(sandbox.procs)}",
                         [sys.executable, "-m", "skillbus.cli", "run", "Wait", "-p", "Ticks=1000", *extra],
@@ -28,7 +38,7 @@ def start_wait_run(sandbox, *extra):
 def wait_running(sandbox, run):
     """Until the task has been ticked a few times (watch the manager's log: ticks are
     only shown with --watch)."""
-    wait_for("task 1 running", lambda: re.search(r"task 1: Wait \(wait\) started", sandbox.procs[0].stderr()),
+    wait_for("task 2 running", lambda: re.search(r"task 2: Wait \(wait\) started", sandbox.procs[0].stderr()),
              20, lambda: run.stdout() + run.stderr() + sandbox.procs[0].stderr()[-2000:])
     time.sleep(0.5)
     assert run.returncode is None, run.stdout() + run.stderr()
@@ -41,14 +51,14 @@ def assert_preempted(sandbox, mgr, run, code):
     assert "Traceback" not in err and "lost sys.stderr" not in err, err
     assert "OSError" not in err and "BusError" not in err, err
     # The manager ended the task (preempted), and the client showed its end.
-    assert re.search(r"task 1: Wait Failure: preempted at tick \d+", mgr.stderr()), mgr.stderr()[-2000:]
-    assert re.search(r"task 1: Failure: preempted at tick \d+", out), out + err
-    rc, _, err = cli(sandbox, "stop", "1")
-    assert rc == 1 and "no running task 1" in err, err
+    assert re.search(r"task 2: Wait Failure: preempted at tick \d+", mgr.stderr()), mgr.stderr()[-2000:]
+    assert re.search(r"task 2: Failure: preempted at tick \d+", out), out + err
+    rc, _, err = cli(sandbox, "stop", "2")
+    assert rc == 1 and "no running task 2" in err, err
 
 
 def test_sigint_preempts_the_task(sandbox):
-    mgr, _ = start_system(sandbox, "flow_skills")
+    mgr = ready_system(sandbox)
     run = start_wait_run(sandbox, "--watch")
     wait_running(sandbox, run)
     sandbox.kill(run, signal.SIGINT)
@@ -56,7 +66,7 @@ def test_sigint_preempts_the_task(sandbox):
 
 
 def test_sigterm_preempts_the_task(sandbox):
-    mgr, _ = start_system(sandbox, "flow_skills")
+    mgr = ready_system(sandbox)
     run = start_wait_run(sandbox)
     wait_running(sandbox, run)
     sandbox.kill(run, signal.SIGTERM)
@@ -64,26 +74,26 @@ def test_sigterm_preempts_the_task(sandbox):
 
 
 def test_timeout_preempts_the_task(sandbox):
-    mgr, _ = start_system(sandbox, "flow_skills")
+    mgr = ready_system(sandbox)
     run = start_wait_run(sandbox, "--timeout", "1")
     assert_preempted(sandbox, mgr, run, 3)
     assert "did not end within 1.0 s" in run.stderr()
 
 
 def test_detach_leaves_the_task_running_for_stop(sandbox):
-    mgr, _ = start_system(sandbox, "flow_skills")
+    mgr = ready_system(sandbox)
     t0 = time.monotonic()
     rc, out, err = cli(sandbox, "run", "Wait", "-p", "Ticks=1000", "--detach", timeout=20)
     assert rc == 0, out + err
-    assert out.strip().splitlines()[-1] == "1", out  # the task id, alone on the last line
+    assert out.strip().splitlines()[-1] == "2", out  # the task id, alone on the last line
     assert time.monotonic() - t0 < 10
     time.sleep(1.0)  # the client is gone; the task runs on
-    assert "Failure" not in mgr.stderr() and "Success" not in mgr.stderr(), mgr.stderr()[-2000:]
-    rc, out, err = cli(sandbox, "pause", "1")
+    assert "task 2: Wait Failure" not in mgr.stderr(), mgr.stderr()[-2000:]
+    rc, out, err = cli(sandbox, "pause", "2")
     assert rc == 0 and "paused" in out, out + err
-    rc, out, err = cli(sandbox, "stop", "1")
+    rc, out, err = cli(sandbox, "stop", "2")
     assert rc == 0 and "stopping" in out, out + err
-    wait_for("the preempted task", lambda: re.search(r"task 1: Wait Failure: preempted at tick \d+", mgr.stderr()),
+    wait_for("the preempted task", lambda: re.search(r"task 2: Wait Failure: preempted at tick \d+", mgr.stderr()),
              10, lambda: mgr.stderr()[-2000:])
 
 

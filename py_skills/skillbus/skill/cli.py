@@ -210,7 +210,8 @@ def run(args) -> int:
 
 
 def _run(args, intr: Interrupts) -> int:
-    bus = open_bus(args.url)
+    from skillbus.monitor import watch_url
+    bus = open_bus(watch_url(args.url))  # (a large receive buffer: progress is not lost while it prints)
     client = RpcClient(bus, "SKILL", "cli")
     lst = call(client, "list", skill_start_t(), skill_list_t, intr)
     if intr.signum:
