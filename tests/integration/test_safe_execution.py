@@ -189,3 +189,18 @@ def test_updating_an_element_parameter_keeps_its_relations(system):
     assert out.startswith("red-seen "), out
     assert "'src': 'skiros:Table-1'" in out, out  # still on the table
     assert out.strip().endswith("True"), out     # and still with its pose
+
+
+def test_set_parent_keeps_the_world_pose(system):
+    # Poses are relative to the container: moving Cube-2 from the table into the bin must
+    # re-express its pose, not leave the table-relative numbers under the bin.
+    code = ("from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface as W; "
+            "from skillbus.world.poses import world_pose; "
+            "w = W(open_bus(), 't'); before = world_pose(w, 'skiros:Cube-2')[0]; "
+            "w.set_parent('skiros:Cube-2', 'skiros:Bin-5'); after = world_pose(w, 'skiros:Cube-2')[0]; "
+            "print(w.get_relations('', 'skiros:contain', 'skiros:Cube-2')[0]['src'], "
+            "max(abs(a - b) for a, b in zip(before, after)))")
+    p = system.start("check", [sys.executable, "-c", code])
+    assert system.wait(p, 30) == 0, p.stderr()
+    parent, moved = p.stdout().split()
+    assert parent == "skiros:Bin-5" and float(moved) < 1e-6, p.stdout()

@@ -296,14 +296,12 @@ class WorldModelInterface:
             self.commit(ops)
 
     def set_parent(self, eid: str, parent: str, relation: str = "skiros:contain") -> None:
-        """Makes `parent` the only element that contains `eid` (a grasped object moves
-        from its table into the gripper). Under lockstep the write goes out with this
-        frame (commit_async); otherwise it is committed at once."""
-        ops = [op(wm_op_t.REMOVE_RELATION, relation=r) for r in sorted(self._relations)
-               if r[1] == relation and r[2] == eid and r[0] != parent]
-        if (parent, relation, eid) not in self._relations:
-            ops.append(op(wm_op_t.ADD_RELATION, relation=(parent, relation, eid)))
-        self.write(ops)
+        """Makes `parent` the only element that contains `eid`, keeping its world pose
+        (poses are relative to the container: the pose is re-expressed relative to the new
+        one in the same transaction, see skillbus.world.poses.reparent). Under lockstep the
+        write goes out with this frame (commit_async); otherwise it is committed at once."""
+        from skillbus.world.poses import reparent_ops
+        self.write(reparent_ops(self, eid, parent, relation=relation))
 
     # -- server-side questions -----------------------------------------------
     def get_transform(self, source: str, target: str) -> tuple[list[float], list[float]]:
