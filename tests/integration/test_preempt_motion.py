@@ -137,9 +137,41 @@ def scenario(run: Path, case: str) -> dict:
         req.task = task
         client.call("stop", req, skill_task_t)
 
+    if case == "arm-sigint":
+        return sigint_scenario(bus, skill, params, kw)
     out = stop_during_motion(bus, start, stop, **kw)
     if case == "gripper" and "error" not in out:
         out["then_open"] = run_to_end(bus, client, lst, "GripperOpen", {"Gripper": "skiros:Gripper-7"})
+    return out
+
+
+def sigint_scenario(bus, skill: str, params: dict, kw: dict) -> dict:
+    """As a user would: `skillbus run` in the foreground, then Ctrl-C (SIGINT). The stop
+    counts as acknowledged when the client has exited (it exits after the manager
+    acknowledged the stop and the task's end was shown)."""
+    import re
+    import signal
+    import subprocess
+    argv = [sys.executable, "-m", "skillbus.cli", "run", skill, *[x for k, v in params.items() for x in ("-p", f"{k}={v}")]]
+    client = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    def start() -> int:
+        line = client.stdout.readline()  # "task N: MoveArm started"
+        m = re.match(r"task (\d+): ", line)
+        if not m:
+            client.kill()
+            raise RuntimeError(f"skillbus run said {line!r}; stderr: {client.stderr.read()[-2000:]}")
+        return int(m.group(1))
+
+    def stop(task: int) -> None:
+        client.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + 30
+        while client.poll() is None and time.monotonic() < deadline:
+            bus.handle(0.01)  # the physics state keeps coming: the ack is when the client exits
+
+    out = stop_during_motion(bus, start, stop, **kw)
+    out["client_exit"] = client.wait(timeout=30)
+    out["client_output"] = (client.stdout.read() + client.stderr.read())[-2000:]
     return out
 
 
@@ -174,6 +206,7 @@ def run_to_end(bus, client, lst, skill: str, params: dict, timeout: float = 30.0
 # skill, its parameters, how to watch it (the fingers start open: 80 mm, closing at 50 mm/s)
 CASES = {
     "arm": ("MoveArm", ARM_PARAMS, {"moving_m": 0.15, "probe": tool_position}),
+    "arm-sigint": ("MoveArm", ARM_PARAMS, {"moving_m": 0.15, "probe": tool_position}),
     "gripper": ("GripperClose", {"Gripper": "skiros:Gripper-7"}, {"moving_m": 0.01, "probe": finger_width}),
 }
 
@@ -199,6 +232,15 @@ def test_stop_during_move_arm_holds_the_arm(sandbox, tmp_path):
     assert r["speed_at_stop_m_s"] > 0.2, r  # it was stopped in full motion
     assert r["moved_after_ack_m"] < MAX_MOTION_AFTER_STOP_M, r
     assert not r["arm_moving_at_end"], r  # settled
+
+
+def test_sigint_to_skillbus_run_during_move_arm_holds_the_arm(sandbox, tmp_path):
+    r = run_case(sandbox, tmp_path, "arm-sigint")
+    assert r["client_exit"] == 130, r
+    assert "Traceback" not in r["client_output"], r["client_output"]
+    assert r["speed_at_stop_m_s"] > 0.2, r
+    assert r["moved_after_ack_m"] < MAX_MOTION_AFTER_STOP_M, r
+    assert not r["arm_moving_at_end"], r
 
 
 def test_stop_during_gripper_close_stops_the_fingers(sandbox, tmp_path):
