@@ -96,6 +96,9 @@ def main(argv: list[str] | None = None) -> int:
     except BusError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:  # Ctrl-C in a command that has nothing to clean up: no traceback
+        print("interrupted", file=sys.stderr)
+        return 130
 
 
 def dispatch(args: argparse.Namespace) -> int:

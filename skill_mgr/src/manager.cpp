@@ -131,6 +131,7 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     if (it != tasks_.end()) it->second->stop_requested = true;
     for (auto q = starts_.begin(); q != starts_.end(); ++q)
       if (q->first == req.task) {
+        stopped_queued_.emplace_back(q->first, q->second.type);  // its end is published at the next frame
         starts_.erase(q);
         break;
       }
@@ -253,6 +254,24 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
   }
   frame_ = frame;
   sim_time_ns_ = sim_time_ns;
+  while (!stopped_queued_.empty()) {  // a task stopped before it began still ends visibly
+    const auto [id, type] = stopped_queued_.front();
+    stopped_queued_.pop_front();
+    results_[id] = "Failure: stopped before it started";
+    skill_progress_t p{};
+    p.task = id;
+    p.state = state_code(State::Failure);
+    skill_node_progress_t root{};
+    root.id = 0;
+    root.parent = -1;
+    root.type = type;
+    root.state = p.state;
+    root.message = "stopped before it started";
+    root.code = -1;
+    p.nodes = {root};
+    p.num_nodes = 1;
+    participant_.publish(channel("SB_SKILL_PROGRESS"), p);
+  }
   if (sim_time_ns % opt_.tick_period_ns != 0) {
     // Between skill ticks only a stop is served: a stop reaches the skills (and the arm)
     // at the next frame, not up to a tick period later.

@@ -83,3 +83,35 @@ def test_a_live_process_is_never_dropped(sandbox):
     mgr, proc = start_system(sandbox, "flow_skills")
     time.sleep(4.5)  # longer than the liveness timeout: heartbeats keep it listed
     assert "Chain" in skills_listed(sandbox)
+
+
+STOP_QUEUED = """
+import time
+from skillbus.bus import channel, open_bus
+from skillbus.msgs import decode, skill_progress_t, skill_start_t, skill_task_t
+from skillbus.rpc import RpcClient
+bus = open_bus()
+c = RpcClient(bus, "SKILL", "t")
+ends = []
+bus.subscribe(channel("SB_SKILL_PROGRESS"),
+              lambda ch, d: ends.append(decode(skill_progress_t, d)))
+req = skill_start_t(); req.type = "Wait"
+task = c.call("start", req, skill_task_t, timeout=5.0).task
+stop = skill_start_t(); stop.task = task
+c.call("stop", stop, skill_task_t, timeout=5.0)
+deadline = time.monotonic() + 3.0
+while time.monotonic() < deadline and not any(p.task == task and p.state == 4 for p in ends):
+    bus.handle(0.05)
+final = [p for p in ends if p.task == task and p.state == 4]
+print(final[0].nodes[0].message if final else "no end seen")
+"""
+
+
+def test_a_task_stopped_before_it_began_still_ends_visibly(sandbox):
+    # At one tick a second, the stop almost always reaches the task while it is queued.
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock", "--tick-hz", "1"])
+    registered(sandbox, "proc1", "flow_skills")
+    p = sandbox.start("stopper", [sys.executable, "-c", STOP_QUEUED])
+    assert sandbox.wait(p, 30) == 0, p.stderr()
+    end = p.stdout().strip()
+    assert end == "stopped before it started" or end.startswith("preempted"), end
