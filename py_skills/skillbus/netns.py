@@ -1,5 +1,10 @@
 """A private network namespace for multi-process runs, and processes that never leak.
 
+This module is public API, not a test fixture: ``skillbus lockstep-session`` and the
+demo use it, as do the tests (the ``sandbox`` fixture) and the benchmarks; keep
+:class:`Sandbox`, :class:`Proc`, :class:`SandboxError` and :func:`last_json` stable.
+``deploy/netns-run`` is its shell twin (the same namespace set-up) for runs by hand.
+
 LCM's UDP multicast needs a multicast route; joining a group on the host would send
 IGMP reports out of the real interface. So tests and the demo run their processes in a
 network namespace of their own (``unshare -rn``; loopback up, multicast on, a route for
@@ -12,6 +17,7 @@ Example::
     with Sandbox() as box:
         clock = box.start("clock", ["build/common/sb_clock", "--participants", "p1"])
         part = box.start("p1", [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", "p1"])
+        part.wait_for("some line", timeout=10)  # of its stderr; fails at once if it exits
         box.wait(clock, timeout=30)
     # every process is gone here, also after an exception or a timeout
 """
@@ -21,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import re
 import select
 import shutil
 import signal
@@ -28,6 +35,8 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
+
+from skillbus.waiting import wait_for_text
 
 SETUP = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
 
@@ -52,6 +61,18 @@ class Proc:
 
     def stderr(self) -> str:
         return self.stderr_path.read_text(errors="replace")
+
+    def wait_for(self, pattern: str | re.Pattern[str], timeout: float, stream: str = "stderr",
+                 what: str = "") -> re.Match[str]:
+        """Waits until the process has written `pattern` (a string: literally; a compiled
+        expression: searched) to its stderr (or stdout) and returns the match. Raises
+        WaitTimeout when it has not within `timeout`, RuntimeError as soon as the process
+        has ended without it; both show the end of its stderr."""
+        read = self.stderr if stream == "stderr" else self.stdout
+        shown = pattern.pattern if isinstance(pattern, re.Pattern) else pattern
+        return wait_for_text(read, pattern, timeout, what or f"{self.name} writing {shown!r} to {stream}",
+                             ended=lambda: self.returncode,
+                             diagnostic=lambda: f"the end of {self.name}'s stderr:\n{self.stderr()[-2000:]}")
 
 
 def last_json(text: str) -> dict | None:
