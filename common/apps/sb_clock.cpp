@@ -11,8 +11,10 @@
 #include <cstdio>
 #include <iostream>
 
-#include "args.hpp"
 #include "demo_mix.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/faulty_bus.hpp"
 #include "skillbus/lockstep.hpp"
@@ -20,39 +22,46 @@
 
 using namespace skillbus;
 
-namespace {
-
-
-}  // namespace
-
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv,
-                  {"url", "name", "participants", "frames", "period-ms", "join-timeout-ms", "ack-timeout-ms",
-                   "message-timeout-ms", "lose-clocks-every"},
-                  {"demo"});
+  CLI::App app{"A lockstep clock master without physics: runs the lockstep protocol for the named participants "
+               "and prints a one-line JSON summary.",
+               "sb_clock"};
+  apps::configure(app);
+  std::string url;
   MasterConfig cfg;
-  cfg.name = args.str("name", "clock");
-  cfg.participants = args.list("participants");
-  cfg.frames = args.num("frames", 1000);
-  cfg.frame_period_ns = static_cast<int64_t>(args.real("period-ms", 10.0) * 1e6);
-  cfg.join_timeout = std::chrono::milliseconds(args.num("join-timeout-ms", 10000));
-  cfg.ack_timeout = std::chrono::milliseconds(args.num("ack-timeout-ms", 5000));
-  cfg.message_timeout = std::chrono::milliseconds(args.num("message-timeout-ms", 2000));
-  if (cfg.frame_period_ns <= 0) apps::Args::die("--period-ms must be positive");
+  cfg.name = "clock";
+  int64_t frames = 1000, join_ms = 10000, ack_ms = 5000, message_ms = 2000;
+  double period_ms = 10.0;
+  int lose_clocks_every = 0;
+  bool demo = false;
+  apps::add_url_option(app, url);
+  app.add_option("--name", cfg.name, "its name on the bus");
+  apps::add_list_option(app, "--participants", cfg.participants, "the participants that must join and ack every frame");
+  app.add_option("--frames", frames, "frames to run");
+  app.add_option("--period-ms", period_ms, "sim time per frame, ms")->check(apps::positive());
+  app.add_option("--join-timeout-ms", join_ms, "how long to wait for every participant to join");
+  app.add_option("--ack-timeout-ms", ack_ms, "how long to wait for a frame's acks");
+  app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
+  app.add_option("--lose-clocks-every", lose_clocks_every, "tests: lose every N-th clock message (0: none)");
+  app.add_flag("--demo", demo, "play the toy world: publish SB_DEMO_STATE, fold in SB_DEMO_CMD");
+  apps::parse_or_exit(app, argc, argv);
+  cfg.frames = frames;
+  cfg.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
+  cfg.join_timeout = std::chrono::milliseconds(join_ms);
+  cfg.ack_timeout = std::chrono::milliseconds(ack_ms);
+  cfg.message_timeout = std::chrono::milliseconds(message_ms);
+  if (cfg.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
 
   std::unique_ptr<Bus> bus;
-  try {
+  apps::start_or_exit("sb_clock", [&] {
     // --lose-clocks-every N: a test of the clock resend (every N-th clock is lost).
-    bus = std::make_unique<DropEveryNthBus>(open_bus(args.str("url")),
-                                            static_cast<int>(args.num("lose-clocks-every", 0)), clock_channel());
-  } catch (const std::exception& e) {
-    apps::Args::die(e.what());
-  }
+    bus = std::make_unique<DropEveryNthBus>(open_bus(url), lose_clocks_every, clock_channel());
+  });
   LockstepMaster master(*bus, cfg);
 
   uint64_t world = 0;
   long commands = 0;
-  if (args.flag("demo")) {
+  if (demo) {
     master.subscribe(channel("SB_DEMO_CMD"), [&](const StampedMessage& m) {
       skillbus_msgs::test_sample_t cmd;
       if (!decode_msg(m.data.data(), m.data.size(), cmd))
@@ -71,13 +80,18 @@ int main(int argc, char** argv) {
 
   const RunResult r = master.run();
   const double rtf = r.wall_seconds > 0 ? (r.sim_time_ns * 1e-9) / r.wall_seconds : 0.0;
-  std::printf(
-      "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"participants\": %zu, \"sim_time_s\": %.3f, "
-      "\"wall_time_s\": %.3f, \"real_time_factor\": %.2f, \"us_per_frame\": %.1f, \"digest\": \"%s\", "
-      "\"commands\": %ld, \"bad_input\": %ld}\n",
-      r.ok ? "true" : "false", apps::json_escape(r.error).c_str(), static_cast<long long>(r.frames), cfg.participants.size(),
-      r.sim_time_ns * 1e-9, r.wall_seconds, rtf, r.frames ? r.wall_seconds * 1e6 / r.frames : 0.0,
-      r.digest_hex().c_str(), commands, master.bad_input().total());
-  std::fflush(stdout);
+  apps::Summary out;
+  out["ok"] = r.ok;
+  out["error"] = r.error;
+  out["frames"] = r.frames;
+  out["participants"] = cfg.participants.size();
+  out["sim_time_s"] = apps::rounded(r.sim_time_ns * 1e-9, 3);
+  out["wall_time_s"] = apps::rounded(r.wall_seconds, 3);
+  out["real_time_factor"] = apps::rounded(rtf, 2);
+  out["us_per_frame"] = apps::rounded(r.frames ? r.wall_seconds * 1e6 / r.frames : 0.0, 1);
+  out["digest"] = r.digest_hex();
+  out["commands"] = commands;
+  out["bad_input"] = master.bad_input().total();
+  apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

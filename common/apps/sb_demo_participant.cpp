@@ -11,8 +11,10 @@
 // Role:    lockstep participant (or wall-clock with --wall-clock).
 #include <cstdio>
 
-#include "args.hpp"
 #include "demo_mix.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus_msgs/test_sample_t.hpp"
@@ -44,25 +46,33 @@ class DropNextBus : public Bus {
 }  // namespace
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "name", "drop-at-frame", "slow-at-frame", "clock-timeout-ms", "message-timeout-ms", "frames"},
-                  {"wall-clock", "bare"});
+  CLI::App app{"A C++ lockstep participant of the demo world (see sb_clock --demo): folds what it receives into "
+               "its state and publishes SB_DEMO_CMD every frame; prints a one-line JSON summary.",
+               "sb_demo_participant"};
+  apps::configure(app);
+  std::string url;
   ParticipantConfig cfg;
-  cfg.name = args.str("name");
-  if (cfg.name.empty()) apps::Args::die("--name is required");
+  bool wall_clock = false, bare = false;
+  int64_t frames = -1, clock_ms = 10000, message_ms = 2000, drop_at = -1, slow_at = -1;
+  apps::add_url_option(app, url);
+  app.add_option("--name", cfg.name, "its participant name (required)");
+  app.add_flag("--wall-clock", wall_clock, "run on the wall clock instead of in lockstep");
+  app.add_option("--frames", frames, "with --wall-clock: frames to run (-1: until stopped)");
+  app.add_option("--clock-timeout-ms", clock_ms, "how long to wait for the next clock message");
+  app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
+  app.add_option("--drop-at-frame", drop_at, "tests: announce but do not send its SB_DEMO_CMD of this frame");
+  app.add_option("--slow-at-frame", slow_at, "tests: spend 0.8 s dispatching the bus in this frame");
+  app.add_flag("--bare", bare, "only the lockstep protocol, no demo traffic (benchmarks)");
+  apps::parse_or_exit(app, argc, argv);
+  if (cfg.name.empty()) apps::usage_error(app, "--name is required");
   cfg.kind = "cpp-demo";
-  cfg.mode = args.flag("wall-clock") ? ClockMode::WallClock : ClockMode::Lockstep;
-  cfg.wall_frames = args.num("frames", -1);
-  cfg.clock_timeout = std::chrono::milliseconds(args.num("clock-timeout-ms", 10000));
-  cfg.message_timeout = std::chrono::milliseconds(args.num("message-timeout-ms", 2000));
-  const long long drop_at = args.num("drop-at-frame", -1);
-  const long long slow_at = args.num("slow-at-frame", -1);
+  cfg.mode = wall_clock ? ClockMode::WallClock : ClockMode::Lockstep;
+  cfg.wall_frames = frames;
+  cfg.clock_timeout = std::chrono::milliseconds(clock_ms);
+  cfg.message_timeout = std::chrono::milliseconds(message_ms);
 
   std::unique_ptr<DropNextBus> bus;
-  try {
-    bus = std::make_unique<DropNextBus>(open_bus(args.str("url")));
-  } catch (const std::exception& e) {
-    apps::Args::die(e.what());
-  }
+  apps::start_or_exit("sb_demo_participant", [&] { bus = std::make_unique<DropNextBus>(open_bus(url)); });
   LockstepParticipant p(*bus, cfg);
   const std::string cmd_channel = channel("SB_DEMO_CMD");
   uint64_t state = 0;
@@ -75,12 +85,12 @@ int main(int argc, char** argv) {
     state = apps::demo_mix(state, s.i64);
     ++received;
   };
-  if (!args.flag("bare")) {  // --bare: only the lockstep protocol (benchmarks)
+  if (!bare) {  // --bare: only the lockstep protocol (benchmarks)
     p.subscribe(channel("SB_DEMO_STATE"), fold);
     p.subscribe(cmd_channel, fold);
   }
   p.on_frame = [&](int64_t frame, int64_t sim_time) {
-    if (args.flag("bare")) return;
+    if (bare) return;
     if (frame == slow_at) {
       // Test: a slow frame, longer than the master's clock resend interval, spent
       // dispatching the bus as a long synchronous RPC call would.
@@ -94,9 +104,13 @@ int main(int argc, char** argv) {
     p.publish(cmd_channel, out);
   };
   const RunResult r = p.run();
-  std::printf("{\"ok\": %s, \"name\": \"%s\", \"frames\": %lld, \"received\": %ld, \"digest\": \"%s\", \"bad_input\": %ld}\n",
-              r.ok ? "true" : "false", cfg.name.c_str(), static_cast<long long>(r.frames), received,
-              r.digest_hex().c_str(), p.bad_input().total());
-  std::fflush(stdout);
+  apps::Summary out;
+  out["ok"] = r.ok;
+  out["name"] = cfg.name;
+  out["frames"] = r.frames;
+  out["received"] = received;
+  out["digest"] = r.digest_hex();
+  out["bad_input"] = p.bad_input().total();
+  apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

@@ -9,11 +9,12 @@
 // SIGTERM or SIGINT stop it; it then prints its statistics as JSON.
 //
 // Reads:   SB_COUNTER_REQ       Writes: SB_COUNTER_REP
-#include <csignal>
 #include <cstdio>
 #include <map>
 
-#include "args.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
 #include "skillbus/faulty_bus.hpp"
 #include "skillbus/rpc.hpp"
 #include "skillbus_msgs/rpc_counter_t.hpp"
@@ -21,21 +22,24 @@
 using namespace skillbus;
 using skillbus_msgs::rpc_counter_t;
 
-namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
-}  // namespace
-
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "drop-every", "exit-after-idle-ms", "area"});
+  CLI::App app{"An RPC server of area COUNTER (methods add, get, fail) for tests and benchmarks of the RPC layer; "
+               "SIGTERM or SIGINT stop it and it prints its statistics as JSON.",
+               "sb_rpc_counter"};
+  apps::configure(app);
+  std::string url, area = "COUNTER";
+  int drop_every = 0;
+  int64_t idle_ms = -1;
+  apps::add_url_option(app, url);
+  app.add_option("--area", area, "the RPC area it serves");
+  app.add_option("--drop-every", drop_every, "tests: lose every N-th message it publishes (0: none)");
+  app.add_option("--exit-after-idle-ms", idle_ms, "stop after this long without a request (-1: never)");
+  apps::parse_or_exit(app, argc, argv);
   std::unique_ptr<Bus> bus;
-  try {
-    bus = std::make_unique<DropEveryNthBus>(open_bus(args.str("url")), static_cast<int>(args.num("drop-every", 0)));
-  } catch (const std::exception& e) {
-    apps::Args::die(e.what());
-  }
+  apps::start_or_exit("sb_rpc_counter",
+                      [&] { bus = std::make_unique<DropEveryNthBus>(open_bus(url), drop_every); });
   std::map<std::string, rpc_counter_t> counters;
-  RpcServer server(*bus, args.str("area", "COUNTER"));
+  RpcServer server(*bus, area);
   server.add_method<rpc_counter_t, rpc_counter_t>("add", [&](const rpc_counter_t& r) {
     rpc_counter_t& c = counters[r.key];
     c.key = r.key;
@@ -55,17 +59,19 @@ int main(int argc, char** argv) {
   server.add_method<rpc_counter_t, rpc_counter_t>("fail", [](const rpc_counter_t& r) -> rpc_counter_t {
     throw std::runtime_error("asked to fail for key '" + r.key + "'");
   });
-  std::fprintf(stderr, "sb_rpc_counter: serving %s on %s\n", rpc_request_channel(args.str("area", "COUNTER")).c_str(),
+  std::fprintf(stderr, "sb_rpc_counter: serving %s on %s\n", rpc_request_channel(area).c_str(),
                bus->url().c_str());
-  const long long idle_ms = args.num("exit-after-idle-ms", -1);
   auto last = std::chrono::steady_clock::now();
-  std::signal(SIGTERM, on_signal);  // stop cleanly and print the statistics
-  std::signal(SIGINT, on_signal);
-  while (!g_stop) {
+  apps::stop_on_signals();  // stop cleanly and print the statistics
+  while (!apps::stop_requested()) {
     if (bus->handle(std::chrono::milliseconds(100))) last = std::chrono::steady_clock::now();
     if (idle_ms >= 0 && std::chrono::steady_clock::now() - last > std::chrono::milliseconds(idle_ms)) break;
   }
-  std::printf("{\"served\": %ld, \"duplicates\": %ld, \"expired\": %ld, \"bad_input\": %ld}\n", server.served(),
-              server.duplicates(), server.expired(), server.bad_input().total());
+  apps::Summary out;
+  out["served"] = server.served();
+  out["duplicates"] = server.duplicates();
+  out["expired"] = server.expired();
+  out["bad_input"] = server.bad_input().total();
+  apps::print_summary(out);
   return 0;
 }

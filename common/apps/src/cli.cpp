@@ -1,0 +1,79 @@
+#include "skillbus/apps/cli.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+
+namespace skillbus::apps {
+
+namespace {
+
+std::string one_line(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+}  // namespace
+
+void configure(CLI::App& app) {
+  app.option_defaults()->always_capture_default();
+  app.get_formatter()->column_width(38);
+}
+
+void parse_or_exit(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::cout << app.help() << std::flush;
+    std::exit(0);
+  } catch (const CLI::CallForAllHelp&) {
+    std::cout << app.help("", CLI::AppFormatMode::All) << std::flush;
+    std::exit(0);
+  } catch (const CLI::ParseError& e) {
+    usage_error(app, e.what());
+  }
+}
+
+void usage_error(const CLI::App& app, const std::string& why) {
+  std::fprintf(stderr, "%s: error: %s (see --help)\n", app.get_name().c_str(), one_line(why).c_str());
+  std::exit(kUsageError);
+}
+
+const CLI::Validator& positive() {
+  static const CLI::Validator v(
+      [](std::string& text) -> std::string {
+        double x = 0;
+        if (!CLI::detail::lexical_cast(text, x) || !std::isfinite(x) || !(x > 0))
+          return "must be a positive number, not '" + text + "'";
+        return "";
+      },
+      "POSITIVE");
+  return v;
+}
+
+CLI::Option* add_url_option(CLI::App& app, std::string& url) {
+  return app.add_option("--url", url,
+                        "the bus URL (empty: $SKILLBUS_BUS_URL, else udpm://239.255.76.67:7667?ttl=0)");
+}
+
+CLI::Option* add_list_option(CLI::App& app, const std::string& name, std::vector<std::string>& out,
+                             const std::string& description) {
+  return app
+      .add_option_function<std::string>(
+          name,
+          [&out](const std::string& text) {
+            out.clear();
+            std::stringstream ss(text);
+            for (std::string item; std::getline(ss, item, ',');)
+              if (!item.empty()) out.push_back(item);
+          },
+          description)
+      ->type_name("A,B,...")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+}
+
+}  // namespace skillbus::apps
