@@ -1,10 +1,11 @@
 """The pick-and-place system: every process, its command line, and the task.
 
-One description serves the supervisor configuration (deploy/supervisord.conf.in, through
-``skillbus launch``), the demo, the tests and the benchmarks, so they all run the same
-system. Under lockstep the physics server is the clock master and the world model server,
-the skill manager, the skill process and the gripper device are its participants; the
-CAN hub and the motion service are plain servers.
+One description serves the supervisord configuration (which ``skillbus launch``,
+py_skills/skillbus/launch.py, writes into the run folder as supervisord.conf), the demo,
+the tests and the benchmarks, so they all run the same system. Under lockstep the
+physics server is the clock master and the world model server, the skill manager, the
+skill process and the gripper device are its participants; the CAN hub and the motion
+service are plain servers.
 """
 
 from __future__ import annotations
