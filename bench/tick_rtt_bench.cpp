@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "remote_nodes.hpp"
+#include "remote_primitive.hpp"
 
 using namespace skillbus;
 using namespace skillbus::skills;

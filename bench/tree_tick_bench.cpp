@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "tree/compound.hpp"
+#include "tree/processor_registry.hpp"
 
 using namespace skillbus::skills;
 

@@ -3,6 +3,11 @@
 #include <sstream>
 
 #include "param_check.hpp"
+#include "remote_primitive.hpp"
+#include "skill_nodes.hpp"
+#include "skillbus_msgs/skill_processors_t.hpp"
+#include "skillbus_msgs/skill_state_t.hpp"
+#include "tree/processor_registry.hpp"
 #include "skillbus_msgs/skill_alive_t.hpp"
 #include "skillbus_msgs/skill_list_t.hpp"
 #include "skillbus_msgs/skill_register_t.hpp"
@@ -24,7 +29,7 @@ ParticipantConfig participant_config(const ManagerOptions& o) {
   return c;
 }
 
-int8_t state_code(State s) { return static_cast<int8_t>(s); }
+int8_t state_code(State s) { return static_cast<int8_t>(s); }  // State's values are skill_state_t's
 
 }  // namespace
 
@@ -80,6 +85,16 @@ Manager::Manager(Bus& bus, ManagerOptions options)
                              << (out.errors.empty() ? "" : ", " + std::to_string(out.errors.size()) + " refused"));
     return out;
   });
+  rpc_.add_method<skill_start_t, skill_processors_t>("processors", [](const skill_start_t&) {
+    skill_processors_t out{};
+    for (const auto& info : ProcessorRegistry::standard().list()) {
+      out.names.push_back(info.name);
+      out.args.push_back(info.arg == ProcessorArg::Count ? "n" : info.arg == ProcessorArg::Processor ? "processor" : "");
+      out.summaries.push_back(info.summary);
+    }
+    out.num_processors = static_cast<int32_t>(out.names.size());
+    return out;
+  });
   rpc_.add_method<skill_start_t, skill_list_t>("list", [this](const skill_start_t&) {
     skill_list_t out{};
     for (const auto& [label, impl] : registry_.all()) {
@@ -92,15 +107,22 @@ Manager::Manager(Bus& bus, ManagerOptions options)
   rpc_.add_method<skill_start_t, skill_task_t>("start", [this](const skill_start_t& req) {
     const auto impls = registry_.find(req.type, req.label);
     if (impls.empty()) throw RpcError(unknown_skill_error(req.type, req.label));
-    // Keys and value types are checked here, so a wrong one never starts; elements need
-    // the world and are checked when the skill starts (the task then fails naming them).
-    const std::string bad = check_given(impls.front()->description, req.params);
+    // Text values (KEY=VALUE from a command line) are parsed here by the description, and
+    // keys and value types are checked, so a wrong one never starts; elements need the
+    // world and are checked when the skill starts (the task then fails naming them).
+    skill_start_t typed = req;
+    for (auto& p : typed.params) {
+      if (!p.data_type.empty()) continue;
+      const std::string bad = parse_text(impls.front()->description, p);
+      if (!bad.empty()) throw RpcError(bad);
+    }
+    const std::string bad = check_given(impls.front()->description, typed.params);
     if (!bad.empty()) throw RpcError(bad);
     skill_task_t out{};
     out.task = next_task_++;
     out.state = state_code(State::Idle);
     out.message = "queued";
-    starts_.emplace_back(out.task, req);
+    starts_.emplace_back(out.task, typed);
     return out;
   });
   // pause / resume / step: a paused task is not ticked; step ticks it once.
@@ -179,13 +201,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
     std::string why;
     world_.ensure(std::chrono::milliseconds(500), &why);
   }
-  if (impls.size() > 1 && req.label.empty()) {  // by type only: the first implementation that can start
-    std::vector<Implementation> copies;
-    for (const auto* x : impls) copies.push_back(*x);
-    t->root = std::make_unique<Alternatives>(*t->ctx, std::move(copies), std::make_shared<Scope>());
-  } else {
-    t->root = make_skill_node(*t->ctx, *impls.front(), std::make_shared<Scope>());
-  }
+  t->root = make_placeholder_node(*t->ctx, req.type, req.label, std::make_shared<Scope>());
   SB_INFO(kLog, "task " << id << ": " << req.type << " (" << impls.front()->description.label << ") started");
   tasks_[id] = std::move(t);
 }
@@ -267,7 +283,7 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     root.type = type;
     root.state = p.state;
     root.message = "stopped before it started";
-    root.code = -1;
+    root.code = skill_state_t::CODE_FAILED;
     p.nodes = {root};
     p.num_nodes = 1;
     participant_.publish(channel("SB_SKILL_PROGRESS"), p);

@@ -8,7 +8,10 @@
 #include <string>
 
 #include "registry.hpp"
-#include "remote_nodes.hpp"
+#include "blackboard.hpp"
+#include "task_context.hpp"
+#include "tree/node.hpp"
+#include "world_replica.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
 #include "skillbus_msgs/skill_progress_t.hpp"

@@ -82,11 +82,11 @@ std::string parse_text(const skillbus_msgs::skill_description_t& d, Param& p) {
   const skill_param_t* decl = declaration(d, p.key);
   if (!decl) return d.type + " has no parameter " + p.key + " (it has: " + keys_of(d) + ")";
   const std::string text = p.values.empty() ? "" : p.values[0].s;
-  const std::string what = "parameter " + p.key + "=" + text + ": ";
+  const std::string what = "parameter " + p.key + ": '" + text + "' is ";
   skill_value_t v{};
   const std::string& t = decl->data_type;
   if (t == "element") {
-    if (text.empty()) return what + "an element id is needed";
+    if (text.empty()) return "parameter " + p.key + ": an element id is needed (e.g. skiros:Cube-2)";
     v.type = skill_value_t::ELEMENT;
     v.element.id = text;
     v.element.type = decl->concept;

@@ -18,17 +18,14 @@ def start_process(sandbox, name="proc1", *extra):
     proc = sandbox.start(name, [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
                                 "--library", "safety_skills", "--library", "skillbus.skills.manipulation",
                                 "--world-model", *extra], env={"PYTHONPATH": str(LIBS)})
-    deadline = time.monotonic() + 30
-    while "registered" not in proc.stderr():
-        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
-        time.sleep(0.05)
+    proc.wait_for("registered", 30)
     return proc
 
 
 @pytest.fixture
 def system(sandbox, tmp_path):
     from skillbus import paths
-    sandbox.start("wm", [paths.build_dir() / "wm_server" / "wm_server", "--wall-clock", "--data", tmp_path / "wm",
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm",
                          "--scene", REPO / "deploy" / "scenes" / "demo.ttl"])
     sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
     sandbox.proc1 = start_process(sandbox)
@@ -204,3 +201,16 @@ def test_set_parent_keeps_the_world_pose(system):
     assert system.wait(p, 30) == 0, p.stderr()
     parent, moved = p.stdout().split()
     assert parent == "skiros:Bin-5" and float(moved) < 1e-6, p.stdout()
+
+
+def test_a_processor_the_manager_does_not_know_is_reported_at_registration_and_expansion(system):
+    proc = system.start("fancy", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "fancy",
+                                  "--library", "fancy_processor_skills"], env={"PYTHONPATH": str(LIBS)})
+    deadline = time.monotonic() + 30
+    while "registered" not in proc.stderr():
+        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
+        time.sleep(0.05)
+    assert "processor Fancy (fancy_processor_skills) is not known to the skill manager (it knows: " in proc.stderr()
+    assert "processor Invert" not in proc.stderr()  # every standard class has its C++ counterpart
+    rc, out, _ = run(system, "UsesFancy")
+    assert rc == 1 and "unknown processor 'Fancy' (known: InferInvalid, Invert(processor), Loop(n)" in out, out

@@ -5,15 +5,15 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import signal
 import sys
-import time
 
 from skillbus.bus import BusError, channel, open_bus
-from skillbus.msgs import decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t
+from skillbus.msgs import (decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t,
+                           skill_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, request_channel
-from skillbus.skill.convert import value_msg
-from skillbus.skill.values import parse_text
+from skillbus.waiting import poll_until
 from skillbus.world.element import Element
 
 STATES = {0: "Uninitialized", 1: "Idle", 2: "Running", 3: "Success", 4: "Failure"}
@@ -165,21 +165,18 @@ def _text(v) -> str:
     return (x.id or x.type) if isinstance(x, Element) else str(x)
 
 
-def parse_param(text: str, lst: skill_list_t, skill: str) -> skill_param_t:
+def parse_param(text: str, lst: skill_list_t | None = None, skill: str = "") -> skill_param_t:
+    """`-p KEY=VALUE` as text: the skill manager types it by the skill's description and
+    refuses a key or value that does not fit (one parser for every client:
+    skill_mgr/src/param_check.cpp; `lst` and `skill` are no longer needed)."""
     if "=" not in text:
         raise ValueError(f"-p {text!r}: expected KEY=VALUE")
     key, raw = text.split("=", 1)
-    decl = next((p for d in lst.skills if skill in (d.type, d.label) for p in d.params if p.key == key), None)
-    if decl is None:
-        raise ValueError(f"-p {key}: {skill} has no parameter {key!r}")
-    try:
-        value = parse_text(decl.data_type, decl.concept, raw)
-    except ValueError as e:
-        raise ValueError(f"-p {key}: {e}") from None
+    v = skill_value_t()
+    v.type, v.s = skill_value_t.STRING, raw
     m = skill_param_t()
-    m.key, m.data_type = key, decl.data_type
-    m.values = [value_msg(value)]
-    m.num_values = 1
+    m.key, m.data_type = key, ""  # no data type: text for the manager to parse
+    m.values, m.num_values = [v], 1
     return m
 
 
@@ -262,19 +259,16 @@ def _run(args, intr: Interrupts) -> int:
         print(task.task, flush=True)
         return 0
     print(f"task {task.task}: {req.type} started", flush=True)
-    deadline = time.monotonic() + args.timeout if args.timeout > 0 else None
+    poll_until(lambda: final or intr.signum, args.timeout if args.timeout > 0 else math.inf, interval=0.2,
+               step=lambda s: intr.handle(bus, s))
     code = None
-    while not final:
-        if intr.signum:
-            print(f"interrupted ({intr.name}): stopping task {task.task}", file=sys.stderr, flush=True)
-            code = intr.exit_code
-            break
-        if deadline and time.monotonic() > deadline:
-            print(f"error: task {task.task} did not end within {args.timeout} s: stopping it", file=sys.stderr,
-                  flush=True)
-            code = EXIT_TIMEOUT
-            break
-        intr.handle(bus, 0.2 if deadline is None else max(0.0, min(0.2, deadline - time.monotonic())))
+    if not final and intr.signum:
+        print(f"interrupted ({intr.name}): stopping task {task.task}", file=sys.stderr, flush=True)
+        code = intr.exit_code
+    elif not final:
+        print(f"error: task {task.task} did not end within {args.timeout} s: stopping it", file=sys.stderr,
+              flush=True)
+        code = EXIT_TIMEOUT
     if code is not None and not final:
         _stop(client, bus, task.task, final, intr)
     if final:
@@ -305,9 +299,7 @@ def _stop(client: RpcClient, bus, task: int, final: list, intr: Interrupts) -> N
         print(f"error: task {task} may still be running: {e}", file=sys.stderr)
         return
     seen = intr.count
-    deadline = time.monotonic() + FINAL_TIMEOUT
-    while not final and time.monotonic() < deadline and intr.count == seen:
-        intr.handle(bus, min(0.2, max(0.0, deadline - time.monotonic())))
+    poll_until(lambda: final or intr.count != seen, FINAL_TIMEOUT, interval=0.2, step=lambda s: intr.handle(bus, s))
     if not final:
         print(f"task {task}: stop acknowledged; its end was not seen"
               + (f" within {FINAL_TIMEOUT:g} s" if intr.count == seen else " (interrupted again)"), file=sys.stderr)

@@ -89,12 +89,27 @@ class SkillProcess:
         m.errors, m.num_errors = list(self.errors), len(self.errors)
         return m
 
+    def check_processors(self, client: RpcClient) -> list[str]:
+        """The processor classes (skillbus.skill.processors and the libraries' own) that the
+        manager's tree engine does not know: a tree naming one would fail at expansion."""
+        from skillbus.msgs import skill_processors_t, skill_start_t
+        from skillbus.skill.processors import all_processors
+        known = client.call("processors", skill_start_t(), skill_processors_t, timeout=2.0)
+        names = set(known.names)
+        return [f"processor {name} ({cls.__module__}) is not known to the skill manager "
+                f"(it knows: {', '.join(sorted(names))})"
+                for name, cls in sorted(all_processors().items()) if name not in names]
+
     def register(self, timeout: float = 30.0) -> skill_register_t:
         """Announces the skills to the manager; retries until it answers or `timeout`."""
         client = RpcClient(self.bus, "SKILL", self.name)
         deadline = time.monotonic() + timeout
         while True:
             try:
+                for e in self.check_processors(client):
+                    if e not in self.errors:
+                        log.error("%s", e)
+                        self.errors.append(e)
                 reply = client.call("register", self.registration(), skill_register_t, timeout=2.0)
                 for e in reply.errors:
                     log.error("the manager refused: %s", e)

@@ -1,6 +1,8 @@
 """Processors, as a compound skill names them in expand(). Each is a description; the
 skill manager's tree engine executes it (skill_mgr/src/tree/processors/, one per file,
-with the semantics table in ../shared/skill-model.md).
+registered by name in skill_mgr/src/tree/processor_registry.cpp; docs/processors.md has
+the table and how to add one). A skill process checks these classes against the
+manager's table when it registers (`all_processors()` here, the `processors` RPC there).
 
     >>> Loop(3).spec(), NoFail(Selector()).spec()
     ('Loop(3)', 'NoFail(Selector)')
@@ -74,6 +76,28 @@ class NoFail(Processor):
         return f"NoFail({self.processor.spec()})"
 
 
+class Invert(Processor):
+    """The inner processor (SerialStar by default) with success and failure swapped."""
+
+    def __init__(self, processor: Processor | None = None) -> None:
+        self.processor = processor or SerialStar()
+
+    def spec(self) -> str:
+        return f"Invert({self.processor.spec()})"
+
+
 class InferInvalid(Processor):
     """Fills in parameters that hold invalid values by inference from the world model,
     then runs the children in sequence."""
+
+
+def all_processors(cls: type = Processor) -> dict[str, type]:
+    """Every processor class defined so far (skill libraries' own included), by the name
+    the skill manager knows it by: a skill process checks them against the manager's
+    table when it registers."""
+    out: dict[str, type] = {}
+    for sub in cls.__subclasses__():
+        if not sub.__name__.startswith("_"):
+            out[sub.__name__] = sub
+        out.update(all_processors(sub))
+    return out

@@ -28,17 +28,19 @@ import copy
 import enum
 from typing import Any
 
+from skillbus.msgs import skill_state_t
 from skillbus.skill.description import SkillDescription
 from skillbus.skill.params import ParamHandler
 from skillbus.skill.processors import Processor, SerialStar
 
 
 class State(enum.IntEnum):
-    Uninitialized = 0
-    Idle = 1
-    Running = 2
-    Success = 3
-    Failure = 4
+    """A skill's state; the numbers are the IDL's (lcmtypes/skill_state_t.lcm)."""
+    Uninitialized = skill_state_t.UNINITIALIZED
+    Idle = skill_state_t.IDLE
+    Running = skill_state_t.RUNNING
+    Success = skill_state_t.SUCCESS
+    Failure = skill_state_t.FAILURE
 
 
 class SkillCore:

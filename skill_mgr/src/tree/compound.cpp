@@ -14,7 +14,7 @@ State CompoundNode::step() {
 
 State CompoundNode::on_preempt() {
   for (const auto& c : children_) c->preempt();
-  set_result("preempted", -1);
+  set_result("preempted", skillbus_msgs::skill_state_t::CODE_FAILED);
   return State::Failure;
 }
 

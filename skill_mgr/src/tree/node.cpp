@@ -26,7 +26,7 @@ void Node::preempt() {
 }
 
 State Node::on_preempt() {
-  set_result("preempted", -1);
+  set_result("preempted", skillbus_msgs::skill_state_t::CODE_FAILED);
   return State::Failure;
 }
 

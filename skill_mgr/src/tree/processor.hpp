@@ -1,5 +1,5 @@
 // A processor decides how a compound node ticks its children (SkiROS2's processors).
-// One processor per file in processors/; make_processor() builds one from its name.
+// One processor per file in processors/; processor_registry.hpp builds one from its name.
 //
 // process() is one tick of the parent: it ticks children (Node::tick restarts a finished
 // child, so a processor that must not re-run a finished child does not tick it),
@@ -33,10 +33,5 @@ class Processor {
  private:
   std::string message_;
 };
-
-// "Serial", "SerialStar", "Sequential", "Selector", "SelectorStar", "ParallelFf",
-// "ParallelFs", "Loop", "Loop(3)", "RetryOnFail", "RetryOnFail(2)", "NoFail(Selector)".
-// Throws std::invalid_argument naming an unknown processor.
-std::unique_ptr<Processor> make_processor(const std::string& spec);
 
 }  // namespace skillbus::skills

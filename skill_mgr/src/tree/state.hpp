@@ -3,9 +3,18 @@
 
 #include <string>
 
+#include "skillbus_msgs/skill_state_t.hpp"
+
 namespace skillbus::skills {
 
-enum class State { Uninitialized, Idle, Running, Success, Failure };
+// The values are the IDL's (skill_state_t): a State travels as its number.
+enum class State : int8_t {
+  Uninitialized = skillbus_msgs::skill_state_t::UNINITIALIZED,
+  Idle = skillbus_msgs::skill_state_t::IDLE,
+  Running = skillbus_msgs::skill_state_t::RUNNING,
+  Success = skillbus_msgs::skill_state_t::SUCCESS,
+  Failure = skillbus_msgs::skill_state_t::FAILURE,
+};
 
 inline const char* to_string(State s) {
   switch (s) {

@@ -8,6 +8,9 @@
 #include <gtest/gtest.h>
 
 #include "tree/compound.hpp"
+#include "tree/processor_registry.hpp"
+#include "tree/processors/invert.hpp"
+#include "tree/processors/serial_star.hpp"
 
 using namespace skillbus::skills;
 
@@ -125,6 +128,9 @@ const Case kCases[] = {
   // NoFail: a failure becomes success.
   {"nofail turns failure into success", "NoFail(Serial)", {"S", "F"}, "S", {"<S>|", "<F>|"}},
   {"nofail keeps running", "NoFail(SerialStar)", {"RS"}, "RS", {"<R|S>|"}},
+  // Invert: success and failure swapped (the worked example of docs/processors.md).
+  {"invert turns success into failure", "Invert", {"S", "RS"}, "RF", {"<S>||", "<R|S>|"}},
+  {"invert turns failure into success", "Invert(Selector)", {"F", "F"}, "S", {"<F>|", "<F>|"}},
 };
 // clang-format on
 
@@ -159,6 +165,62 @@ TEST(Processors, NestedTreesPropagate) {
   EXPECT_EQ(root.tick(), State::Success);
   EXPECT_EQ(l1, "<F><F>");  // Serial restarts the selector, which retries its first child
   EXPECT_EQ(l3, "<RS>");
+}
+
+TEST(Processors, TheRegistryListsEveryProcessorAndNamesTheUnknownFromItself) {
+  const auto& r = ProcessorRegistry::standard();
+  std::vector<std::string> names;
+  for (const auto& info : r.list()) {
+    names.push_back(info.name);
+    EXPECT_FALSE(info.summary.empty()) << info.name;
+    // every listed processor can be built from its name
+    EXPECT_NO_THROW(r.make(info.name)) << info.name;
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"InferInvalid", "Invert", "Loop", "NoFail", "ParallelFf", "ParallelFs",
+                                             "RetryOnFail", "Selector", "SelectorStar", "Sequential", "Serial",
+                                             "SerialStar"}));
+  try {
+    r.make("Parallel");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "unknown processor 'Parallel' (known: " + r.known() + ")");
+    EXPECT_NE(r.known().find("Loop(n)"), std::string::npos);
+    EXPECT_NE(r.known().find("NoFail(processor)"), std::string::npos);
+  }
+  EXPECT_THROW(r.make("Serial(2)"), std::invalid_argument);  // takes no argument
+}
+
+TEST(Processors, OneRegistryLineAddsAProcessor) {
+  ProcessorRegistry mine;  // a registry of one's own, as a test or a plug-in would make
+  mine.add<SerialStar>({"SerialStar", ProcessorArg::None, "in sequence, with memory"});
+  mine.add<Invert>({"Invert", ProcessorArg::Processor, "swap success and failure"});
+  EXPECT_EQ(mine.make("Invert(Invert)")->name(), "Invert(Invert(SerialStar))");
+  EXPECT_THROW(mine.make("Serial"), std::invalid_argument);  // only what it was given
+}
+
+TEST(Processors, InferInvalidAsksItsOwnerOncePerRun) {
+  int asked = 0;
+  ProcessorHooks hooks;
+  hooks.before_run = [&asked] {
+    ++asked;
+    return asked == 2 ? std::string("InferInvalid: cannot ground parameter Object") : std::string();
+  };
+  std::string log;
+  Children kids;
+  kids.push_back(std::make_unique<ScriptedLeaf>("c0", "RS", log));
+  CompoundNode node("Group", "", make_processor("InferInvalid", hooks), std::move(kids));
+  EXPECT_EQ(node.tick(), State::Running);
+  EXPECT_EQ(node.tick(), State::Success);
+  EXPECT_EQ(asked, 1);  // once for the run, not per tick
+  EXPECT_EQ(node.tick(), State::Failure);  // the next run asks again, and its error fails it
+  EXPECT_EQ(node.message(), "InferInvalid: cannot ground parameter Object");
+  EXPECT_EQ(asked, 2);
+  std::string bare_log;
+  Children one;
+  one.push_back(std::make_unique<ScriptedLeaf>("c0", "S", bare_log));
+  CompoundNode bare("Bare", "", make_processor("InferInvalid"), std::move(one));
+  EXPECT_EQ(bare.tick(), State::Failure);  // no owner: nothing to infer, said so
+  EXPECT_EQ(bare_log, "");                 // and its children never ran
 }
 
 TEST(Processors, FactoryNamesWhatItDoesNotKnow) {

@@ -1,9 +1,10 @@
-// Loop(n): runs the children in sequence (with SerialStar's memory) n times; without n,
-// forever. A failure fails the loop. A new round starts on the tick after the previous
-// one ended, so a round of instantly succeeding children cannot spin inside one tick.
+// Loop(n): runs the children in sequence (a SerialStar: its memory of finished children)
+// n times; without n, forever. A failure fails the loop. A new round starts on the tick
+// after the previous one ended, so a round of instantly succeeding children cannot spin
+// inside one tick.
 #pragma once
 
-#include "../processor.hpp"
+#include "serial_star.hpp"
 
 namespace skillbus::skills {
 
@@ -11,19 +12,13 @@ class Loop : public Processor {
  public:
   explicit Loop(int rounds) : rounds_(rounds) {}
   State process(const Children& children) override {
-    for (; next_ < children.size(); ++next_) {
-      const State s = children[next_]->tick();
-      if (s == State::Failure) {
-        say("round " + std::to_string(done_ + 1) + ": " + children[next_]->type() + " failed: " + children[next_]->message());
-        return State::Failure;
-      }
-      if (s == State::Running) {
-        say("round " + std::to_string(done_ + 1) + ": " + children[next_]->type() + " running");
-        return State::Running;
-      }
+    const State s = round_.process(children);
+    if (s != State::Success) {
+      say("round " + std::to_string(done_ + 1) + ": " + round_.message());
+      return s;
     }
     ++done_;
-    next_ = 0;
+    round_.reset();
     if (rounds_ >= 0 && done_ >= rounds_) {
       say(std::to_string(done_) + " rounds done");
       return State::Success;
@@ -31,12 +26,15 @@ class Loop : public Processor {
     say("round " + std::to_string(done_) + " done");
     return State::Running;
   }
-  void reset() override { next_ = 0; done_ = 0; }
+  void reset() override {
+    round_.reset();
+    done_ = 0;
+  }
   std::string name() const override { return rounds_ < 0 ? "Loop" : "Loop(" + std::to_string(rounds_) + ")"; }
 
  private:
   int rounds_;
-  size_t next_ = 0;
+  SerialStar round_;
   int done_ = 0;
 };
 

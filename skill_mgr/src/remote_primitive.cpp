@@ -1,0 +1,148 @@
+#include "remote_primitive.hpp"
+
+#include <cstdio>
+
+#include "skill_params.hpp"
+#include "skillbus_msgs/skill_state_t.hpp"
+#include "skillbus_msgs/skill_tick_reply_t.hpp"
+#include "skillbus_msgs/skill_tick_t.hpp"
+
+namespace skillbus::skills {
+
+using skillbus_msgs::skill_state_t;
+using skillbus_msgs::skill_tick_t;
+
+namespace {
+
+constexpr int kFailed = skill_state_t::CODE_FAILED;
+
+// A state from the wire; anything unknown is a failure.
+State to_state(int8_t s) {
+  switch (s) {
+    case skill_state_t::RUNNING: return State::Running;
+    case skill_state_t::SUCCESS: return State::Success;
+    default: return State::Failure;
+  }
+}
+
+std::string seconds(std::chrono::milliseconds d) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", static_cast<double>(d.count()) / 1000.0);
+  return buf;
+}
+
+}  // namespace
+
+RemotePrimitive::RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope)
+    : Node(impl.description.type, impl.description.label), ctx_(ctx), impl_(std::move(impl)), scope_(std::move(scope)) {}
+
+bool RemotePrimitive::start() {
+  const std::string err = prepare_start(ctx_, impl_, *scope_, params_);
+  if (!err.empty()) {
+    set_result(err, kFailed);
+    return false;
+  }
+  instance_ = ctx_.next_instance++;
+  incarnation_ = ctx_.registry.incarnation_of(impl_.process);
+  first_ = true;
+  unresponsive_ = false;
+  return true;
+}
+
+State RemotePrimitive::call(int8_t action) {
+  if (action != skill_tick_t::START && ctx_.registry.incarnation_of(impl_.process) == 0) {
+    // The manager dropped the process: it stopped sending heartbeats.
+    set_result("skill process " + impl_.process + " stopped answering while running " + impl_.description.label +
+                   ": the running skill was lost",
+               kFailed);
+    return State::Failure;
+  }
+  if (action != skill_tick_t::START && ctx_.registry.incarnation_of(impl_.process) != incarnation_) {
+    // The process announced itself again: it was restarted, and this instance with it.
+    set_result("skill process " + impl_.process + " was restarted while running " + impl_.description.label +
+                   ": the running skill was lost",
+               kFailed);
+    return State::Failure;
+  }
+  skill_tick_t t{};
+  t.label = impl_.description.label;
+  t.instance = instance_;
+  t.action = action;
+  t.frame = ctx_.frame;
+  t.sim_time_ns = ctx_.sim_time_ns;
+  t.params = params_;
+  t.num_params = static_cast<int32_t>(params_.size());
+  CallOptions opts;
+  opts.timeout = ctx_.tick_timeout;
+  opts.retry_interval = std::chrono::milliseconds(100);
+  try {
+    const auto reply = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tick_reply_t>("tick", t, opts);
+    set_result(reply.message, reply.code, reply.progress);
+    wm_version_ = reply.wm_version;
+    // What the skill changed goes to the blackboard, an emptied value included; what it
+    // sent back unchanged is not written (a parallel sibling may have written that key).
+    for (const auto& p : reply.params) {
+      if (scope_->specified(p.key)) continue;
+      const Param* sent = nullptr;
+      for (const auto& q : params_)
+        if (q.key == p.key) sent = &q;
+      if (sent && same_values(*sent, p)) continue;
+      ctx_.blackboard.set(scope_->key(p.key), p);
+    }
+    if (!reply.params.empty()) params_ = reply.params;
+    return to_state(reply.state);
+  } catch (const RpcTimeout&) {
+    unresponsive_ = true;
+    set_result("skill process " + impl_.process + " did not answer the tick of " + impl_.description.label +
+                   " within " + seconds(ctx_.tick_timeout),
+               kFailed);
+  } catch (const RpcError& e) {
+    set_result("skill process " + impl_.process + " failed the tick of " + impl_.description.label + ": " + e.what(),
+               kFailed);
+  }
+  return State::Failure;
+}
+
+State RemotePrimitive::step() {
+  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
+  if (!first_) {  // hold-conditions, checked on every later tick (the first was checked at start)
+    const std::string broken = check_hold(ctx_, impl_, params_);
+    if (!broken.empty()) {
+      call(skill_tick_t::PREEMPT);
+      set_result(broken, kFailed);
+      return State::Failure;
+    }
+  }
+  const int8_t action = first_ ? skill_tick_t::START : skill_tick_t::EXECUTE;
+  first_ = false;
+  const State s = call(action);
+  if (s == State::Success) {
+    // The skill's own last writes must be in the replica before its post-conditions are
+    // judged (outside lockstep the change stream may lag the skill's commit reply).
+    if (ctx_.world && wm_version_ >= 0 && !impl_.description.post.empty())
+      ctx_.world->wait_for(wm_version_, std::chrono::milliseconds(1000));
+    const std::string unmet = check_post(ctx_, impl_, params_);
+    if (!unmet.empty()) {
+      set_result(unmet, kFailed);
+      return State::Failure;
+    }
+  }
+  return s;
+}
+
+State RemotePrimitive::on_preempt() {
+  if (unresponsive_) return State::Failure;
+  const State s = call(skill_tick_t::PREEMPT);
+  return s == State::Running ? State::Failure : s;
+}
+
+void RemotePrimitive::finish() {
+  if (instance_ == 0 || unresponsive_) return;
+  const std::string msg = message();
+  const int c = code();
+  call(skill_tick_t::END);
+  set_result(msg, c);  // the end does not overwrite the result
+  instance_ = 0;
+}
+
+}  // namespace skillbus::skills

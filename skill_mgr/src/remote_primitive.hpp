@@ -1,0 +1,41 @@
+// A primitive of a skill process: each lifecycle step is an RPC tick to the process
+// (START, EXECUTE, PREEMPT, END) with the node's parameters from the blackboard; what the
+// skill changed goes back to the blackboard. Hold-conditions are checked before every
+// tick after the first (the first was checked at start), post-conditions on success.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "blackboard.hpp"
+#include "registry.hpp"
+#include "task_context.hpp"
+#include "tree/node.hpp"
+
+namespace skillbus::skills {
+
+class RemotePrimitive : public Node {
+ public:
+  RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope);
+  const std::vector<Param>& last_params() const { return params_; }
+
+ protected:
+  bool start() override;
+  State step() override;
+  State on_preempt() override;
+  void finish() override;
+
+ private:
+  State call(int8_t action);
+  TaskContext& ctx_;
+  Implementation impl_;
+  std::shared_ptr<Scope> scope_;
+  std::vector<Param> params_;
+  int64_t instance_ = 0;
+  int64_t incarnation_ = 0;  // of the skill process that runs this instance
+  bool first_ = true;
+  bool unresponsive_ = false;  // its process did not answer: do not wait for it again
+  int64_t wm_version_ = -1;    // the world version the skill has seen (from its last reply)
+};
+
+}  // namespace skillbus::skills

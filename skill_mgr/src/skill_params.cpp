@@ -1,0 +1,206 @@
+#include "skill_params.hpp"
+
+#include <algorithm>
+#include <set>
+
+#include "conditions.hpp"
+#include "convert.hpp"
+#include "grounding.hpp"
+#include "param_check.hpp"
+
+namespace skillbus::skills {
+
+using skillbus_msgs::skill_param_t;
+
+namespace {
+
+// Values compared by their encoding: what a skill sent back unchanged.
+std::vector<uint8_t> encoded(const Param& p) {
+  std::vector<uint8_t> out;
+  for (const auto& v : p.values) {
+    std::vector<uint8_t> buf(static_cast<size_t>(v.getEncodedSize()));
+    v.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    out.insert(out.end(), buf.begin(), buf.end());
+  }
+  return out;
+}
+
+}  // namespace
+
+bool same_values(const Param& a, const Param& b) {
+  return a.values.size() == b.values.size() && encoded(a) == encoded(b);
+}
+
+const wm::WorldStore* world_if_ready(TaskContext& ctx) {
+  return ctx.world && ctx.world->ready() ? &ctx.world->store() : nullptr;
+}
+
+const wm::WorldStore* world_for(TaskContext& ctx, std::string* why) {
+  if (!ctx.world) {
+    *why = "the manager has no world model";
+    return nullptr;
+  }
+  if (!ctx.world->ensure(std::chrono::milliseconds(1000), why)) return nullptr;
+  return &ctx.world->store();
+}
+
+namespace {
+
+std::string conditions_error(const char* kind, const std::vector<Condition>& conds, const std::vector<Param>& params,
+                             TaskContext& ctx) {
+  if (conds.empty()) return "";
+  std::string why;
+  const wm::WorldStore* world = conditions_need_world(conds) ? world_for(ctx, &why) : world_if_ready(ctx);
+  const ConditionResult r = check_conditions(conds, params, world);
+  return r.ok ? "" : std::string(kind) + "-condition " + r.failed + " failed" + (why.empty() ? "" : " (" + why + ")");
+}
+
+}  // namespace
+
+std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb,
+                                 std::string* missing, const wm::WorldStore* world) {
+  std::vector<Param> out;
+  for (const auto& decl : d.params) {
+    Param p = decl;
+    const std::string key = scope.key(decl.key);
+    if (const Param* fixed = scope.specified(decl.key)) {
+      p.values = fixed->values;
+    } else if (decl.param_type == skill_param_t::REQUIRED && decl.num_defaults > 0 && decl.data_type != "element" &&
+               !bb.given(key)) {
+      p.values = decl.defaults;  // static: overwrites the blackboard every run, unless the user gave it
+      bb.set(key, p);
+    } else if (bb.has(key)) {
+      p.values = bb.get(key)->values;
+    } else if (decl.num_defaults > 0) {
+      p.values = decl.defaults;  // a default, or (for now) an abstract element to ground
+    } else {
+      p.values.clear();
+    }
+    if (world) {  // element parameters are re-read from the world model; a deleted one is dropped
+      std::vector<skillbus_msgs::skill_value_t> kept;
+      for (auto& v : p.values) {
+        if (v.type != skillbus_msgs::skill_value_t::ELEMENT || v.element.id.empty()) {
+          kept.push_back(v);
+        } else if (const wm::Element* e = world->get(v.element.id)) {
+          v.element = wm::to_msg(*e);
+          kept.push_back(v);
+        }
+      }
+      p.values = std::move(kept);
+    }
+    p.num_values = static_cast<int32_t>(p.values.size());
+    if (missing && missing->empty() && decl.param_type == skill_param_t::REQUIRED && p.values.empty())
+      *missing = "missing parameter " + decl.key + (key != decl.key ? " (blackboard key " + key + ")" : "") + " of " +
+                 d.type;
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params,
+                          bool dry_run) {
+  Blackboard scratch = ctx.blackboard;  // a dry run must leave the task's blackboard alone
+  Blackboard& bb = dry_run ? scratch : ctx.blackboard;
+  std::string missing;
+  params = gather_params(impl.description, scope, bb, &missing, nullptr);
+  // Robot (added to every description): the manager's own agent when it was given one;
+  // else grounded like the rest, but only from a world model that is already there, so
+  // that skills run without a world model when nothing else needs one.
+  std::set<std::string> skip;
+  std::vector<std::string> unchecked;  // the manager's own Robot, when there is no world to check it in
+  for (auto& p : params) {
+    if (p.key != "Robot" || p.data_type != "element" || (!p.values.empty() && !p.values[0].element.id.empty())) continue;
+    if (!ctx.robot.empty()) {
+      skillbus_msgs::skill_value_t v{};
+      v.type = skillbus_msgs::skill_value_t::ELEMENT;
+      v.element.id = ctx.robot;
+      v.element.type = p.concept;
+      p.values = {v};
+      p.num_values = 1;
+      if (!world_if_ready(ctx)) unchecked.push_back(p.key);
+    } else if (!world_if_ready(ctx)) {
+      skip.insert(p.key);
+    }
+  }
+  // Every concrete element must be in the world and of the parameter's concept: a wrong
+  // id fails the start here, before grounding could mistake it for an abstract value.
+  bool concrete = false;
+  for (const auto& p : params)
+    for (const auto& v : p.values)
+      concrete |= concrete_element(v) && std::find(unchecked.begin(), unchecked.end(), p.key) == unchecked.end();
+  if (concrete) {
+    std::string why;
+    const wm::WorldStore* world = world_for(ctx, &why);
+    if (!world) return "cannot check the element parameters of " + impl.description.type + ": " + why;
+    const std::string err = check_elements(params, *world, unchecked);
+    if (!err.empty()) return err + " (" + impl.description.type + ")";
+  }
+  if (needs_grounding(params, skip)) {
+    std::string why;
+    const wm::WorldStore* world = world_for(ctx, &why);
+    if (!world) return "cannot ground the parameters of " + impl.description.type + ": " + why;
+    const std::string err = ground(params, impl.description.pre, *world, skip);
+    if (!err.empty()) return err;
+    for (const auto& p : params)  // what grounding found is on the blackboard for the next skills
+      if (!scope.specified(p.key) && !p.values.empty()) bb.set(scope.key(p.key), p);
+    missing.clear();
+    gather_params(impl.description, scope, bb, &missing, nullptr);
+  }
+  if (!missing.empty()) return missing;
+  const std::string pre = conditions_error("pre", impl.description.pre, params, ctx);
+  if (!pre.empty()) return pre;
+  // A hold-condition that is already false would stop the skill at its first check:
+  // stop it before it acts at all.
+  return conditions_error("hold", impl.description.hold, params, ctx);
+}
+
+std::string infer_invalid(TaskContext& ctx, const Implementation& impl, const Scope& scope) {
+  std::string why;
+  const wm::WorldStore* world = world_for(ctx, &why);
+  if (!world) return "InferInvalid: " + why;
+  std::vector<Param> params = gather_params(impl.description, scope, ctx.blackboard, nullptr, nullptr);
+  // Invalid: an element that is gone (or was never concrete), or one that a failing
+  // pre-condition is about (e.g. the cube of the last round, now in the bin).
+  std::set<std::string> suspect;
+  for (const auto& c : impl.description.pre)
+    if (!check_conditions({c}, params, world).ok)
+      for (const auto* k : {&c.subject, &c.object})
+        if (!k->empty() && !scope.specified(*k)) suspect.insert(*k);
+  std::set<std::string> valid;
+  for (auto& p : params) {
+    if (p.data_type != "element") {
+      valid.insert(p.key);
+      continue;
+    }
+    const bool ok = !p.values.empty() && !p.values[0].element.id.empty() && world->get(p.values[0].element.id) &&
+                    !suspect.count(p.key);
+    if (ok) {
+      valid.insert(p.key);
+    } else {
+      skillbus_msgs::skill_value_t v{};  // forget the stale element: ground it like a new one
+      v.type = skillbus_msgs::skill_value_t::ELEMENT;
+      v.element.type = p.concept;
+      for (const auto& decl : impl.description.params)  // the description's label, not the stale element's
+        if (decl.key == p.key && !decl.defaults.empty()) v.element.label = decl.defaults[0].element.label;
+      p.values = {v};
+      p.num_values = 1;
+      p.param_type = skill_param_t::REQUIRED;
+    }
+  }
+  if (valid.size() == params.size()) return "";
+  const std::string err = ground(params, impl.description.pre, *world, valid);
+  if (!err.empty()) return "InferInvalid: " + err;
+  for (const auto& p : params)
+    if (!valid.count(p.key) && !scope.specified(p.key)) ctx.blackboard.set(scope.key(p.key), p);
+  return "";
+}
+
+std::string check_hold(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params) {
+  return conditions_error("hold", impl.description.hold, params, ctx);
+}
+
+std::string check_post(TaskContext& ctx, const Implementation& impl, const std::vector<Param>& params) {
+  return conditions_error("post", impl.description.post, params, ctx);
+}
+
+}  // namespace skillbus::skills
