@@ -10,13 +10,13 @@ supervision advance with the process's frames, in sim time.
 from __future__ import annotations
 
 import logging
-import time
 from typing import Any
 
 import can
 import canopen
 
 from skillbus.can.driver import GripperDriver, GripperError
+from skillbus.waiting import WaitTimeout, wait_until
 
 log = logging.getLogger("gripper-service")
 _driver: GripperDriver | None = None
@@ -51,14 +51,11 @@ def setup(spec: str, interface: str = "skillbus_vcan", participant: Any = None, 
     # By SDO, before the run (the device answers SDO outside the frames); the device may
     # still be starting, so try again until sdo_timeout.
     _driver.node.sdo.RESPONSE_TIMEOUT = 0.5
-    deadline = time.monotonic() + sdo_timeout
-    while True:
-        try:
-            _driver.configure()
-            break
-        except GripperError:
-            if time.monotonic() > deadline:
-                raise
+    try:
+        wait_until(lambda: _driver.configure() or True, sdo_timeout, f"gripper node {node_id}: its configuration by SDO",
+                   interval=0.0, retry_on=(GripperError,))
+    except WaitTimeout as e:
+        raise GripperError(f"{e.what}: not within {sdo_timeout:g} s: {e.__cause__}") from None
     _driver.begin_startup()
     inner = participant.on_frame
 
@@ -74,10 +71,18 @@ def setup(spec: str, interface: str = "skillbus_vcan", participant: Any = None, 
     return _driver
 
 
+def interface(bus: Any, participant: Any, arg: str, can_interface: str = "skillbus_vcan", **options: Any) -> GripperDriver:
+    """The gripper interface (skillbus.robot.interfaces): `arg` is CHANNEL[:NODE]."""
+    return setup(arg, can_interface, participant, **options)
+
+
 def driver() -> GripperDriver:
-    if _driver is None:
-        raise GripperError("this skill process drives no gripper: start it with --gripper CHANNEL[:NODE]")
-    return _driver
+    """The process's gripper interface."""
+    from skillbus.robot import interfaces
+    try:
+        return interfaces.get("gripper", hint="--gripper CHANNEL[:NODE]")
+    except interfaces.InterfaceError as e:
+        raise GripperError(str(e)) from None
 
 
 def shutdown() -> None:

@@ -13,14 +13,12 @@ import logging
 from typing import Any
 
 from skillbus.bus import Bus
-from skillbus.lockstep import StampedMessage
 from skillbus.msgs import (decode, motion_plan_t, motion_request_t, sim_arm_cmd_t, sim_cmd_reply_t, sim_object_t,
                            sim_state_t, sim_traj_point_t)
 from skillbus.rpc import RpcClient
 from skillbus.sim.messages import arm_channel, reply_channel, state_channel
 
 log = logging.getLogger("arm")
-_arm: "Arm | None" = None
 
 
 class ArmError(RuntimeError):
@@ -133,13 +131,16 @@ class Arm:
         return (not s.arm_moving and s.arm_tracking_error < tolerance), ""
 
 
-def setup(bus: Bus, participant: Any = None) -> Arm:
-    global _arm
-    _arm = Arm(bus, participant)
-    return _arm
+def interface(bus: Bus, participant: Any = None, arg: str = "", **options: Any) -> Arm:
+    """The arm interface (skillbus.robot.interfaces): the robot state and commands over
+    the bus, planning by the motion service. `arg` is unused."""
+    return Arm(bus, participant)
 
 
 def arm() -> Arm:
-    if _arm is None:
-        raise ArmError("this skill process has no arm: start it with --arm")
-    return _arm
+    """The process's arm interface."""
+    from skillbus.robot import interfaces
+    try:
+        return interfaces.get("arm", hint="--arm")
+    except interfaces.InterfaceError as e:
+        raise ArmError(str(e)) from None

@@ -8,11 +8,12 @@ import json
 import math
 import signal
 import sys
+from typing import Any
 
 from skillbus.bus import BusError, channel, open_bus
 from skillbus.msgs import (decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t,
                            skill_value_t)
-from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, request_channel
+from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, no_answer
 from skillbus.waiting import poll_until
 from skillbus.world.element import Element
 
@@ -29,8 +30,7 @@ class NoManager(RuntimeError):
     """No skill manager answered: one line for the user instead of a traceback."""
 
     def __init__(self, timeout: float) -> None:
-        super().__init__(f"no skill manager answered on {request_channel('SKILL')} within {timeout:g} s: "
-                         f"is the system running, in this network namespace?")
+        super().__init__(no_answer("SKILL", timeout))
 
 
 class Interrupts:
@@ -107,20 +107,25 @@ def call(client: RpcClient, method: str, req, reply_type, intr: Interrupts | Non
 
 def add_parsers(sub) -> None:
     sp = sub.add_parser("skills-process", help="load skill libraries and serve them to a skill manager")
-    sp.add_argument("--name", required=True, help="unique name of this process")
-    sp.add_argument("--library", action="append", required=True, help="a Python module of skills (repeatable)")
+    sp.add_argument("--name", default=None, help="unique name of this process")
+    sp.add_argument("--library", action="append", default=None, help="a Python module of skills (repeatable)")
+    sp.add_argument("--config", default=None, metavar="FILE.toml",
+                    help="settings and [interfaces] from a file (docs/skills.md, 'Robot interfaces')")
+    sp.add_argument("--interface", action="append", default=None, metavar="NAME=MODULE[:ARG]",
+                    help="a robot interface for the skills, e.g. arm=skillbus.robot.arm (repeatable)")
     sp.add_argument("--url", default=None)
     sp.add_argument("--register-timeout", type=float, default=30.0)
     sp.add_argument("--lockstep", action="store_true", help="be a lockstep participant named --name")
     sp.add_argument("--gripper", default=None, metavar="CHANNEL[:NODE]",
-                    help="drive a CANopen gripper on this CAN channel (node id, default 5) for the gripper skills")
+                    help="shortcut for --interface gripper=skillbus.can.gripper_service:CHANNEL[:NODE]")
     sp.add_argument("--can-interface", default="skillbus_vcan", help="python-can interface of --gripper")
     sp.add_argument("--arm", action="store_true",
-                    help="give the skills the arm (robot state, trajectories, the motion service)")
+                    help="shortcut for --interface arm=skillbus.robot.arm (robot state, trajectories, motion service)")
     sp.add_argument("--world-model", action="store_true", help="give skills a world-model client (self.wmi)")
     ls = sub.add_parser("skills", help="the skills the manager knows, with parameters and conditions")
     ls.add_argument("--url", default=None)
-    ls.add_argument("--json", action="store_true")
+    ls.add_argument("--json", action="store_true",
+                    help="print a JSON list: each skill with its parameters (kind, type, defaults) and conditions")
     run = sub.add_parser("run", help="run a skill; exit 0 on success; interrupted (130, 143) or timed out (3): "
                                      "the task is stopped")
     run.add_argument("skill", help="skill type (or implementation label with --label)")
@@ -132,6 +137,9 @@ def add_parsers(sub) -> None:
                      help="stop the task after this many seconds and exit 3 (0: never)")
     run.add_argument("--detach", action="store_true",
                      help="print the task id and return at once, leaving the task running (skillbus stop ID)")
+    run.add_argument("--json", action="store_true",
+                     help="print the result and the final tree as one JSON object (with --watch, each tree "
+                          "shown before it as a JSON line)")
     run.add_argument("--url", default=None)
     for verb, text in (("stop", "preempt a running task"), ("pause", "stop ticking a task"),
                        ("resume", "tick a paused task again"), ("step", "tick a paused task once")):
@@ -163,6 +171,43 @@ def _text(v) -> str:
     from skillbus.skill.convert import value_from_msg
     x = value_from_msg(v)
     return (x.id or x.type) if isinstance(x, Element) else str(x)
+
+
+def value_json(v) -> Any:
+    """A skill_value_t as JSON: its value; an element as {id, type, label}."""
+    from skillbus.skill.convert import value_from_msg
+    x = value_from_msg(v)
+    return {"id": x.id, "type": x.type, "label": x.label} if isinstance(x, Element) else x
+
+
+def condition_json(c) -> dict[str, Any]:
+    return {"kind": c.kind, "label": c.label, "subject": c.subject, "object": c.object, "owl": c.owl,
+            "desired_state": bool(c.desired_state), "op": c.op,
+            "value": value_json(c.value) if c.kind == "Property" else None, "or_label": c.or_label}
+
+
+def skill_json(d, process: str) -> dict[str, Any]:
+    """One skill of the manager's list as `skillbus skills --json` prints it."""
+    return {"type": d.type, "label": d.label, "compound": bool(d.compound), "process": process,
+            "params": [{"key": p.key, "kind": PARAM_TYPES.get(p.param_type, "?"), "data_type": p.data_type,
+                        "concept": p.concept, "defaults": [value_json(v) for v in p.defaults],
+                        "options": list(p.options), "description": p.description} for p in d.params],
+            "pre": [condition_json(c) for c in d.pre], "hold": [condition_json(c) for c in d.hold],
+            "post": [condition_json(c) for c in d.post]}
+
+
+def skills_json(lst: skill_list_t) -> list[dict[str, Any]]:
+    return [skill_json(d, p) for d, p in sorted(zip(lst.skills, lst.processes), key=lambda x: (x[0].type, x[0].label))]
+
+
+def progress_json(p: skill_progress_t) -> dict[str, Any]:
+    """A task's progress (its whole tree) as JSON; each node's parameters as a dict."""
+    return {"task": p.task, "tick": p.tick, "state": STATES.get(p.state, "?"), "sim_time_s": p.header.sim_time_ns * 1e-9,
+            "nodes": [{"id": n.id, "parent": n.parent, "type": n.type, "label": n.label, "processor": n.processor,
+                       "state": STATES.get(n.state, "?"), "message": n.message, "code": n.code,
+                       "progress": n.progress,
+                       "params": dict(line.split("=", 1) for line in n.params.splitlines() if "=" in line)}
+                      for n in p.nodes]}
 
 
 def parse_param(text: str, lst: skill_list_t | None = None, skill: str = "") -> skill_param_t:
@@ -229,18 +274,25 @@ def _run(args, intr: Interrupts) -> int:
     req.num_params = len(req.params)
     final: list[skill_progress_t] = []
     last_shown = [None]
+    last: list[skill_progress_t | None] = [None]
     task_id = [None]
+    as_json = getattr(args, "json", False)
+    say = sys.stderr if as_json else sys.stdout  # (with --json, stdout is JSON only)
 
     def on_progress(ch, data):
         p = decode(skill_progress_t, data)
         if p is None or p.task != task_id[0]:
             return
+        last[0] = p
         if args.watch:
             shown = [(n.state, n.message) for n in p.nodes]
             if shown != last_shown[0]:
                 last_shown[0] = shown
-                print(f"--- task {p.task}, tick {p.tick}")
-                print_tree(p, args.verbose)
+                if as_json:
+                    print(json.dumps(progress_json(p)), flush=True)
+                else:
+                    print(f"--- task {p.task}, tick {p.tick}")
+                    print_tree(p, args.verbose)
         if p.state in (3, 4):
             final.append(p)
 
@@ -256,9 +308,10 @@ def _run(args, intr: Interrupts) -> int:
     if args.detach:
         print(f"task {task.task}: {req.type} started, detached (stop it with: skillbus stop {task.task})",
               file=sys.stderr, flush=True)
-        print(task.task, flush=True)
+        print(json.dumps({"task": task.task, "skill": req.type, "detached": True}) if as_json else task.task,
+              flush=True)
         return 0
-    print(f"task {task.task}: {req.type} started", flush=True)
+    print(f"task {task.task}: {req.type} started", file=say, flush=True)
     poll_until(lambda: final or intr.signum, args.timeout if args.timeout > 0 else math.inf, interval=0.2,
                step=lambda s: intr.handle(bus, s))
     code = None
@@ -271,15 +324,24 @@ def _run(args, intr: Interrupts) -> int:
         code = EXIT_TIMEOUT
     if code is not None and not final:
         _stop(client, bus, task.task, final, intr)
-    if final:
+    if code is None:
+        code = 0 if final[0].state == 3 else 1
+    if as_json:
+        # the final tree, or when its end was not seen, the last one (state Running, ...)
+        p = final[0] if final else last[0]
+        tree = progress_json(p) if p is not None else None
+        root = p.nodes[0] if p is not None and p.nodes else None
+        print(json.dumps({"task": task.task, "skill": req.type, "label": req.label,
+                          "state": STATES[p.state] if final else None, "message": root.message if root else "",
+                          "ended": bool(final), "exit_code": code, "tick": tree["tick"] if tree else None,
+                          "tree": tree["nodes"] if tree else []}), flush=True)
+    elif final:
         p = final[0]
         if not args.watch:
             print_tree(p, args.verbose)
         root = p.nodes[0]
         print(f"task {p.task}: {STATES[p.state]}" + (f": {root.message}" if root.message else ""), flush=True)
-    if code is not None:
-        return code
-    return 0 if final[0].state == 3 else 1
+    return code
 
 
 def _stop(client: RpcClient, bus, task: int, final: list, intr: Interrupts) -> None:
@@ -333,8 +395,7 @@ def _command(args, intr: Interrupts) -> int:
         if intr.signum:
             return intr.exit_code
         if args.json:
-            print(json.dumps([{"type": d.type, "label": d.label, "compound": d.compound, "process": p,
-                               "params": [x.key for x in d.params]} for d, p in zip(lst.skills, lst.processes)]))
+            print(json.dumps(skills_json(lst)))
         else:
             print_skills(lst)
         return 0

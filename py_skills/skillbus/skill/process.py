@@ -24,6 +24,7 @@ from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t
 from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer
 from skillbus import tick_context as context
+from skillbus.robot import interfaces
 from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
 from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
 
@@ -205,8 +206,58 @@ class SkillProcess:
             return out
 
 
+def interface_specs(args) -> list[tuple[str, str, str]]:
+    """The interfaces to load, (name, module, arg): the configuration file's [interfaces],
+    then --interface NAME=MODULE[:ARG], then the shortcuts --arm and --gripper (a later
+    one of the same name wins)."""
+    specs: dict[str, tuple[str, str, str]] = {}
+    for name, text in (getattr(args, "config_interfaces", None) or {}).items():
+        specs[name] = interfaces.parse(f"{name}={text}")
+    for text in getattr(args, "interface", None) or []:
+        name, module, arg = interfaces.parse(text)
+        specs[name] = (name, module, arg)
+    if getattr(args, "arm", False):
+        specs["arm"] = ("arm", "skillbus.robot.arm", "")
+    if getattr(args, "gripper", None):
+        specs["gripper"] = ("gripper", "skillbus.can.gripper_service", args.gripper)
+    return list(specs.values())
+
+
+def apply_config(args) -> None:
+    """Reads --config (TOML): process settings the command line did not give, and the
+    [interfaces] table."""
+    import tomllib
+    path = getattr(args, "config", None)
+    if not path:
+        return
+    with open(path, "rb") as f:
+        conf = tomllib.load(f)
+    known = {"name", "library", "world_model", "lockstep", "url", "can_interface", "interfaces"}
+    unknown = sorted(set(conf) - known)
+    if unknown:
+        raise ValueError(f"{path}: unknown setting(s) {', '.join(unknown)} (known: {', '.join(sorted(known))})")
+    for key in ("name", "url"):
+        if getattr(args, key, None) in (None, "") and key in conf:
+            setattr(args, key, conf[key])
+    args.library = list(conf.get("library", [])) + list(args.library or [])
+    for key in ("world_model", "lockstep"):
+        if conf.get(key):
+            setattr(args, key, True)
+    if "can_interface" in conf and args.can_interface == "skillbus_vcan":
+        args.can_interface = conf["can_interface"]
+    args.config_interfaces = dict(conf.get("interfaces", {}))
+
+
 def main(args) -> int:
     sys.path.insert(0, os.getcwd())  # libraries next to where the user runs it
+    try:
+        apply_config(args)
+    except (OSError, ValueError) as e:
+        print(f"error: --config: {e}", file=sys.stderr)
+        return 2
+    if not args.name or not args.library:
+        print("error: skills-process needs --name and at least one --library (or both in --config)", file=sys.stderr)
+        return 2
     bus = open_bus(args.url)
     participant = None
     if args.lockstep:
@@ -216,17 +267,12 @@ def main(args) -> int:
     if args.world_model:
         from skillbus.world import WorldModelInterface
         wmi = WorldModelInterface(bus, args.name, participant=participant)
-    if getattr(args, "arm", False):
-        from skillbus.robot import arm as arm_service
-        arm_service.setup(bus, participant)
-    if getattr(args, "gripper", None):
-        from skillbus.can import gripper_service
-        from skillbus.can.driver import GripperError
-        try:
-            gripper_service.setup(args.gripper, args.can_interface, participant)
-        except GripperError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 2
+    try:
+        for name, module, arg in interface_specs(args):
+            interfaces.load(name, module, arg, bus, participant, can_interface=args.can_interface)
+    except Exception as e:  # an interface that cannot start (no gripper answers, a bad module): say which
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     proc = SkillProcess(bus, args.name, args.library, wmi, participant)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
     reply = proc.register(timeout=args.register_timeout)
