@@ -23,11 +23,11 @@ import shlex
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 from skillbus import paths
 from skillbus.system import Program
+from skillbus.waiting import WaitTimeout, poll_until, wait_until
 
 STARTRETRIES = 3
 PRIORITY = {"can_hub": 10, "sim": 20, "motion": 20, "wm": 30, "gripper": 40, "skill_mgr": 50, "skills": 60,
@@ -154,25 +154,31 @@ def start(conf: Path, wait_s: float = 30.0, expect: list[str] | None = None) -> 
 
 def _wait_started(conf: Path, wait_s: float, expect: list[str] | None) -> dict[str, str]:
     logs = conf.parent / "logs"
-    deadline = time.monotonic() + wait_s
-    while True:
+    last: dict[str, str] = {}
+
+    def started() -> dict[str, str] | None:
         st = status(conf)
+        last.clear()
+        last.update(st)
         fatal = sorted(n for n, s in st.items() if s == "FATAL")
         if fatal:
             raise LaunchError("\n".join(
                 f"program {n}: FATAL (it would not start, {STARTRETRIES} retries); the end of {logs / (n + '.err')}:\n"
                 + log_tail(logs / f"{n}.err") for n in fatal))
-        if st and all(s in ("RUNNING", "EXITED") for s in st.values()) and (not expect or set(expect) <= set(st)):
-            return st
-        if time.monotonic() > deadline:
-            if not st and not supervisord_pid(conf):
-                raise LaunchError(f"supervisord ended; the end of {logs / 'supervisord.log'}:\n"
-                                  + log_tail(logs / "supervisord.log"))
-            late = sorted(n for n, s in st.items() if s not in ("RUNNING", "EXITED"))
-            raise LaunchError(f"not started within {wait_s:.0f} s: " + (", ".join(
-                f"{n} {st[n]}" for n in late) or str(st)) + "".join(
-                f"\nthe end of {logs / (n + '.err')}:\n" + log_tail(logs / f"{n}.err") for n in late))
-        time.sleep(0.2)
+        done = st and all(s in ("RUNNING", "EXITED") for s in st.values()) and (not expect or set(expect) <= set(st))
+        return st if done else None
+
+    try:
+        return wait_until(started, wait_s, "every program started", interval=0.2)
+    except WaitTimeout:
+        st = last
+        if not st and not supervisord_pid(conf):
+            raise LaunchError(f"supervisord ended; the end of {logs / 'supervisord.log'}:\n"
+                              + log_tail(logs / "supervisord.log")) from None
+        late = sorted(n for n, s in st.items() if s not in ("RUNNING", "EXITED"))
+        raise LaunchError(f"not started within {wait_s:.0f} s: " + (", ".join(
+            f"{n} {st[n]}" for n in late) or str(st)) + "".join(
+            f"\nthe end of {logs / (n + '.err')}:\n" + log_tail(logs / f"{n}.err") for n in late)) from None
 
 
 def program_pids(conf: Path) -> dict[str, int]:
@@ -195,20 +201,14 @@ def shutdown(conf: Path, timeout: float = 40.0) -> list[str]:
         return []
     pids = program_pids(conf)
     ctl(conf, "shutdown")
-    deadline = time.monotonic() + timeout
-    while _alive(pid) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    if _alive(pid):
+    gone = lambda: not _alive(pid)  # noqa: E731
+    if not poll_until(gone, timeout, interval=0.1):
         _kill(pid, signal.SIGTERM, group=False)
-        end = time.monotonic() + 5
-        while _alive(pid) and time.monotonic() < end:
-            time.sleep(0.1)
+        poll_until(gone, 5, interval=0.1)
         _kill(pid, signal.SIGKILL, group=False)
     for p in pids.values():  # (each program leads a process group of its own)
         _kill(p, signal.SIGKILL, group=True)
-    end = time.monotonic() + 5
-    while any(_alive(p) for p in [pid, *pids.values()]) and time.monotonic() < end:
-        time.sleep(0.1)
+    poll_until(lambda: not any(_alive(p) for p in [pid, *pids.values()]), 5, interval=0.1)
     return [f"{n} (pid {p})" for n, p in [("supervisord", pid), *pids.items()] if _alive(p)]
 
 

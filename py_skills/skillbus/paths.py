@@ -17,7 +17,11 @@ _PROGRAMS = {
     "sb_clock": "common",
     "sb_demo_participant": "common",
     "sb_rpc_counter": "common",
+    "wm_server": "wm_server",
+    "skill_mgr": "skill_mgr",
     "sim_server": "sim_server",
+    "motion_server": "motion_server",
+    "codec_peer": "tests/cpp",
 }
 
 
@@ -26,8 +30,20 @@ def demo_scene() -> Path:
 
 
 def binary(name: str) -> Path:
-    path = build_dir() / _PROGRAMS.get(name, "") / name
-    if not path.exists():
+    """The built program `name` (absolute). KeyError for a name that is no program of the
+    build, FileNotFoundError when it has not been built.
+
+    >>> binary("wm_server").relative_to(build_dir().resolve()).as_posix()
+    'wm_server/wm_server'
+    >>> binary("wm")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    KeyError: "no program 'wm' in the build; the programs: codec_peer, motion_server, ..."
+    """
+    if name not in _PROGRAMS:
+        raise KeyError(f"no program {name!r} in the build; the programs: {', '.join(sorted(_PROGRAMS))}")
+    path = build_dir().resolve() / _PROGRAMS[name] / name
+    if not path.is_file():
         raise FileNotFoundError(f"{path} does not exist: run `make build` first")
     return path
 

@@ -50,8 +50,7 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     ttl = scene.with_suffix("").with_suffix(".ttl") if scene.name.endswith(".scene.json") else scene.with_suffix(".ttl")
     can = str(run_dir / "gripper0.sock")
     py = [sys.executable, "-m", "skillbus.cli"]
-    b = paths.build_dir().resolve()
-    sim = [str(b / "sim_server" / "sim_server"), "--scene", str(scene), "--frame-ms", str(frame_ms)]
+    sim = [str(paths.binary("sim_server")), "--scene", str(scene), "--frame-ms", str(frame_ms)]
     if lockstep:
         sim.append("--pipeline")
     if lockstep:
@@ -62,7 +61,7 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         sim += ["--wall-clock"]
     sim += list(extra_sim)
     clock = [] if lockstep else ["--wall-clock"]
-    mgr = [str(b / "skill_mgr" / "skill_mgr"), *clock, "--tick-timeout-ms", "2000"]
+    mgr = [str(paths.binary("skill_mgr")), *clock, "--tick-timeout-ms", "2000"]
     if task:
         mgr += ["--start", task]
     skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm", "--gripper", f"{can}:5"]
@@ -75,8 +74,8 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     return [
         Program("can_hub", [*py, "can-hub", "--channel", can]),
         Program("sim", sim),
-        Program("motion", [str(b / "motion_server" / "motion_server"), "--scene", str(scene)]),
-        Program("wm", [str(b / "wm_server" / "wm_server"), *clock, "--data", str(run_dir / "wm"), "--scene", str(ttl)],
+        Program("motion", [str(paths.binary("motion_server")), "--scene", str(scene)]),
+        Program("wm", [str(paths.binary("wm_server")), *clock, "--data", str(run_dir / "wm"), "--scene", str(ttl)],
                 participant=True),
         Program("gripper", device, participant=True),
         Program("skill_mgr", mgr, participant=True),
@@ -88,14 +87,12 @@ def start(box, progs: list[Program], run_dir: Path, timeout: float = 10.0) -> di
     """Starts the programs in a sandbox (skillbus.netns.Sandbox) in order; the CAN hub's
     socket must exist before the processes that open the CAN bus start. Returns the
     processes by name."""
-    import time
+    from skillbus.waiting import wait_until
     procs = {}
     for p in progs:
-        procs[p.name] = box.start(p.name, p.argv, env=p.env or None)
+        proc = procs[p.name] = box.start(p.name, p.argv, env=p.env or None)
         if p.name == "can_hub":
-            deadline = time.monotonic() + timeout
-            while not (run_dir / "gripper0.sock").exists():
-                if time.monotonic() > deadline:
-                    raise RuntimeError(f"the CAN hub did not start: {procs[p.name].stderr()[-1000:]}")
-                time.sleep(0.02)
+            sock = Path(run_dir) / "gripper0.sock"
+            wait_until(sock.exists, timeout, f"the CAN hub's socket {sock}", interval=0.02,
+                       diagnostic=lambda: f"the end of the CAN hub's stderr:\n{proc.stderr()[-1000:]}")
     return procs

@@ -16,6 +16,7 @@ from skillbus.bus import channel, open_bus
 from skillbus.demo import in_bin
 from skillbus.msgs import decode, sim_state_t, skill_progress_t
 from skillbus.system import programs
+from skillbus.waiting import poll_until
 from skillbus.world import WorldModelInterface
 
 RUN = Path(sys.argv[1])
@@ -30,13 +31,12 @@ def skill_run(*extra: str) -> subprocess.Popen:
 
 
 def wait_registered(timeout: float = 60) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        r = subprocess.run([sys.executable, "-m", "skillbus.cli", "skills"], capture_output=True, text=True)
-        if "ClearTable" in r.stdout and "Pick" in r.stdout:
-            return True
-        time.sleep(0.5)
-    return False
+    def listed() -> bool:
+        r = subprocess.run([sys.executable, "-m", "skillbus.cli", "skills"], capture_output=True, text=True,
+                           timeout=30)
+        return "ClearTable" in r.stdout and "Pick" in r.stdout
+
+    return bool(poll_until(listed, timeout, interval=0.5))
 
 
 conf = launch.write_config(RUN, programs(RUN, task=None, lockstep=False), lockstep=False)
@@ -61,9 +61,7 @@ try:
     out["registered"] = wait_registered()
     pid_before = int(launch.ctl(conf, "pid", "skills").stdout.strip())
     first = skill_run("-p", "Retries=0")  # no retry: the kill must fail the task
-    deadline = time.monotonic() + 60
-    while not state["pick"] and time.monotonic() < deadline:
-        bus.handle(0.05)
+    poll_until(lambda: state["pick"], 60, step=bus.handle)
     out["pick_seen"] = state["pick"]
     os.kill(pid_before, signal.SIGKILL)
     killed_at = time.monotonic()
@@ -71,16 +69,14 @@ try:
     out["first_exit"] = first.returncode
     out["first_output"] = text[-3000:]
     out["failed_after_s"] = time.monotonic() - killed_at
-    deadline = time.monotonic() + 60
-    pid_after = pid_before
-    while time.monotonic() < deadline:
+
+    def skills_pid() -> int:
         try:
-            pid_after = int(launch.ctl(conf, "pid", "skills").stdout.strip())
+            return int(launch.ctl(conf, "pid", "skills").stdout.strip())
         except ValueError:
-            pid_after = 0
-        if pid_after not in (0, pid_before):
-            break
-        time.sleep(0.2)
+            return 0
+
+    pid_after = poll_until(lambda: (p := skills_pid()) not in (0, pid_before) and p, 60, interval=0.2) or pid_before
     out["restarted"] = pid_after not in (0, pid_before)
     out["registered_again"] = wait_registered()
     second = skill_run()
@@ -91,9 +87,7 @@ try:
     while bus.handle(0.0):  # what queued up while the runs went on is old: drop it
         pass
     state["sim"] = None
-    deadline = time.monotonic() + 10
-    while state["sim"] is None and time.monotonic() < deadline:
-        bus.handle(0.1)
+    poll_until(lambda: state["sim"] is not None, 10, interval=0.1, step=bus.handle)
     s = decode(sim_state_t, state["sim"])
     out["physics_in_bin"] = {o.name: in_bin(list(o.pose[:3])) for o in s.objects}
     out["physics"] = {o.name: list(o.pose[:3]) for o in s.objects}

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from skillbus import launch
 from skillbus.system import programs
+from skillbus.waiting import poll_until
 
 RUN = Path(sys.argv[1])
 ARGS = ["-p", "Gripper=skiros:Gripper-7", "-p", "Arm=skiros:Arm-8", "-p", "Table=skiros:Table-1",
@@ -27,12 +28,7 @@ def skills() -> str:
 
 
 def wait_for(pred, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if pred():
-            return True
-        time.sleep(0.1)
-    return False
+    return bool(poll_until(pred, timeout, interval=0.1))
 
 
 conf = launch.write_config(RUN, programs(RUN, task=None, lockstep=False), lockstep=False)

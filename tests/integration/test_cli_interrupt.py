@@ -8,14 +8,8 @@ import signal
 import sys
 import time
 
+from skillbus.waiting import wait_until
 from test_skills import LIBS, cli, start_system
-
-
-def wait_for(what, cond, timeout, info=lambda: ""):
-    deadline = time.monotonic() + timeout
-    while not cond():
-        assert time.monotonic() < deadline, f"{what} not within {timeout} s\n{info()}"
-        time.sleep(0.05)
 
 
 def ready_system(sandbox):
@@ -38,8 +32,8 @@ def start_wait_run(sandbox, *extra):
 def wait_running(sandbox, run):
     """Until the task has been ticked a few times (watch the manager's log: ticks are
     only shown with --watch)."""
-    wait_for("task 2 running", lambda: re.search(r"task 2: Wait \(wait\) started", sandbox.procs[0].stderr()),
-             20, lambda: run.stdout() + run.stderr() + sandbox.procs[0].stderr()[-2000:])
+    wait_until(lambda: re.search(r"task 2: Wait \(wait\) started", sandbox.procs[0].stderr()), 20, "task 2 running",
+               diagnostic=lambda: run.stdout() + run.stderr() + sandbox.procs[0].stderr()[-2000:])
     time.sleep(0.5)
     assert run.returncode is None, run.stdout() + run.stderr()
 
@@ -93,8 +87,7 @@ def test_detach_leaves_the_task_running_for_stop(sandbox):
     assert rc == 0 and "paused" in out, out + err
     rc, out, err = cli(sandbox, "stop", "2")
     assert rc == 0 and "stopping" in out, out + err
-    wait_for("the preempted task", lambda: re.search(r"task 2: Wait Failure: preempted at tick \d+", mgr.stderr()),
-             10, lambda: mgr.stderr()[-2000:])
+    mgr.wait_for(re.compile(r"task 2: Wait Failure: preempted at tick \d+"), 10, what="the preempted task")
 
 
 def test_no_manager_is_one_line(sandbox):

@@ -11,7 +11,7 @@ from conftest import last_json  # noqa: E402
 
 
 def codec_peer(binary):
-    return binary("sb_clock").parent.parent / "tests" / "cpp" / "codec_peer"
+    return binary("codec_peer")
 
 
 def test_cpp_to_python_every_type(sandbox, binary):

@@ -6,7 +6,6 @@ demo's own LCM log (lcm-logger, every message of the run)."""
 import re
 import signal
 import sys
-import time
 
 import lcm
 
@@ -79,10 +78,7 @@ def test_an_interrupted_demo_shuts_its_system_down(box, tmp_path):  # noqa: F811
     for sig, code in ((signal.SIGTERM, 143), (signal.SIGINT, 130)):
         demo = box.start(f"demo-{sig.name}", [sys.executable, "-m", "skillbus.cli", "demo", "--run-dir", str(run_dir)],
                          env={"SKILLBUS_NETNS": "1"})
-        deadline = time.monotonic() + 120
-        while not LIVE.search(demo.stdout()):  # the task is running
-            assert time.monotonic() < deadline and demo.returncode is None, demo.stdout() + demo.stderr()
-            time.sleep(0.05)
+        demo.wait_for(LIVE, 120, stream="stdout", what="a live line of the demo (the task is running)")
         box.kill(demo, sig)
         rc = box.wait(demo, 60)
         err = demo.stderr()

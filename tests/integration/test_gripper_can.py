@@ -9,15 +9,13 @@ import pytest
 
 from skillbus.can import cia402
 from skillbus.can.driver import GripperDriver
+from skillbus.waiting import poll_until, wait_until
 
 
 def start_hub(sandbox, path):
     """A virtual CAN hub on `path`, once its socket exists."""
-    sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    hub = sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
+    wait_until(path.exists, 10, f"the CAN hub's socket {path}", interval=0.02, diagnostic=lambda: hub.stderr()[-2000:])
     return path
 
 
@@ -72,13 +70,10 @@ def rig(request, sandbox, tmp_path):
         n.disconnect()
 
 
-def wait_until(driver, pred, timeout=5.0):
-    deadline = time.monotonic() + timeout
-    while not pred(driver.status()):
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out; status {driver.status()}")
-        time.sleep(0.01)
-    return driver.status()
+def wait_status(driver, pred, timeout=5.0):
+    """The driver's status, once `pred(status)` holds."""
+    return wait_until(lambda: pred(s := driver.status()) and s, timeout, "a status of the gripper", interval=0.01,
+                      diagnostic=lambda: f"its status: {driver.status()}")
 
 
 def test_boot_heartbeat_enable_open_close_move_stop(rig):
@@ -86,16 +81,16 @@ def test_boot_heartbeat_enable_open_close_move_stop(rig):
     s = driver.status()
     assert s.state == cia402.OPERATION_ENABLED and s.position_um == 80000 and s.updates > 0
     driver.command(80000)  # open (already open: reached at once)
-    wait_until(driver, lambda s: s.target_reached and s.position_um == 80000)
+    wait_status(driver, lambda s: s.target_reached and s.position_um == 80000)
     driver.command(0)  # close on nothing
-    s = wait_until(driver, lambda s: s.target_reached and s.position_um == 0)
+    s = wait_status(driver, lambda s: s.target_reached and s.position_um == 0)
     assert not s.gripped
     driver.command(60000)  # move to a width
-    s = wait_until(driver, lambda s: s.target_reached and s.position_um == 60000)
+    s = wait_status(driver, lambda s: s.target_reached and s.position_um == 60000)
     driver.command(0)
-    wait_until(driver, lambda s: s.moving and s.position_um < 50000)
+    wait_status(driver, lambda s: s.moving and s.position_um < 50000)
     driver.stop()  # halt mid-move
-    s = wait_until(driver, lambda s: not s.moving)
+    s = wait_status(driver, lambda s: not s.moving)
     time.sleep(0.2)
     assert 0 < driver.status().position_um == s.position_um < 60000
 
@@ -103,7 +98,7 @@ def test_boot_heartbeat_enable_open_close_move_stop(rig):
 def test_close_on_an_object_grips_it(rig):
     driver, _, _ = rig(object_width=40000)
     driver.command(0)
-    s = wait_until(driver, lambda s: s.gripped)
+    s = wait_status(driver, lambda s: s.gripped)
     assert s.position_um == 40000 and not s.faults
     time.sleep(1.2)  # held with the rated force: no fault
     assert driver.status().state == cia402.OPERATION_ENABLED and not driver.status().faults
@@ -122,14 +117,14 @@ def test_heartbeat_loss_is_a_fault_within_three_periods(rig, sandbox):
 def test_emcy_on_a_blocked_move_then_fault_reset(rig):
     driver, _, _ = rig(object_width=40000, force_limit=500)  # above the rated 40 N
     driver.command(0)
-    s = wait_until(driver, lambda s: s.state == cia402.FAULT, timeout=5)
+    s = wait_status(driver, lambda s: s.state == cia402.FAULT, timeout=5)
     assert any("EMCY 0x2310: over-current" in f for f in s.faults), s.faults
     driver.fault_reset()
-    wait_until(driver, lambda s: s.state == cia402.SWITCH_ON_DISABLED)
+    wait_status(driver, lambda s: s.state == cia402.SWITCH_ON_DISABLED)
     assert not driver.status().faults
     driver.enable()
     driver.command(80000)
-    wait_until(driver, lambda s: s.position_um == 80000 and s.target_reached)
+    wait_status(driver, lambda s: s.position_um == 80000 and s.target_reached)
 
 
 def test_malformed_frames_are_ignored_and_counted_by_both_sides(rig, sandbox):
@@ -142,14 +137,13 @@ def test_malformed_frames_are_ignored_and_counted_by_both_sides(rig, sandbox):
     with pytest.raises(canopen.SdoAbortedError) as e:
         driver.node.sdo.upload(0x1234, 0)  # an object the device does not have
     assert e.value.code == 0x06020000  # "object does not exist"
-    deadline = time.monotonic() + 5  # both sides count what reached them
-    while (driver.malformed < 1 or "RPDO1 of 3 bytes (6 expected) ignored" not in device.stderr()) \
-            and time.monotonic() < deadline:
-        time.sleep(0.02)
+    # both sides count what reached them
+    poll_until(lambda: driver.malformed >= 1 and "RPDO1 of 3 bytes (6 expected) ignored" in device.stderr(), 5,
+               interval=0.02)
     assert driver.malformed == 1
     assert "RPDO1 of 3 bytes (6 expected) ignored" in device.stderr()
     driver.command(30000)  # and both still work
-    wait_until(driver, lambda s: s.position_um == 30000 and s.target_reached)
+    wait_status(driver, lambda s: s.position_um == 30000 and s.target_reached)
 
 
 def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
@@ -157,10 +151,7 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
     log_file = tmp_path / "traffic.log"
     recorder = sandbox.start("recorder", [sys.executable, "-m", "skillbus.cli", "can-record", str(log_file),
                                           "--channel", str(path)])
-    deadline = time.monotonic() + 30  # the recorder is on the bus before the device boots
-    while "recording" not in recorder.stderr():
-        assert time.monotonic() < deadline and recorder.returncode is None, recorder.stderr()[-2000:]
-        time.sleep(0.05)
+    recorder.wait_for("recording", 30)  # the recorder is on the bus before the device boots
     sandbox.start("device", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", path,
                              "--node-id", "5", "--object-width", "40000"])
     net = canopen.Network()
@@ -169,7 +160,7 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
         driver = GripperDriver(net, 5, force_limit=200)
         driver.start(timeout=10)
         driver.command(0)
-        wait_until(driver, lambda s: s.gripped)
+        wait_status(driver, lambda s: s.gripped)
         with pytest.raises(canopen.sdo.exceptions.SdoAbortedError):
             driver.node.sdo.upload(0x5555, 0)  # a missing object: the device aborts
         net.send_message(0x123, b"\x01\x02")  # a COB-ID nobody owns

@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 import re
 import sys
-import time
 from pathlib import Path
 
 from conftest import last_json
@@ -17,6 +16,7 @@ from skillbus.netns import Sandbox
 from skillbus.sim import scene as scene_file
 from skillbus.sim.arm_poses import ARM, top_down
 from skillbus.sim.scripts import CUBE
+from skillbus.waiting import wait_until
 from test_skills import mgr_binary
 
 FRAMES = 400  # 4 s of sim time
@@ -41,15 +41,12 @@ def session(box: Sandbox, tmp: Path, start: str, with_cube: bool = True) -> dict
     scene, ttl = grasp_scene(tmp, with_cube)
     sock = tmp / "grip.sock"
     box.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", str(sock)])
-    deadline = time.monotonic() + 10
-    while not sock.exists():
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    wait_until(sock.exists, 10, f"the CAN hub's socket {sock}", interval=0.02)
     sim = box.start("sim", [str(paths.binary("sim_server")), "--scene", str(scene), "--participants", PARTICIPANTS,
                             "--frames", str(FRAMES), "--join-timeout-ms", "30000"])
     device = box.start("gripper", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", str(sock),
                                    "--node-id", "5", "--lockstep", "--name", "gripper"])
-    wm = box.start("wm", [str(paths.build_dir() / "wm_server" / "wm_server"), "--data", str(tmp / "wm"),
+    wm = box.start("wm", [paths.binary("wm_server"), "--data", str(tmp / "wm"),
                           "--scene", str(ttl)])
     mgr = box.start("skill_mgr", [str(mgr_binary()), "--start", start])
     skills = box.start("grip_skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--lockstep",

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from skillbus import paths
+from skillbus.waiting import poll_until
 
 LAUNCH = ["launch", "--wall-clock", "--no-task", "--run-dir", "rel/robot"]
 PROGRAMS = {"can_hub", "sim", "motion", "wm", "gripper", "skill_mgr", "skills"}
@@ -40,11 +41,14 @@ def netns_procs(sandbox) -> dict[int, str]:
 
 
 def wait_no_procs(sandbox, timeout: float) -> dict[int, str]:
-    deadline = time.monotonic() + timeout
-    left = netns_procs(sandbox)
-    while left and time.monotonic() < deadline:
-        time.sleep(0.2)
-        left = netns_procs(sandbox)
+    left: dict[int, str] = {}
+
+    def none_left() -> bool:
+        left.clear()
+        left.update(netns_procs(sandbox))
+        return not left
+
+    poll_until(none_left, timeout, interval=0.2)
     return left
 
 

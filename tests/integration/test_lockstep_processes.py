@@ -24,15 +24,6 @@ def start(sandbox, binary, names, frames, clock_args=(), part_args=None):
     return clock, parts
 
 
-def wait_for_log(proc, pattern, timeout):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if re.search(pattern, proc.stderr()):
-            return
-        time.sleep(0.05)
-    raise TimeoutError(f"{proc.name} never logged {pattern!r}: {proc.stderr()[-1000:]}")
-
-
 def test_10000_frames_twice_give_the_same_digest(tmp_path):
     runs = []
     for i in range(2):
@@ -63,7 +54,7 @@ def test_a_different_world_gives_a_different_digest(tmp_path):
 def test_killing_a_participant_stops_the_master_with_an_error_naming_it(sandbox, binary):
     clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=10_000_000,
                          clock_args=["--ack-timeout-ms", "1500"])
-    wait_for_log(clock, "starting frames", 30)
+    clock.wait_for("starting frames", 30)
     time.sleep(0.5)
     killed_at = time.monotonic()
     sandbox.kill(parts["py2"])
@@ -114,7 +105,7 @@ def test_bad_input_on_every_channel_is_counted_and_changes_nothing(sandbox, bina
     assert clean["ok"]
     names = ["py1", "py2", "cpp1"]
     clock, parts = start(sandbox, binary, names, frames=3000)
-    wait_for_log(clock, "starting frames", 30)
+    clock.wait_for("starting frames", 30)
     fuzz = sandbox.start("fuzz", python_tool("fuzz_publisher.py", "3000", "SB_LOCKSTEP_CLOCK", "SB_LOCKSTEP_ACK",
                                              "SB_LOCKSTEP_JOIN", "SB_DEMO_STATE", "SB_DEMO_CMD"))
     assert sandbox.wait(fuzz, 60) == 0

@@ -28,15 +28,9 @@ def _dist(a, b) -> float:
 def wait_for_skill(client, skill: str, timeout: float = 60.0) -> bool:
     from skillbus.rpc import RpcError
     from skillbus.skill.cli import skill_list
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        try:
-            if any(d.type == skill for d in skill_list(client).skills):
-                return True
-        except RpcError:
-            pass
-        client.bus.handle(0.2)
-    return False
+    from skillbus.waiting import poll_until
+    return bool(poll_until(lambda: any(d.type == skill for d in skill_list(client).skills), timeout, interval=0.2,
+                           step=client.bus.handle, retry_on=(RpcError,)))
 
 
 def tool_position(s) -> tuple:
@@ -57,6 +51,7 @@ def stop_during_motion(bus, start: Callable[[], int], stop: Callable[[int], None
     the tool's position (default) or the fingers' width (`finger_width`), in m."""
     from skillbus.bus import channel
     from skillbus.msgs import decode, sim_state_t, skill_progress_t
+    from skillbus.waiting import poll_until
     states: list[tuple[float, tuple, str, bool]] = []  # (sim time s, tool xyz, arm command id, arm moving)
     final: dict = {}
     task_box = {"id": None}
@@ -75,16 +70,18 @@ def stop_during_motion(bus, start: Callable[[], int], stop: Callable[[int], None
             bus.subscribe(channel("SB_SKILL_PROGRESS"), on_progress)]
     out: dict = {}
     try:
-        deadline = time.monotonic() + timeout
-        while not states and time.monotonic() < deadline:
-            bus.handle(0.05)
+        deadline = time.monotonic() + timeout  # for all of it
+
+        def left() -> float:
+            return max(0.0, deadline - time.monotonic())
+
+        poll_until(lambda: states, left(), step=bus.handle)
         if not states:
             return {"error": "no physics state"}
         home = states[-1][1]
         task_box["id"] = start()
         out["task"] = task_box["id"]
-        while _dist(states[-1][1], home) < moving_m and not final and time.monotonic() < deadline:
-            bus.handle(0.005)
+        poll_until(lambda: final or _dist(states[-1][1], home) >= moving_m, left(), interval=0.005, step=bus.handle)
         if final or _dist(states[-1][1], home) < moving_m:
             return {**out, "error": f"the robot did not move {moving_m} m (task: {final})"}
         t_sent, p_sent = states[-1][0], states[-1][1]
@@ -94,8 +91,7 @@ def stop_during_motion(bus, start: Callable[[], int], stop: Callable[[int], None
         # the tool's speed just before the stop
         prev = next((s for s in reversed(states[:n_ack]) if s[0] <= t_ack - 0.1), states[0])
         out["speed_at_stop_m_s"] = _dist(p_ack, prev[1]) / max(t_ack - prev[0], 1e-9)
-        while (states[-1][0] < t_ack + settle_s - 1e-6 or not final) and time.monotonic() < deadline:
-            bus.handle(0.02)
+        poll_until(lambda: states[-1][0] >= t_ack + settle_s - 1e-6 and final, left(), interval=0.02, step=bus.handle)
         after = [s for s in states[n_ack:]]
         p_end = states[-1][1]
         out.update(
@@ -164,10 +160,10 @@ def sigint_scenario(bus, skill: str, params: dict, kw: dict) -> dict:
         return int(m.group(1))
 
     def stop(task: int) -> None:
+        from skillbus.waiting import poll_until
         client.send_signal(signal.SIGINT)
-        deadline = time.monotonic() + 30
-        while client.poll() is None and time.monotonic() < deadline:
-            bus.handle(0.01)  # the physics state keeps coming: the ack is when the client exits
+        # the physics state keeps coming (dispatched meanwhile): the ack is when the client exits
+        poll_until(lambda: client.poll() is not None, 30, interval=0.01, step=bus.handle)
 
     out = stop_during_motion(bus, start, stop, **kw)
     out["client_exit"] = client.wait(timeout=30)
@@ -180,6 +176,7 @@ def run_to_end(bus, client, lst, skill: str, params: dict, timeout: float = 30.0
     from skillbus.bus import channel
     from skillbus.msgs import decode, skill_progress_t, skill_start_t, skill_task_t
     from skillbus.skill.cli import parse_param
+    from skillbus.waiting import poll_until
     final: dict = {}
     task = {"id": None}
 
@@ -195,9 +192,7 @@ def run_to_end(bus, client, lst, skill: str, params: dict, timeout: float = 30.0
         req.params = [parse_param(f"{k}={v}", lst, skill) for k, v in params.items()]
         req.num_params = len(req.params)
         task["id"] = client.call("start", req, skill_task_t).task
-        deadline = time.monotonic() + timeout
-        while not final and time.monotonic() < deadline:
-            bus.handle(0.05)
+        poll_until(lambda: final, timeout, step=bus.handle)
         return final or {"error": f"{skill} did not end within {timeout} s"}
     finally:
         bus.unsubscribe(sub)

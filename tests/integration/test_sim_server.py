@@ -157,9 +157,7 @@ def test_a_dead_participant_stops_the_server_with_an_error_naming_it(sandbox, bi
     alive = sandbox.start("alive", [str(binary("sb_demo_participant")), "--name", "alive"])
     doomed = sandbox.start("doomed", [sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name",
                                       "doomed", "--bare"])
-    deadline = time.monotonic() + 30
-    while "starting frames" not in sim.stderr() and time.monotonic() < deadline:
-        time.sleep(0.05)
+    sim.wait_for("starting frames", 30)
     time.sleep(0.5)
     sandbox.kill(doomed)
     assert sandbox.wait(sim, 30) == 1

@@ -6,6 +6,7 @@ import signal
 import sys
 import time
 
+from skillbus.waiting import wait_until
 from test_skills import LIBS, cli, mgr_binary, start_system
 
 
@@ -21,13 +22,14 @@ def test_a_restarted_manager_lists_every_skill_again_within_5_s(sandbox):
     sandbox.kill(mgr, signal.SIGKILL)
     sandbox.wait(mgr, 10)
     sandbox.start("skill_mgr-again", [mgr_binary(), "--wall-clock"])
-    t0 = time.monotonic()
-    while True:
-        rc, out, _ = cli(sandbox, "skills", timeout=20)
-        if rc == 0 and out == before:
-            break
-        assert time.monotonic() - t0 < 5.0, f"after {time.monotonic() - t0:.1f} s the manager lists:\n{out}"
-        time.sleep(0.1)
+    listed = [""]
+
+    def lists_every_skill() -> bool:
+        rc, listed[0], _ = cli(sandbox, "skills", timeout=20)
+        return rc == 0 and listed[0] == before
+
+    wait_until(lists_every_skill, 5.0, "the restarted manager listing every skill", interval=0.1,
+               diagnostic=lambda: f"it lists:\n{listed[0]}")
     rc, out, _ = cli(sandbox, "run", "Chain", "--timeout", "30")
     assert rc == 0, out
     assert proc.returncode is None  # the process was never restarted
@@ -36,10 +38,7 @@ def test_a_restarted_manager_lists_every_skill_again_within_5_s(sandbox):
 def registered(sandbox, name, library):
     proc = sandbox.start(name, [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
                                 "--library", library], env={"PYTHONPATH": str(LIBS)})
-    deadline = time.monotonic() + 30
-    while "registered" not in proc.stderr():
-        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
-        time.sleep(0.05)
+    proc.wait_for("registered", 30)
     return proc
 
 
@@ -63,10 +62,8 @@ def test_a_process_that_stops_is_dropped_and_a_task_that_needs_it_names_it(sandb
     assert rc == 0, out
     sandbox.kill(echo, signal.SIGKILL)
     sandbox.wait(echo, 10)
-    t0 = time.monotonic()
-    while "Echo (echo" in skills_listed(sandbox):
-        assert time.monotonic() - t0 < 3.0 + 3.0, "the dead process's skills are still listed"
-        time.sleep(0.2)
+    wait_until(lambda: "Echo (echo" not in skills_listed(sandbox), 3.0 + 3.0,
+               "the dead process's skills dropped from the list", interval=0.2)
     gone = "skill process echoes stopped answering (no heartbeat for 3000 ms)"
     rc, out, _ = cli(sandbox, "run", "UsesEcho", "--timeout", "20")
     assert rc == 1 and "no skill of type Echo is available (in uses_echo): " + gone in out, out
@@ -86,10 +83,10 @@ def test_a_live_process_is_never_dropped(sandbox):
 
 
 STOP_QUEUED = """
-import time
 from skillbus.bus import channel, open_bus
 from skillbus.msgs import decode, skill_progress_t, skill_start_t, skill_task_t
 from skillbus.rpc import RpcClient
+from skillbus.waiting import poll_until
 bus = open_bus()
 c = RpcClient(bus, "SKILL", "t")
 ends = []
@@ -99,9 +96,7 @@ req = skill_start_t(); req.type = "Wait"
 task = c.call("start", req, skill_task_t, timeout=5.0).task
 stop = skill_start_t(); stop.task = task
 c.call("stop", stop, skill_task_t, timeout=5.0)
-deadline = time.monotonic() + 3.0
-while time.monotonic() < deadline and not any(p.task == task and p.state == 4 for p in ends):
-    bus.handle(0.05)
+poll_until(lambda: any(p.task == task and p.state == 4 for p in ends), 3.0, step=bus.handle)
 final = [p for p in ends if p.task == task and p.state == 4]
 print(final[0].nodes[0].message if final else "no end seen")
 """

@@ -5,13 +5,14 @@ import time
 from pathlib import Path
 
 from conftest import last_json
+from skillbus.waiting import wait_until
 
 LIBS = Path(__file__).resolve().parent / "skill_libs"
 
 
 def mgr_binary():
     from skillbus import paths
-    return paths.build_dir() / "skill_mgr" / "skill_mgr"
+    return paths.binary("skill_mgr")
 
 
 def cli(sandbox, *args, timeout=60):
@@ -25,11 +26,7 @@ def start_system(sandbox, *libraries, name="proc1"):
     mgr = sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
     proc = sandbox.start(name, [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
                                 *[x for lib in libraries for x in ("--library", lib)]], env={"PYTHONPATH": str(LIBS)})
-    deadline = time.monotonic() + 30
-    while "registered" not in proc.stderr():
-        assert time.monotonic() < deadline, proc.stderr()[-2000:]
-        assert proc.returncode is None, proc.stderr()[-2000:]
-        time.sleep(0.05)
+    proc.wait_for("registered", 30)
     return mgr, proc
 
 
@@ -86,10 +83,8 @@ def test_pause_step_resume_and_stop(sandbox):
         ticks = re.findall(r"Wait Running: tick (\d+)", run.stdout())
         return int(ticks[-1]) if ticks else 0
 
-    deadline = time.monotonic() + 20
-    while last_tick() < 3:
-        assert time.monotonic() < deadline, run.stdout() + run.stderr()
-        time.sleep(0.02)
+    wait_until(lambda: last_tick() >= 3, 20, "tick 3 of Wait", interval=0.02,
+               diagnostic=lambda: run.stdout() + run.stderr())
     assert cli(sandbox, "pause", "1")[0] == 0
     time.sleep(0.3)
     paused_at = last_tick()
@@ -122,10 +117,7 @@ def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):
     # the supervisor restarts it; it registers again and the skill runs
     restarted = sandbox.start("proc1-again", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
                                               "--library", "flow_skills"], env={"PYTHONPATH": str(LIBS)})
-    deadline = time.monotonic() + 30
-    while "registered" not in restarted.stderr():
-        assert time.monotonic() < deadline, restarted.stderr()[-2000:]
-        time.sleep(0.05)
+    restarted.wait_for("registered", 30)
     rc, out, _ = cli(sandbox, "run", "Consume", "-p", "Item=x", "--timeout", "20")
     assert rc == 0 and "consumed x" in out, out
 

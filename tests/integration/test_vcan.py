@@ -8,16 +8,15 @@ import can
 import pytest
 
 from conftest import last_json, python_tool
+from skillbus.waiting import wait_until
 
 
 @pytest.fixture
 def hub(sandbox, tmp_path):
     path = tmp_path / "can0.sock"
     proc = sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path])
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()
-        time.sleep(0.02)
+    wait_until(lambda: path.exists() or proc.returncode is not None, 10, f"the CAN hub's socket {path}", interval=0.02)
+    assert proc.returncode is None, proc.stderr()
     return str(path), proc
 
 
@@ -103,10 +102,8 @@ def test_a_client_that_stops_reading_is_disconnected_not_the_bus_stopped(sandbox
     path = tmp_path / "small.sock"
     hub_proc = sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path,
                                          "--queue-limit", "500", "--stall-timeout", "1.0"])
-    deadline = time.monotonic() + 10
-    while not path.exists():
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    wait_until(path.exists, 10, f"the CAN hub's socket {path}", interval=0.02,
+               diagnostic=lambda: hub_proc.stderr()[-2000:])
     sleeper = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)  # connects, never reads
     sleeper.connect(str(path))
     sleeper.send(b"ECHO0")

@@ -3,10 +3,10 @@ a crash in the middle of 2,000 writes, and determinism under lockstep."""
 
 import random
 import signal
-import time
 from pathlib import Path
 
 from conftest import last_json, python_tool
+from skillbus.waiting import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "deploy" / "scenes" / "demo.ttl"
@@ -18,7 +18,7 @@ def start_server(sandbox, binary_path, data, *extra, name="wm"):
 
 def wm_binary():
     from skillbus import paths
-    return paths.build_dir() / "wm_server" / "wm_server"
+    return paths.binary("wm_server")
 
 
 def run_scenario(sandbox, name, *args, timeout=120):
@@ -45,11 +45,14 @@ def test_kill_9_during_2000_writes_loses_and_duplicates_nothing(sandbox, tmp_pat
     server = start_server(sandbox, wm_binary(), data, "--snapshot-every", "300")
     writer = sandbox.start("writer", python_tool("wm_scenarios.py", "writer", "2000"))
     kill_after_acks = random.Random().randrange(200, 1800)  # a random moment, printed on failure
-    deadline = time.monotonic() + 120
-    while writer.stdout().count("ack ") < kill_after_acks:
-        assert time.monotonic() < deadline, "the writer made no progress"
+
+    def acked() -> bool:
+        if writer.stdout().count("ack ") >= kill_after_acks:
+            return True
         assert writer.returncode is None, writer.stderr()[-2000:]
-        time.sleep(0.01)
+        return False
+
+    wait_until(acked, 120, f"{kill_after_acks} acks of the writer (it made no progress)", interval=0.01)
     sandbox.kill(server, signal.SIGKILL)
     sandbox.wait(server, 10)
     acked_before_kill = writer.stdout().count("ack ")

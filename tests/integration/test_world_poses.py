@@ -24,16 +24,11 @@ def _dist(a, b) -> float:
 def connect_world_model(bus, name: str, timeout: float = 60.0):
     """A world-model client, once the server answers."""
     from skillbus.rpc import RpcError
+    from skillbus.waiting import wait_until
     from skillbus.world import WorldModelInterface
     from skillbus.world.client import WorldModelError
-    deadline = time.monotonic() + timeout
-    while True:
-        try:
-            return WorldModelInterface(bus, name, timeout=1.0)
-        except (RpcError, WorldModelError):
-            if time.monotonic() > deadline:
-                raise
-            bus.handle(0.1)
+    return wait_until(lambda: WorldModelInterface(bus, name, timeout=1.0), timeout, f"the world model server ({name})",
+                      interval=0.1, step=bus.handle, retry_on=(RpcError, WorldModelError))
 
 
 def compare(wmi, physics: dict[str, list[float]]) -> dict:
@@ -57,6 +52,7 @@ def observe_clear_table(timeout: float = 400.0) -> dict:
     succeeded in)."""
     from skillbus.bus import channel, open_bus
     from skillbus.msgs import decode, sim_state_t, skill_progress_t
+    from skillbus.waiting import poll_until
     bus = open_bus()
     physics: dict[int, dict[str, list[float]]] = {}  # frame -> object poses
     progress: list = []
@@ -69,10 +65,10 @@ def observe_clear_table(timeout: float = 400.0) -> dict:
     placed: set[int] = set()
     started: dict[str, list[int]] = {"Grasp": [], "Release": []}  # frames the gripper skills started in
     seen_running: set[int] = set()
-    deadline = time.monotonic() + timeout
     final = None
-    while final is None and time.monotonic() < deadline:
-        bus.handle(0.05)
+
+    def take_progress():
+        nonlocal final
         while progress:
             p = progress.pop(0)
             if p is None:
@@ -97,6 +93,9 @@ def observe_clear_table(timeout: float = 400.0) -> dict:
             at = physics.get(frame) or physics[max(physics)]
             checks.append({"frame": frame, "after": "Place" if done else "task",
                            "objects": compare(wmi, at)})
+        return final
+
+    poll_until(take_progress, timeout, step=bus.handle)
     return {"checks": checks, "moves": _check_moves(wmi, moves, started, physics), "final": None if final is None else
             {"state": int(final.state), "message": final.nodes[0].message if final.nodes else ""}}
 
@@ -221,7 +220,7 @@ def reparenting() -> dict:
 def test_reparent_writes_the_containment_and_the_pose_in_the_new_container_in_one_transaction(sandbox, tmp_path):
     from conftest import last_json
     from skillbus import paths
-    sandbox.start("wm", [paths.build_dir() / "wm_server" / "wm_server", "--wall-clock", "--data", tmp_path / "wm",
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm",
                          "--scene", paths.demo_scene().with_suffix("").with_suffix(".ttl")])
     sc = sandbox.start("scenario", [sys.executable, __file__, "reparent"])
     assert sandbox.wait(sc, 120) == 0, sc.stdout()[-3000:] + sc.stderr()[-3000:]

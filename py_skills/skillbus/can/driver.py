@@ -32,6 +32,7 @@ import canopen
 from skillbus import tick_context
 from skillbus.can import cia402 as c
 from skillbus.can.device import EDS
+from skillbus.waiting import WaitTimeout, wait_until
 
 log = logging.getLogger("gripper-driver")
 
@@ -193,12 +194,11 @@ class GripperDriver:
             self._wait_state(want, timeout)
 
     def _wait_state(self, want: str, timeout: float) -> None:
-        deadline = time.monotonic() + timeout
-        while self.status().state != want:
-            if time.monotonic() > deadline:
-                raise GripperError(f"gripper node {self.node.id}: state {self.status().state!r}, not {want!r}, "
-                                   f"after {timeout} s")
-            time.sleep(0.005)
+        try:
+            wait_until(lambda: self.status().state == want, timeout, f"gripper node {self.node.id}: state {want!r}",
+                       interval=0.005, diagnostic=lambda: f"its state is {self.status().state!r}")
+        except WaitTimeout as e:
+            raise GripperError(str(e).replace("\n", "; ")) from None
 
     # -- run time (non-blocking) -------------------------------------------------------------
     def _send(self, cw: int, target: int) -> None:

@@ -19,6 +19,7 @@ import can
 
 from skillbus.can.hub import ECHO_OFF, ECHO_ON, JOINED, socket_path
 from skillbus.can.records import CANFD_MTU, from_record, to_record
+from skillbus.waiting import WaitTimeout, wait_until
 
 
 class VirtualSocketCanBus(can.BusABC):
@@ -29,18 +30,20 @@ class VirtualSocketCanBus(can.BusABC):
         self._fd = fd
         path = socket_path(str(channel))
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-        deadline = time.monotonic() + connect_timeout
-        while True:
-            try:
-                self.sock.connect(str(path))
-                break
-            except (FileNotFoundError, ConnectionRefusedError) as e:
-                if time.monotonic() >= deadline:
-                    self.sock.close()
-                    raise can.CanInitializationError(
-                        f"no virtual SocketCAN hub at {path} (start one: skillbus can-hub --channel {channel}): {e}"
-                    ) from None
-                time.sleep(0.02)
+        deadline = time.monotonic() + connect_timeout  # for the connection and the hub's JOINED
+
+        def connected() -> bool:
+            self.sock.connect(str(path))
+            return True
+
+        try:
+            wait_until(connected, connect_timeout, f"the virtual SocketCAN hub at {path}", interval=0.02,
+                       retry_on=(FileNotFoundError, ConnectionRefusedError))
+        except WaitTimeout as e:
+            self.sock.close()
+            raise can.CanInitializationError(
+                f"no virtual SocketCAN hub at {path} (start one: skillbus can-hub --channel {channel}): {e.__cause__}"
+            ) from None
         self.sock.send(ECHO_ON if receive_own_messages else ECHO_OFF)
         self.bad_records = 0
         self._early: collections.deque[bytes] = collections.deque()

@@ -13,7 +13,6 @@ resync from a snapshot. Writes are transactions:
 
 from __future__ import annotations
 
-import time
 from typing import Any, Callable
 
 from skillbus.bus import Bus, channel
@@ -21,6 +20,7 @@ from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elemen
                            wm_relation_t, wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
 from skillbus.rpc import RpcClient, RpcRemoteError
 from skillbus.world.convert import element_from_msg, op, property_msg, relation_msg
+from skillbus.waiting import poll_until
 from skillbus.world.element import Element
 
 Relation = tuple[str, str, str]
@@ -128,11 +128,8 @@ class WorldModelInterface:
         """Dispatches the bus until the replica is at `version` (default: the server's)."""
         if version is None:
             version = self._server_version()
-        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
-        while self.version < version and not self._stale:
-            if time.monotonic() >= deadline:
-                break
-            self.bus.handle(min(0.05, max(0.0, deadline - time.monotonic())))
+        poll_until(lambda: self.version >= version or self._stale, self.timeout if timeout is None else timeout,
+                   step=self.bus.handle)
         if self.version < version:
             self.resync()
 
