@@ -21,6 +21,7 @@ def build_parser() -> argparse.ArgumentParser:
     ls.add_argument("--python", type=int, default=3, help="Python participants")
     ls.add_argument("--cpp", type=int, default=1, help="C++ participants")
     ls.add_argument("--timeout", type=float, default=120.0, help="seconds before the run is abandoned")
+    ls.add_argument("--json", action="store_true", help="print the summary as JSON")
     la = sub.add_parser("launch", help="start the system under supervisord")
     la.add_argument("--run-dir", default="runs/launch")
     la.add_argument("--wall-clock", action="store_true", help="as on a robot: no lockstep, processes restart")
@@ -74,6 +75,8 @@ def build_parser() -> argparse.ArgumentParser:
     cl.add_argument("file")
     cl.add_argument("--node-id", type=int, default=5)
     cl.add_argument("--eds", default=None, help="the device's EDS (default: the skillbus gripper's)")
+    cl.add_argument("--json", action="store_true",
+                    help="print a JSON list of the frames: time, COB-ID, data and what it means")
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
     from skillbus.sim import cli as sim_cli
@@ -90,8 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     from skillbus.rpc import RpcTimeout
     try:
         return dispatch(args)
-    except RpcTimeout as e:  # a server that does not answer: one line, not a traceback
-        print(f"error: no answer: {e}: is the system running, in this network namespace?", file=sys.stderr)
+    except RpcTimeout as e:  # a server that does not answer: one line naming it, not a traceback
+        print(f"error: {e.no_answer()}", file=sys.stderr)
         return 1
     except BusError as e:
         print(f"error: {e}", file=sys.stderr)

@@ -5,6 +5,7 @@ in a private network namespace and prints its summary."""
 
 from __future__ import annotations
 
+import json
 import sys
 
 from skillbus import paths
@@ -49,10 +50,14 @@ def print_summary(s: dict) -> None:
 
 
 def main(args) -> int:
+    as_json = getattr(args, "json", False)
     with Sandbox() as box:
         print(f"running {args.frames} frames with {args.python} Python and {args.cpp} C++ participants "
-              f"({box.mode}, {box.url})", flush=True)
+              f"({box.mode}, {box.url})", file=sys.stderr if as_json else sys.stdout, flush=True)
         s = run_session(box, args.frames, args.python, args.cpp, timeout=args.timeout)
-    print_summary(s)
+    if as_json:
+        print(json.dumps(s))
+    else:
+        print_summary(s)
     ok = s.get("ok") and all(p.get("ok") for p in s["participant_results"].values())
     return 0 if ok else 1

@@ -63,7 +63,7 @@ class Proc:
         return self.stderr_path.read_text(errors="replace")
 
     def wait_for(self, pattern: str | re.Pattern[str], timeout: float, stream: str = "stderr",
-                 what: str = "") -> re.Match[str]:
+                 what: str = "", interval: float = 0.05) -> re.Match[str]:
         """Waits until the process has written `pattern` (a string: literally; a compiled
         expression: searched) to its stderr (or stdout) and returns the match. Raises
         WaitTimeout when it has not within `timeout`, RuntimeError as soon as the process
@@ -71,7 +71,7 @@ class Proc:
         read = self.stderr if stream == "stderr" else self.stdout
         shown = pattern.pattern if isinstance(pattern, re.Pattern) else pattern
         return wait_for_text(read, pattern, timeout, what or f"{self.name} writing {shown!r} to {stream}",
-                             ended=lambda: self.returncode,
+                             ended=lambda: self.returncode, interval=interval,
                              diagnostic=lambda: f"the end of {self.name}'s stderr:\n{self.stderr()[-2000:]}")
 
 

@@ -45,7 +45,32 @@ class RpcError(RuntimeError):
 
 
 class RpcTimeout(RpcError):
-    pass
+    """No reply within the timeout: ``area`` and ``timeout`` say whose and how long."""
+
+    def __init__(self, message: str, area: str = "", timeout: float = 0.0) -> None:
+        super().__init__(message)
+        self.area, self.timeout = area, timeout
+
+    def no_answer(self) -> str:
+        """The one line a command prints for it (see :func:`no_answer`)."""
+        return no_answer(self.area, self.timeout)
+
+
+# The server of each RPC area, as a command names it when it gets no answer.
+SERVERS = {"WM": "world model server", "SKILL": "skill manager", "SIM": "physics server",
+           "MOTION": "motion service", "COUNTER": "counter service"}
+
+
+def no_answer(area: str, timeout: float) -> str:
+    """What a command says when the server of `area` does not answer: the server, the
+    channel it listens on, and the two usual reasons.
+
+    >>> no_answer("WM", 2.0)
+    'no world model server answered on SB_WM_REQ within 2 s: is the system running, in this network namespace?'
+    """
+    server = SERVERS.get(area.upper(), f"{area} server")
+    return (f"no {server} answered on {request_channel(area)} within {timeout:g} s: "
+            f"is the system running, in this network namespace?")
 
 
 class RpcRemoteError(RpcError):
@@ -200,7 +225,7 @@ class RpcClient:
             rep = self._pending.pop(rid)
         if rep is None:
             raise RpcTimeout(f"rpc {self.area}.{method}: no reply on {reply_channel(self.area)} "
-                             f"within {timeout:.1f} s ({attempts} attempts)")
+                             f"within {timeout:.1f} s ({attempts} attempts)", self.area, timeout)
         if rep.status != OK:
             raise RpcRemoteError(rep.status, rep.error)
         return bytes(rep.payload)

@@ -10,6 +10,7 @@ the EDS, decoded by canopen's own PDO maps), and EMCY with code and text.
 
 from __future__ import annotations
 
+import json
 import signal
 import struct
 import sys
@@ -120,13 +121,20 @@ class Decoder:
         return f"unknown COB-ID 0x{cid:03X} ({len(data)} bytes)"
 
 
-def lines(path: str, node_id: int = 5, eds: str | Path = EDS) -> Iterator[str]:
+def frames(path: str, node_id: int = 5, eds: str | Path = EDS) -> Iterator[dict]:
+    """Each frame of a log: seconds since the first, COB-ID, data (hex) and its meaning."""
     d = Decoder(node_id, eds)
     start = None
     for msg in can.LogReader(path):
         start = msg.timestamp if start is None else start
-        raw = f"{msg.arbitration_id:03X}#{bytes(msg.data).hex().upper()}"
-        yield f"{msg.timestamp - start:10.4f}  {raw:<24} {d.decode(msg)}"
+        yield {"t": msg.timestamp - start, "id": msg.arbitration_id, "data": bytes(msg.data).hex().upper(),
+               "decoded": d.decode(msg)}
+
+
+def lines(path: str, node_id: int = 5, eds: str | Path = EDS) -> Iterator[str]:
+    for f in frames(path, node_id, eds):
+        raw = f"{f['id']:03X}#{f['data']}"
+        yield f"{f['t']:10.4f}  {raw:<24} {f['decoded']}"
 
 
 def main_record(args) -> int:
@@ -137,6 +145,9 @@ def main_record(args) -> int:
 
 def main_log(args) -> int:
     try:
+        if getattr(args, "json", False):
+            print(json.dumps(list(frames(args.file, args.node_id, args.eds or EDS))))
+            return 0
         for line in lines(args.file, args.node_id, args.eds or EDS):
             print(line)
     except (OSError, ValueError) as e:

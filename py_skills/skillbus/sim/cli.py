@@ -16,6 +16,7 @@ def add_parsers(sub) -> None:
     s.add_argument("scene", nargs="?", default="", help="load-scene: the scene file")
     s.add_argument("--url", default=None)
     s.add_argument("--timeout", type=float, default=5.0)
+    s.add_argument("--json", action="store_true", help="JSON also for digest (status and the others always are)")
 
     p = sub.add_parser("sim-script", help="play a command script against the physics server (lockstep)")
     p.add_argument("script", help="JSON: {\"steps\": [{\"at_s\": 0.5, \"arm\"|\"gripper\": {...}}]}")
@@ -48,14 +49,20 @@ def main(args: argparse.Namespace) -> int:
             sys.stdout.write(text)
         return 0
     from skillbus.bus import open_bus
-    from skillbus.rpc import RpcError
+    from skillbus.rpc import RpcError, RpcTimeout
     from skillbus.sim.client import SimClient
     c = SimClient(open_bus(args.url), timeout=args.timeout)
     action = args.action.replace("-", "_")
     try:
         rep = c.load_scene(args.scene) if action == "load_scene" else getattr(c, action)()
+    except RpcTimeout as e:
+        print(f"error: {e.no_answer()}", file=sys.stderr)
+        return 1
     except RpcError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
-    print(json.dumps(rep) if isinstance(rep, dict) else rep)
+    if isinstance(rep, dict):
+        print(json.dumps(rep))
+    else:
+        print(json.dumps({action: rep}) if args.json else rep)
     return 0

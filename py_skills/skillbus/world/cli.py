@@ -27,7 +27,9 @@ def add_parser(sub) -> None:
     ld.add_argument("file")
     sv = wsub.add_parser("save", help="write the world as a Turtle scene")
     sv.add_argument("file")
-    wsub.add_parser("tree", help="the containment tree with poses")
+    t = wsub.add_parser("tree", help="the containment tree with poses")
+    t.add_argument("--json", action="store_true",
+                   help="print the roots as a JSON list, each element with its position and children")
 
 
 def element_dict(e: Element) -> dict:
@@ -44,15 +46,18 @@ def print_element(e: Element) -> None:
         print(f"    {r['src']} {r['type']} {r['dst']}")
 
 
-def pose_text(e: Element) -> str:
+def position(e: Element) -> list[float] | None:
     keys = ["skiros:PositionX", "skiros:PositionY", "skiros:PositionZ"]
     if not any(e.hasProperty(k) for k in keys):
-        return ""
-    xyz = [e.getProperty(k).value if e.hasProperty(k) else 0.0 for k in keys]
-    return " at ({:.3f}, {:.3f}, {:.3f})".format(*xyz)
+        return None
+    return [e.getProperty(k).value if e.hasProperty(k) else 0.0 for k in keys]
 
 
-def print_tree(wmi: WorldModelInterface) -> None:
+def containment_tree(wmi: WorldModelInterface) -> list[dict]:
+    """The containment tree (skiros:contain) from its roots: each element's id, type,
+    label, position (relative to its container; None without one) and children, sorted
+    by id. Where the containment has a cycle, the element met again is shown once more
+    with "cycle": true and no children."""
     elements = {e.id: e for e in wmi.get_elements()}
     children: dict[str, list[str]] = {}
     contained = set()
@@ -60,17 +65,26 @@ def print_tree(wmi: WorldModelInterface) -> None:
         children.setdefault(r["src"], []).append(r["dst"])
         contained.add(r["dst"])
 
-    def show(eid: str, depth: int, seen: set) -> None:
-        e = elements[eid]
-        print("  " * depth + f"{eid} [{e.label}]{pose_text(e)}")
-        if eid in seen:
-            print("  " * (depth + 1) + "(cycle)")
-            return
-        for c in sorted(children.get(eid, [])):
-            show(c, depth + 1, seen | {eid})
+    def node(eid: str, seen: frozenset) -> dict:
+        e, cycle = elements[eid], eid in seen
+        return {"id": eid, "type": e.type, "label": e.label, "position": position(e), "cycle": cycle,
+                "children": [] if cycle else [node(c, seen | {eid}) for c in sorted(children.get(eid, []))]}
 
-    for root in sorted(set(elements) - contained):
-        show(root, 0, set())
+    return [node(root, frozenset()) for root in sorted(set(elements) - contained)]
+
+
+def print_tree(wmi: WorldModelInterface) -> None:
+    def show(n: dict, depth: int) -> None:
+        p = n["position"]
+        at = " at ({:.3f}, {:.3f}, {:.3f})".format(*p) if p is not None else ""
+        print("  " * depth + f"{n['id']} [{n['label']}]{at}")
+        if n["cycle"]:
+            print("  " * (depth + 1) + "(cycle)")
+        for c in n["children"]:
+            show(c, depth + 1)
+
+    for root in containment_tree(wmi):
+        show(root, 0)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -96,7 +110,7 @@ def main(args: argparse.Namespace) -> int:
             wmi.save_scene(args.file)
             print(f"saved version {wmi.version} to {args.file}")
         elif c == "tree":
-            print_tree(wmi)
+            print(json.dumps(containment_tree(wmi), indent=2)) if args.json else print_tree(wmi)
         return 0
     except (WorldModelError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
