@@ -1,4 +1,4 @@
-#include "ik.hpp"
+#include "skillbus/motion/ik.hpp"
 
 #include <ceres/ceres.h>
 

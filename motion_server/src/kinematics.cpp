@@ -1,4 +1,4 @@
-#include "kinematics.hpp"
+#include "skillbus/motion/kinematics.hpp"
 
 #include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/DegreeOfFreedom.hpp>
@@ -19,18 +19,18 @@ struct Kinematics::Impl {
   }
 };
 
-Kinematics::Kinematics(const sim::Scene& scene) : impl_(std::make_unique<Impl>()) {
+Kinematics::Kinematics(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
   const auto& r = scene.robot;
   dart::utils::DartLoader loader;
   impl_->robot = loader.parseSkeleton(dart::common::Uri::createFromPath(r.urdf), nullptr,
                                       dart::utils::DartLoader::FIXED_BASE_LINK);
-  if (!impl_->robot) throw sim::SceneError(r.urdf + ": DART cannot load this URDF");
+  if (!impl_->robot) throw scene::SceneError(r.urdf + ": DART cannot load this URDF");
   Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
   base.translation() = Eigen::Vector3d(r.pose[0], r.pose[1], r.pose[2]);
   base.linear() = Eigen::Quaterniond(r.pose[6], r.pose[3], r.pose[4], r.pose[5]).normalized().toRotationMatrix();
   impl_->robot->getRootJoint()->setTransformFromParentBodyNode(base);
   impl_->tool = impl_->robot->getBodyNode(r.tool_link);
-  if (!impl_->tool) throw sim::SceneError(scene.path + ": robot.tool_link '" + r.tool_link + "' is not a link");
+  if (!impl_->tool) throw scene::SceneError(scene.path + ": robot.tool_link '" + r.tool_link + "' is not a link");
   impl_->offset = Eigen::Vector3d(0, 0, r.tool_offset);
   for (size_t i = 0; i < impl_->robot->getNumDofs(); ++i) {
     auto* dof = impl_->robot->getDof(i);

@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "../../common/apps/args.hpp"
-#include "planner.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/log.hpp"
+#include "skillbus/motion/planner.hpp"
 #include "skillbus/rpc.hpp"
 #include "skillbus_msgs/motion_plan_t.hpp"
 #include "skillbus_msgs/motion_request_t.hpp"
@@ -62,14 +64,20 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_
 }  // namespace
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "scene"}, {});
-  const std::string scene_file = args.str("scene");
-  if (scene_file.empty()) apps::Args::die("--scene FILE is required (the robot comes from it)");
+  CLI::App app{"Arm motion for the skills over RPC (area MOTION, method plan): inverse kinematics (Ceres) and "
+               "joint trajectories for the scene's arm. SIGTERM or SIGINT stop it; it prints a one-line JSON summary.",
+               "motion_server"};
+  apps::configure(app);
+  std::string url, scene_file;
+  apps::add_url_option(app, url);
+  app.add_option("--scene", scene_file, "the scene file the robot comes from (required)")->type_name("FILE");
+  apps::parse_or_exit(app, argc, argv);
+  if (scene_file.empty()) apps::usage_error(app, "--scene FILE is required (the robot comes from it)");
   std::unique_ptr<Bus> bus;
   std::unique_ptr<motion::Kinematics> kin;
   apps::start_or_exit("motion_server", [&] {
-    kin = std::make_unique<motion::Kinematics>(sim::load_scene(scene_file));
-    bus = open_bus(args.str("url"));
+    kin = std::make_unique<motion::Kinematics>(scene::load_scene(scene_file));
+    bus = open_bus(url);
   });
   RpcServer rpc(*bus, "MOTION");
   rpc.add_method<skillbus_msgs::motion_request_t, skillbus_msgs::motion_plan_t>(
@@ -78,6 +86,10 @@ int main(int argc, char** argv) {
   SB_INFO("motion_server", "serving " << rpc_request_channel("MOTION") << " for " << kin->joints().size()
                                       << " arm joints of " << scene_file);
   while (!apps::stop_requested()) bus->handle(std::chrono::milliseconds(100));
-  std::printf("{\"ok\": true, \"served\": %ld, \"bad_input\": %ld}\n", rpc.served(), rpc.bad_input().total());
+  apps::Summary out;
+  out["ok"] = true;
+  out["served"] = rpc.served();
+  out["bad_input"] = rpc.bad_input().total();
+  apps::print_summary(out);
   return 0;
 }

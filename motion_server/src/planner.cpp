@@ -1,4 +1,4 @@
-#include "planner.hpp"
+#include "skillbus/motion/planner.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,44 +1,51 @@
 // sim_server: the DART physics server. See sim_server/README.md.
 #include <cstdio>
 
-#include "../../common/apps/args.hpp"
-#include "server.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
+#include "skillbus/sim/server.hpp"
 
 using namespace skillbus;
 
-namespace {
-
-}  // namespace
-
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv,
-                  {"url", "scene", "script", "record-script", "name", "participants", "frames", "duration-s", "speed", "collision", "step-ms",
-                   "frame-ms", "join-timeout-ms", "ack-timeout-ms", "message-timeout-ms", "stop-after-task"},
-                  {"wall-clock", "pipeline"});
+  CLI::App app{"The DART physics server: plays the robot and the objects of a scene file, serves the robot "
+               "interface and the SIM services, and is the lockstep clock master (or runs on the wall clock). "
+               "Prints a one-line JSON summary when it ends.",
+               "sim_server"};
+  apps::configure(app);
+  std::string url;
   sim::ServerOptions o;
-  o.scene_file = args.str("scene");
-  if (o.scene_file.empty()) apps::Args::die("--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
-  o.script_file = args.str("script");
-  o.record_script = args.str("record-script");
-  o.name = args.str("name", "sim");
-  o.participants = args.list("participants");
-  o.wall_clock = args.flag("wall-clock");
-  o.pipeline = args.flag("pipeline");
-  o.speed = args.real("speed", 1.0);
-  o.collision_detector = args.str("collision");
-  o.step_ms = args.real("step-ms", 0);
-  o.frame_ms = args.real("frame-ms", 0);
-  o.frames = args.num("frames", -1);
-  o.duration_s = args.real("duration-s", 0);
-  o.stop_after_task = args.num("stop-after-task", -1);
-  o.join_timeout = std::chrono::milliseconds(args.num("join-timeout-ms", 10000));
-  o.ack_timeout = std::chrono::milliseconds(args.num("ack-timeout-ms", 5000));
-  o.message_timeout = std::chrono::milliseconds(args.num("message-timeout-ms", 2000));
+  int64_t join_ms = 10000, ack_ms = 5000, message_ms = 2000;
+  apps::add_url_option(app, url);
+  app.add_option("--scene", o.scene_file, "the scene file (required; e.g. deploy/scenes/demo.scene.json)")->type_name("FILE");
+  app.add_option("--script", o.script_file, "play this command script in-process (no participant needed)")->type_name("FILE");
+  app.add_option("--record-script", o.record_script, "write every accepted command to this file, as a script")->type_name("FILE");
+  app.add_option("--name", o.name, "its name on the bus");
+  apps::add_list_option(app, "--participants", o.participants, "lockstep: who must join and ack every frame");
+  app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of as lockstep master");
+  app.add_option("--speed", o.speed, "wall clock: sim seconds per wall second")->check(apps::positive());
+  app.add_option("--frames", o.frames, "frames to run (-1: until stopped)");
+  app.add_option("--duration-s", o.duration_s, "sim time to run (> 0: overrides --frames)");
+  app.add_option("--stop-after-task", o.stop_after_task, "lockstep: end the run when this skill task has finished");
+  app.add_flag("--pipeline", o.pipeline,
+               "lockstep: step the physics while the participants work (commands take effect a frame later)");
+  app.add_option("--collision", o.collision_detector, "collision detector bullet, dart or fcl (empty: the scene's)");
+  app.add_option("--step-ms", o.step_ms, "physics step, ms (0: the scene's)");
+  app.add_option("--frame-ms", o.frame_ms, "frame, ms (0: the scene's)");
+  app.add_option("--join-timeout-ms", join_ms, "lockstep: how long to wait for every participant to join");
+  app.add_option("--ack-timeout-ms", ack_ms, "lockstep: how long to wait for a frame's acks");
+  app.add_option("--message-timeout-ms", message_ms, "lockstep: how long to wait for an announced message");
+  apps::parse_or_exit(app, argc, argv);
+  if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
+  o.join_timeout = std::chrono::milliseconds(join_ms);
+  o.ack_timeout = std::chrono::milliseconds(ack_ms);
+  o.message_timeout = std::chrono::milliseconds(message_ms);
 
   std::unique_ptr<Bus> bus;
   std::unique_ptr<sim::SimServer> server;
   apps::start_or_exit("sim_server", [&] {
-    bus = open_bus(args.str("url"));
+    bus = open_bus(url);
     server = std::make_unique<sim::SimServer>(*bus, o);
   });
   apps::stop_on_signals();
@@ -47,41 +54,41 @@ int main(int argc, char** argv) {
   // Where each object ended (x y z in the world), for people and for the demo's summary.
   skillbus_msgs::sim_state_t state{};
   server->physics().fill_state(state);
-  std::string objects;
-  for (const auto& o : state.objects) {
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "%s\"%s\": [%.4f, %.4f, %.4f]", objects.empty() ? "" : ", ",
-                  apps::json_escape(o.name).c_str(), o.pose[0], o.pose[1], o.pose[2]);
-    objects += buf;
-  }
+  apps::Summary objects = apps::Summary::object();
+  for (const auto& ob : state.objects)
+    objects[ob.name] = {apps::rounded(ob.pose[0], 4), apps::rounded(ob.pose[1], 4), apps::rounded(ob.pose[2], 4)};
   // Where a frame's wall time went, in ms per frame: publishing the state, the physics
   // (and commands), the wait for the participants' acks (the slowest of each frame), and
   // each participant's own clock-to-ack time (its work plus the transport both ways).
-  std::string breakdown;
-  {
-    const double f = rep.run.frames > 0 ? static_cast<double>(rep.run.frames) : 1.0;
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "\"state\": %.3f, \"physics\": %.3f, \"ack_wait\": %.3f, \"total\": %.3f",
-                  rep.frame_start_seconds * 1e3 / f, rep.frame_end_seconds * 1e3 / f, rep.ack_wait_seconds * 1e3 / f,
-                  rep.run.wall_seconds * 1e3 / f);
-    breakdown = buf;
-    for (const auto& [name, s] : rep.ack_seconds) {
-      std::snprintf(buf, sizeof buf, ", \"ack_%s\": %.3f", apps::json_escape(name).c_str(), s * 1e3 / f);
-      breakdown += buf;
-    }
-  }
+  const double f = r.frames > 0 ? static_cast<double>(r.frames) : 1.0;
+  apps::Summary frame_ms;
+  frame_ms["state"] = apps::rounded(rep.frame_start_seconds * 1e3 / f, 3);
+  frame_ms["physics"] = apps::rounded(rep.frame_end_seconds * 1e3 / f, 3);
+  frame_ms["ack_wait"] = apps::rounded(rep.ack_wait_seconds * 1e3 / f, 3);
+  frame_ms["total"] = apps::rounded(r.wall_seconds * 1e3 / f, 3);
+  for (const auto& [name, s] : rep.ack_seconds) frame_ms["ack_" + name] = apps::rounded(s * 1e3 / f, 3);
   const double rtf = r.wall_seconds > 0 ? r.sim_time_ns * 1e-9 / r.wall_seconds : 0.0;
-  std::printf(
-      "{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"sim_time_s\": %.3f, \"wall_time_s\": %.3f, "
-      "\"real_time_factor\": %.2f, \"steps\": %lld, \"physics_us_per_step\": %.1f, \"collision_detector\": \"%s\", "
-      "\"participants\": %zu, \"state_digest\": \"%s\", \"session_digest\": \"%s\", \"commands_accepted\": %ld, "
-      "\"commands_rejected\": %ld, \"bad_input\": %ld, \"finger_width\": %.5f, \"finger_force\": %.3f, "
-      "\"objects\": {%s}, \"frame_ms\": {%s}}\n",
-      r.ok ? "true" : "false", apps::json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.sim_time_ns * 1e-9,
-      r.wall_seconds, rtf, static_cast<long long>(rep.steps), rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0,
-      server->physics().collision_detector().c_str(), o.participants.size(), to_hex(rep.state_digest).c_str(),
-      r.digest_hex().c_str(), rep.accepted, rep.rejected, rep.bad_input, state.finger_width, state.finger_force,
-      objects.c_str(), breakdown.c_str());
-  std::fflush(stdout);
+
+  apps::Summary out;
+  out["ok"] = r.ok;
+  out["error"] = r.error;
+  out["frames"] = r.frames;
+  out["sim_time_s"] = apps::rounded(r.sim_time_ns * 1e-9, 3);
+  out["wall_time_s"] = apps::rounded(r.wall_seconds, 3);
+  out["real_time_factor"] = apps::rounded(rtf, 2);
+  out["steps"] = rep.steps;
+  out["physics_us_per_step"] = apps::rounded(rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0, 1);
+  out["collision_detector"] = server->physics().collision_detector();
+  out["participants"] = o.participants.size();
+  out["state_digest"] = to_hex(rep.state_digest);
+  out["session_digest"] = r.digest_hex();
+  out["commands_accepted"] = rep.accepted;
+  out["commands_rejected"] = rep.rejected;
+  out["bad_input"] = rep.bad_input;
+  out["finger_width"] = apps::rounded(state.finger_width, 5);
+  out["finger_force"] = apps::rounded(state.finger_force, 3);
+  out["objects"] = objects;
+  out["frame_ms"] = frame_ms;
+  apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

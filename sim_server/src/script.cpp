@@ -1,4 +1,4 @@
-#include "script.hpp"
+#include "skillbus/sim/script.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,6 +7,8 @@
 #include <sstream>
 
 namespace skillbus::sim {
+
+using scene::SceneError;
 
 std::vector<ScriptStep> load_script(const std::string& path) {
   std::ifstream in(path);

@@ -1,4 +1,4 @@
-#include "server.hpp"
+#include "skillbus/sim/server.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -15,6 +15,9 @@
 #include "skillbus_msgs/skill_progress_t.hpp"
 
 namespace skillbus::sim {
+
+using scene::Scene;
+using scene::SceneError;
 
 namespace {
 constexpr const char* kLog = "sim_server";
@@ -38,7 +41,7 @@ SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::mov
 SimServer::~SimServer() = default;
 
 Scene SimServer::load(const std::string& path) const {
-  Scene s = load_scene(path);
+  Scene s = scene::load_scene(path);
   if (!opt_.collision_detector.empty()) {
     if (opt_.collision_detector != "bullet" && opt_.collision_detector != "dart" && opt_.collision_detector != "fcl")
       throw SceneError("--collision must be one of bullet, dart, fcl (got '" + opt_.collision_detector + "')");

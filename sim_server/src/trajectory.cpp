@@ -1,4 +1,4 @@
-#include "trajectory.hpp"
+#include "skillbus/sim/trajectory.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -4,21 +4,21 @@
 
 #include <cmath>
 
-#include "ik.hpp"
-#include "planner.hpp"
+#include "skillbus/motion/ik.hpp"
+#include "skillbus/motion/planner.hpp"
 
 using namespace skillbus;
 using namespace skillbus::motion;
 
 namespace {
 
-const sim::Scene& scene() {
-  static const sim::Scene s = sim::load_scene(SKILLBUS_TEST_SCENE);
+const scene::Scene& demo_scene() {
+  static const scene::Scene s = scene::load_scene(SKILLBUS_TEST_SCENE);
   return s;
 }
 
 Kinematics& kin() {
-  static Kinematics k(scene());
+  static Kinematics k(demo_scene());
   return k;
 }
 

@@ -1,9 +1,9 @@
 // Scene files: the demo scene loads; every kind of mistake is named with its field.
 #include <gtest/gtest.h>
 
-#include "scene.hpp"
+#include "skillbus/scene/scene.hpp"
 
-using namespace skillbus::sim;
+using namespace skillbus::scene;
 
 namespace {
 const std::string kDir = SKILLBUS_TEST_SCENE_DIR;  // deploy/scenes

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "trajectory.hpp"
+#include "skillbus/sim/trajectory.hpp"
 
 using namespace skillbus::sim;
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "trajectory.hpp"
+#include "skillbus/sim/trajectory.hpp"
 
 namespace skillbus::sim {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "kinematics.hpp"
+#include "skillbus/motion/kinematics.hpp"
 
 namespace skillbus::motion {
 

@@ -1,7 +1,9 @@
 // The simulated robot and world: a DART world built from a scene file, the arm's joint
-// controller (computed torque: gravity and Coriolis compensation plus PD on a joint
-// trajectory) and the finger controller (position ramp with a force limit), stepped a
-// frame at a time. DART stays behind this header (pimpl) so nothing else compiles it.
+// controller (arm_controller.hpp: computed torque with PID on a joint trajectory) and the
+// finger controller (finger_controller.hpp: position ramp with a force limit), stepped a
+// frame at a time. DART stays behind this header (pimpl) so nothing else compiles it:
+// src/world.* builds the world and sets up the robot, src/physics.cpp controls and
+// steps it, src/state.cpp reads the state message and the digest out of it.
 #pragma once
 
 #include <cstdint>
@@ -9,17 +11,16 @@
 #include <string>
 #include <vector>
 
-#include "commands.hpp"
-#include "scene.hpp"
 #include "skillbus/digest.hpp"
+#include "skillbus/scene/scene.hpp"
+#include "skillbus/sim/commands.hpp"
 #include "skillbus_msgs/sim_state_t.hpp"
-#include "trajectory.hpp"
 
 namespace skillbus::sim {
 
 class Physics {
  public:
-  explicit Physics(const Scene& scene);  // throws SceneError when the scene cannot be built
+  explicit Physics(const scene::Scene& scene);  // throws scene::SceneError when the scene cannot be built
   ~Physics();
   Physics(const Physics&) = delete;
   Physics& operator=(const Physics&) = delete;
@@ -37,7 +38,7 @@ class Physics {
   // SHA-256 over every skeleton's positions and velocities (bit patterns), in scene order.
   Digest digest() const;
 
-  const Scene& scene() const;
+  const scene::Scene& scene() const;
   int steps_per_frame() const;
   int64_t step_count() const;
   std::string collision_detector() const;

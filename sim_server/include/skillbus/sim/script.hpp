@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "commands.hpp"
-#include "scene.hpp"
+#include "skillbus/scene/scene.hpp"
+#include "skillbus/sim/commands.hpp"
 
 namespace skillbus::sim {
 
@@ -19,7 +19,7 @@ struct ScriptStep {
   GripperCommand gripper;
 };
 
-// Throws SceneError naming the file and the step when the script is malformed.
+// Throws scene::SceneError naming the file and the step when the script is malformed.
 std::vector<ScriptStep> load_script(const std::string& path);
 
 }  // namespace skillbus::sim

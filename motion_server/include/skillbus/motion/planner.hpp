@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "ik.hpp"
+#include "skillbus/motion/ik.hpp"
 
 namespace skillbus::motion {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "scene.hpp"
+#include "skillbus/scene/scene.hpp"
 
 namespace skillbus::motion {
 
@@ -19,7 +19,7 @@ struct JointInfo {
 
 class Kinematics {
  public:
-  explicit Kinematics(const sim::Scene& scene);  // throws sim::SceneError
+  explicit Kinematics(const scene::Scene& scene);  // throws scene::SceneError
   ~Kinematics();
   const std::vector<JointInfo>& joints() const { return joints_; }
   Eigen::Isometry3d tool_pose(const Eigen::VectorXd& q) const;

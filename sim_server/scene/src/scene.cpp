@@ -1,4 +1,4 @@
-#include "scene.hpp"
+#include "skillbus/scene/scene.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -7,7 +7,7 @@
 #include <set>
 #include <sstream>
 
-namespace skillbus::sim {
+namespace skillbus::scene {
 
 namespace {
 
@@ -212,4 +212,4 @@ Scene load_scene(const std::string& path) {
   return parse_scene(ss.str(), path);
 }
 
-}  // namespace skillbus::sim
+}  // namespace skillbus::scene

@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "physics.hpp"
-#include "script.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
+#include "skillbus/sim/physics.hpp"
+#include "skillbus/sim/script.hpp"
 #include "skillbus_msgs/sim_cmd_reply_t.hpp"
 #include "skillbus_msgs/sim_status_t.hpp"
 
@@ -62,13 +62,13 @@ struct ServerReport {
 
 class SimServer {
  public:
-  SimServer(Bus& bus, ServerOptions options);  // throws SceneError on a bad scene
+  SimServer(Bus& bus, ServerOptions options);  // throws scene::SceneError on a bad scene
   ~SimServer();
   ServerReport run_until(std::function<bool()> should_stop);
   const Physics& physics() const { return *physics_; }
 
  private:
-  Scene load(const std::string& path) const;  // the file, with the command-line overrides
+  scene::Scene load(const std::string& path) const;  // the file, with the command-line overrides
   void on_arm(const uint8_t* data, size_t size, const std::string& ch);
   void on_gripper(const uint8_t* data, size_t size, const std::string& ch);
   void reply(const std::string& id, const std::string& command, const std::string& error);

@@ -1,7 +1,8 @@
 // The scene file: one JSON document that lists the robot, the fixtures (table, bin) and
 // the graspable objects with their poses. The physics server builds its world from it,
 // and `skillbus scene turtle` turns the same file into the world model's Turtle scene,
-// so belief and truth start from one source. Format: docs/scene.md.
+// so belief and truth start from one source. Format: docs/scene.md. The physics server
+// (sim_server) and the motion server (motion_server) both read it with this library.
 #pragma once
 
 #include <array>
@@ -10,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace skillbus::sim {
+namespace skillbus::scene {
 
 // x y z qx qy qz qw, world frame.
 using Pose = std::array<double, 7>;
@@ -68,4 +69,4 @@ struct Scene {
 Scene load_scene(const std::string& path);
 Scene parse_scene(const std::string& json_text, const std::string& path);
 
-}  // namespace skillbus::sim
+}  // namespace skillbus::scene

@@ -1,0 +1,103 @@
+// The physics' outputs: the state message every frame, and the digest of the world.
+#include <cmath>
+#include <dart/collision/CollisionObject.hpp>
+#include <dart/collision/CollisionResult.hpp>
+#include <dart/dynamics/BodyNode.hpp>
+#include <dart/dynamics/DegreeOfFreedom.hpp>
+#include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/ShapeNode.hpp>
+#include <dart/dynamics/Skeleton.hpp>
+#include <dart/simulation/World.hpp>
+#include <map>
+
+#include "physics_impl.hpp"
+
+namespace skillbus::sim {
+
+using dart::dynamics::BodyNode;
+
+void Physics::fill_state(skillbus_msgs::sim_state_t& out) const {
+  const Impl& m = *impl_;
+  const auto& r = m.world.robot;
+  const size_t n = r->getNumDofs();
+  out.num_joints = static_cast<int32_t>(n);
+  out.joint_names.resize(n);
+  out.position.resize(n);
+  out.velocity.resize(n);
+  out.effort.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    out.joint_names[i] = r->getDof(i)->getJoint()->getName();
+    out.position[i] = r->getPosition(i);
+    out.velocity[i] = r->getVelocity(i);
+    out.effort[i] = m.applied[i];
+  }
+  Eigen::Isometry3d tcp = m.layout.tool->getWorldTransform();
+  tcp.translate(Eigen::Vector3d(0, 0, m.scene.robot.tool_offset));
+  from_iso(tcp, out.tool_pose);
+  out.finger_width = r->getPosition(m.layout.left_dof) + r->getPosition(m.layout.right_dof);
+  out.finger_force = -0.5 * (m.applied[m.layout.left_dof] + m.applied[m.layout.right_dof]);
+  out.finger_width_target = 2 * m.fingers.target();
+  out.arm_command_id = m.arm.command_id();
+  out.arm_moving = m.arm.moving();
+  std::vector<double> want = m.arm.reference_positions(m.total_steps);
+  double err = 0;
+  for (size_t k = 0; k < m.layout.arm_dofs.size(); ++k)
+    err = std::max(err, std::abs(want[k] - r->getPosition(m.layout.arm_dofs[k])));
+  out.arm_tracking_error = err;
+
+  const auto& objects = m.world.objects;
+  out.num_objects = static_cast<int32_t>(objects.size());
+  out.objects.resize(objects.size());
+  for (size_t k = 0; k < objects.size(); ++k) {
+    const BodyNode* bn = objects[k]->getRootBodyNode();
+    auto& o = out.objects[k];
+    o.name = objects[k]->getName();
+    from_iso(bn->getWorldTransform(), o.pose);
+    const Eigen::Vector3d v = bn->getLinearVelocity(), w = bn->getAngularVelocity();
+    for (int i = 0; i < 3; ++i) {
+      o.twist[i] = v[i];
+      o.twist[3 + i] = w[i];
+    }
+  }
+  // Finger-object contacts of the last step, summed per pair in a fixed order.
+  const BodyNode* fingers[2] = {r->getJoint(m.scene.robot.left_finger_joint)->getChildBodyNode(),
+                                r->getJoint(m.scene.robot.right_finger_joint)->getChildBodyNode()};
+  std::map<std::pair<std::string, std::string>, std::pair<int, double>> pairs;
+  for (const auto& c : m.world.sim->getLastCollisionResult().getContacts()) {
+    const BodyNode* a = c.collisionObject1->getShapeFrame()->asShapeNode()->getBodyNodePtr().get();
+    const BodyNode* b = c.collisionObject2->getShapeFrame()->asShapeNode()->getBodyNodePtr().get();
+    if (a == fingers[0] || a == fingers[1]) {
+    } else if (b == fingers[0] || b == fingers[1]) {
+      std::swap(a, b);
+    } else {
+      continue;
+    }
+    if (b->getSkeleton() == r) continue;
+    auto& e = pairs[{a->getName(), b->getSkeleton()->getName()}];
+    e.first += 1;
+    e.second += std::abs(c.force.dot(c.normal));
+  }
+  out.contacts.clear();
+  for (const auto& [k, v] : pairs) {
+    skillbus_msgs::sim_contact_t c;
+    c.body_a = k.first;
+    c.body_b = k.second;
+    c.points = v.first;
+    c.normal_force = v.second;
+    out.contacts.push_back(c);
+  }
+  out.num_contacts = static_cast<int32_t>(out.contacts.size());
+}
+
+Digest Physics::digest() const {
+  Sha256 h;
+  for (const auto& s : impl_->world.all) {
+    h.update_str(s->getName());
+    const Eigen::VectorXd q = s->getPositions(), v = s->getVelocities();
+    h.update(q.data(), sizeof(double) * static_cast<size_t>(q.size()));
+    h.update(v.data(), sizeof(double) * static_cast<size_t>(v.size()));
+  }
+  return h.finish();
+}
+
+}  // namespace skillbus::sim

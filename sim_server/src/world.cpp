@@ -1,0 +1,204 @@
+#include "world.hpp"
+
+#include <algorithm>
+#include <dart/collision/CollisionFilter.hpp>
+#include <dart/collision/CollisionObject.hpp>
+#include <dart/collision/bullet/BulletCollisionDetector.hpp>
+#include <dart/collision/dart/DARTCollisionDetector.hpp>
+#include <dart/collision/fcl/FCLCollisionDetector.hpp>
+#include <dart/constraint/BoxedLcpConstraintSolver.hpp>
+#include <dart/constraint/ConstraintSolver.hpp>
+#include <dart/constraint/DantzigBoxedLcpSolver.hpp>
+#include <dart/constraint/PgsBoxedLcpSolver.hpp>
+#include <dart/dynamics/BodyNode.hpp>
+#include <dart/dynamics/BoxShape.hpp>
+#include <dart/dynamics/CylinderShape.hpp>
+#include <dart/dynamics/DegreeOfFreedom.hpp>
+#include <dart/dynamics/FreeJoint.hpp>
+#include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/ShapeNode.hpp>
+#include <dart/dynamics/Skeleton.hpp>
+#include <dart/dynamics/WeldJoint.hpp>
+#include <dart/simulation/World.hpp>
+#include <dart/utils/urdf/DartLoader.hpp>
+#include <set>
+
+namespace skillbus::sim {
+
+using namespace dart;
+using dynamics::BodyNode;
+using dynamics::SkeletonPtr;
+using scene::Pose;
+using scene::SceneError;
+
+namespace {
+
+constexpr double kRobotFriction = 0.5, kFingerFriction = 1.0;
+
+void set_friction(const SkeletonPtr& skel, double mu) {
+  for (size_t b = 0; b < skel->getNumBodyNodes(); ++b)
+    for (auto* sn : skel->getBodyNode(b)->getShapeNodesWith<dynamics::DynamicsAspect>())
+      sn->getDynamicsAspect()->setFrictionCoeff(mu);
+}
+
+// Fixed fixtures never touch each other or the floor in a way that matters, and the
+// robot's pedestal stands on the floor: skip those pairs before narrow phase.
+class StaticPairFilter : public collision::CollisionFilter {
+ public:
+  explicit StaticPairFilter(std::set<const BodyNode*> fixed) : fixed_(std::move(fixed)) {}
+  bool ignoresCollision(const collision::CollisionObject* a, const collision::CollisionObject* b) const override {
+    const BodyNode* ba = a->getShapeFrame()->asShapeNode()->getBodyNodePtr().get();
+    const BodyNode* bb = b->getShapeFrame()->asShapeNode()->getBodyNodePtr().get();
+    if (ba->getSkeleton() == bb->getSkeleton() && !ba->getSkeleton()->isEnabledSelfCollisionCheck()) return true;
+    return fixed_.count(ba) && fixed_.count(bb);
+  }
+
+ private:
+  std::set<const BodyNode*> fixed_;
+};
+
+SkeletonPtr load_urdf(const std::string& path, const std::string& name, const Pose& pose) {
+  utils::DartLoader loader;
+  SkeletonPtr skel = loader.parseSkeleton(common::Uri::createFromPath(path), nullptr, utils::DartLoader::FIXED_BASE_LINK);
+  if (!skel) throw SceneError(path + ": DART cannot load this URDF (see the log above)");
+  skel->setName(name);
+  skel->getRootJoint()->setTransformFromParentBodyNode(to_iso(pose));
+  return skel;
+}
+
+}  // namespace
+
+Eigen::Isometry3d to_iso(const Pose& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(p[0], p[1], p[2]);
+  T.linear() = Eigen::Quaterniond(p[6], p[3], p[4], p[5]).normalized().toRotationMatrix();
+  return T;
+}
+
+void from_iso(const Eigen::Isometry3d& T, double* out) {
+  const Eigen::Quaterniond q(T.linear());
+  out[0] = T.translation().x();
+  out[1] = T.translation().y();
+  out[2] = T.translation().z();
+  out[3] = q.x();
+  out[4] = q.y();
+  out[5] = q.z();
+  out[6] = q.w();
+}
+
+World build_world(const scene::Scene& scene, const std::function<void(dynamics::Skeleton& robot)>& set_up_robot) {
+  World w;
+  auto& world = w.sim;
+  world = simulation::World::create(scene.name);
+  if (scene.physics.lcp_solver == "pgs")
+    world->setConstraintSolver(std::make_unique<constraint::BoxedLcpConstraintSolver>(
+        std::make_shared<constraint::PgsBoxedLcpSolver>()));
+  else
+    world->setConstraintSolver(std::make_unique<constraint::BoxedLcpConstraintSolver>(
+        std::make_shared<constraint::DantzigBoxedLcpSolver>(), std::make_shared<constraint::PgsBoxedLcpSolver>()));
+  // After the solver is set, so that it gets the step too.
+  world->setTimeStep(scene.physics.step_ms * 1e-3);
+  world->setGravity(Eigen::Vector3d(scene.physics.gravity[0], scene.physics.gravity[1], scene.physics.gravity[2]));
+  const std::string& cd = scene.physics.collision_detector;
+  if (cd == "bullet") {
+    world->getConstraintSolver()->setCollisionDetector(collision::BulletCollisionDetector::create());
+  } else if (cd == "dart") {
+    world->getConstraintSolver()->setCollisionDetector(collision::DARTCollisionDetector::create());
+  } else {
+    auto fcl = collision::FCLCollisionDetector::create();
+    fcl->setPrimitiveShapeType(collision::FCLCollisionDetector::PRIMITIVE);
+    world->getConstraintSolver()->setCollisionDetector(fcl);
+  }
+  auto& all = w.all;
+  std::set<const BodyNode*> fixed;
+
+  SkeletonPtr floor = dynamics::Skeleton::create("floor");
+  BodyNode* fb = floor->createJointAndBodyNodePair<dynamics::WeldJoint>().second;
+  auto fs = std::make_shared<dynamics::BoxShape>(Eigen::Vector3d(4, 4, 0.1));
+  fb->createShapeNodeWith<dynamics::CollisionAspect, dynamics::DynamicsAspect>(fs);
+  Eigen::Isometry3d fT = Eigen::Isometry3d::Identity();
+  fT.translation().z() = -0.05;
+  fb->getParentJoint()->setTransformFromParentBodyNode(fT);
+  set_friction(floor, 0.8);
+  floor->setMobile(false);
+  fixed.insert(fb);
+  all.push_back(floor);
+
+  for (const auto& f : scene.fixtures) {
+    SkeletonPtr s = load_urdf(f.urdf, f.name, f.pose);
+    s->setMobile(false);
+    set_friction(s, f.friction);
+    for (size_t b = 0; b < s->getNumBodyNodes(); ++b) fixed.insert(s->getBodyNode(b));
+    all.push_back(s);
+  }
+
+  SkeletonPtr robot = load_urdf(scene.robot.urdf, scene.robot.name, scene.robot.pose);
+  w.robot = robot;
+  set_friction(robot, kRobotFriction);
+  fixed.insert(robot->getRootBodyNode());
+  set_up_robot(*robot);
+  all.push_back(robot);
+
+  for (const auto& o : scene.objects) {
+    SkeletonPtr s = dynamics::Skeleton::create(o.name);
+    BodyNode* bn = s->createJointAndBodyNodePair<dynamics::FreeJoint>().second;
+    bn->setName(o.name);
+    dynamics::ShapePtr shape;
+    if (o.shape == "box")
+      shape = std::make_shared<dynamics::BoxShape>(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]));
+    else
+      shape = std::make_shared<dynamics::CylinderShape>(o.size[0], o.size[1]);
+    bn->createShapeNodeWith<dynamics::CollisionAspect, dynamics::DynamicsAspect>(shape);
+    dynamics::Inertia inertia;
+    inertia.setMass(o.mass);
+    inertia.setMoment(shape->computeInertia(o.mass));
+    bn->setInertia(inertia);
+    set_friction(s, o.friction);
+    s->setPositions(dynamics::FreeJoint::convertToPositions(to_iso(o.pose)));
+    w.objects.push_back(s);
+    all.push_back(s);
+  }
+  for (auto& s : all) world->addSkeleton(s);
+  world->getConstraintSolver()->getCollisionOption().collisionFilter = std::make_shared<StaticPairFilter>(fixed);
+  world->getConstraintSolver()->getCollisionOption().maxNumContacts = 200;
+  return w;
+}
+
+RobotLayout set_up_robot(dynamics::Skeleton& robot, const scene::Scene& scene) {
+  const scene::RobotSpec& r = scene.robot;
+  RobotLayout out;
+  auto* lj = robot.getJoint(r.left_finger_joint);
+  auto* rj = robot.getJoint(r.right_finger_joint);
+  if (!lj || lj->getNumDofs() != 1) throw SceneError(scene.path + ": robot.left_finger_joint '" + r.left_finger_joint + "' is not a 1-DoF joint of " + r.urdf);
+  if (!rj || rj->getNumDofs() != 1) throw SceneError(scene.path + ": robot.right_finger_joint '" + r.right_finger_joint + "' is not a 1-DoF joint of " + r.urdf);
+  out.tool = robot.getBodyNode(r.tool_link);
+  if (!out.tool) throw SceneError(scene.path + ": robot.tool_link '" + r.tool_link + "' is not a link of " + r.urdf);
+  out.left_dof = lj->getDof(0)->getIndexInSkeleton();
+  out.right_dof = rj->getDof(0)->getIndexInSkeleton();
+  out.finger_limits.upper = std::min(lj->getPositionUpperLimit(0), rj->getPositionUpperLimit(0));
+  out.finger_limits.effort = std::min(lj->getForceUpperLimit(0), rj->getForceUpperLimit(0));
+  out.finger_limits.velocity = std::min(lj->getVelocityUpperLimit(0), rj->getVelocityUpperLimit(0));
+
+  for (size_t i = 0; i < robot.getNumDofs(); ++i) {
+    auto* dof = robot.getDof(i);
+    dof->getJoint()->setLimitEnforcement(true);
+    if (i == out.left_dof || i == out.right_dof) continue;
+    out.arm_dofs.push_back(i);
+    out.arm_names.push_back(dof->getJoint()->getName());
+    out.arm_limits.push_back({dof->getPositionLowerLimit(), dof->getPositionUpperLimit(), dof->getVelocityUpperLimit()});
+  }
+  for (const auto& [name, q] : r.initial_joints) {
+    auto* j = robot.getJoint(name);
+    if (!j || j->getNumDofs() != 1) throw SceneError(scene.path + ": robot.initial_joints names '" + name + "', not a 1-DoF joint of " + r.urdf);
+    if (q < j->getPositionLowerLimit(0) || q > j->getPositionUpperLimit(0))
+      throw SceneError(scene.path + ": robot.initial_joints." + name + " is outside the joint's limits");
+    j->setPosition(0, q);
+  }
+  for (const auto* sn : robot.getJoint(r.left_finger_joint)->getChildBodyNode()->getShapeNodesWith<dynamics::DynamicsAspect>())
+    const_cast<dynamics::ShapeNode*>(sn)->getDynamicsAspect()->setFrictionCoeff(kFingerFriction);
+  for (const auto* sn : robot.getJoint(r.right_finger_joint)->getChildBodyNode()->getShapeNodesWith<dynamics::DynamicsAspect>())
+    const_cast<dynamics::ShapeNode*>(sn)->getDynamicsAspect()->setFrictionCoeff(kFingerFriction);
+  return out;
+}
+
+}  // namespace skillbus::sim

@@ -1,0 +1,51 @@
+// Private to sim_physics (DART): the DART world of a scene and the robot's set-up in it.
+// Only the physics' own .cpp files include this; DART stays out of the public headers.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <dart/dynamics/SmartPointer.hpp>
+#include <dart/simulation/SmartPointer.hpp>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "skillbus/scene/scene.hpp"
+#include "skillbus/sim/finger_controller.hpp"
+#include "skillbus/sim/trajectory.hpp"
+
+namespace skillbus::sim {
+
+// The world as built from a scene.
+struct World {
+  dart::simulation::WorldPtr sim;
+  dart::dynamics::SkeletonPtr robot;
+  std::vector<dart::dynamics::SkeletonPtr> objects;
+  std::vector<dart::dynamics::SkeletonPtr> all;  // digest order: floor, fixtures, robot, objects
+};
+
+// Builds the world: the constraint solver and collision detector the scene names, the
+// floor, the fixtures and the robot (URDF), then the objects. `set_up_robot` is called
+// once the robot is loaded, before the objects are made and anything is added to the
+// world. Throws scene::SceneError when the scene cannot be built.
+World build_world(const scene::Scene& scene, const std::function<void(dart::dynamics::Skeleton& robot)>& set_up_robot);
+
+// The robot's layout as the controllers see it.
+struct RobotLayout {
+  std::vector<size_t> arm_dofs;  // skeleton DoF indices of the arm's joints, in skeleton order
+  std::vector<std::string> arm_names;
+  std::vector<JointLimits> arm_limits;
+  size_t left_dof = 0, right_dof = 0;  // the fingers'
+  FingerLimits finger_limits;          // the tighter of the two fingers'
+  dart::dynamics::BodyNode* tool = nullptr;
+};
+
+// Checks the scene's robot against its skeleton and sets it up: joint limits enforced,
+// the initial joint positions, the fingers' friction. Throws scene::SceneError naming
+// the field that does not fit the URDF.
+RobotLayout set_up_robot(dart::dynamics::Skeleton& robot, const scene::Scene& scene);
+
+// Between the scene's poses (x y z qx qy qz qw) and Eigen's.
+Eigen::Isometry3d to_iso(const scene::Pose& p);
+void from_iso(const Eigen::Isometry3d& T, double* out);
+
+}  // namespace skillbus::sim
