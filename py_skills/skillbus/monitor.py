@@ -16,10 +16,12 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from skillbus import paths
-from skillbus.bus import resolve_url
+from skillbus.bus import channel, open_bus, resolve_url
+from skillbus.waiting import wait_until
 
 WATCH_RECV_BUF = 8 << 20  # bytes of socket receive buffer a watcher asks for (the kernel's cap applies)
 
@@ -40,6 +42,42 @@ def watch_url(url: str | None = None) -> str:
         return url
     size = min(WATCH_RECV_BUF, cap)
     return url + ("&" if "?" in url else "?") + f"recv_buf_size={size}"
+
+
+LOG_MARK_CHANNEL = "SB_LOG_MARK"  # (not a channel any program listens to)
+
+
+def mark_log(log: str | Path, timeout: float = 10.0, url: str | None = None) -> str:
+    """Waits until lcm-logger, writing `log`, has recorded a marker published now: from
+    then on it records everything, and everything that reached it before the marker is
+    in the file. Call it after starting the logger (before what must be recorded) and
+    before stopping it (instead of a pause "for the last messages"). The marker is a
+    test_sample_t with a unique text on SB_LOG_MARK, published every 50 ms until the
+    logger has written one (it flushes every 100 ms); it decodes like every message of
+    a run. Returns the marker's text; WaitTimeout when the log has none within `timeout`."""
+    from skillbus.msgs import test_sample_t
+    log = Path(log)
+    token = f"skillbus-log-mark:{os.getpid()}:{time.monotonic_ns()}"
+    m = test_sample_t()
+    m.text, m.blob = token, bytes(4)
+    data, needle = m.encode(), token.encode()
+    try:
+        start = log.stat().st_size  # (only what is written from now on can hold it)
+    except FileNotFoundError:
+        start = 0
+    bus = open_bus(url)
+
+    def logged() -> bool:
+        bus.publish(channel(LOG_MARK_CHANNEL), data)
+        try:
+            with open(log, "rb") as f:
+                f.seek(start)
+                return needle in f.read()
+        except FileNotFoundError:
+            return False
+
+    wait_until(logged, timeout, f"a marker in the LCM log {log} (is lcm-logger recording it, on this bus?)")
+    return token
 
 
 def lcm_tool(name: str) -> str:

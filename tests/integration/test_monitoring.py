@@ -9,7 +9,6 @@ import re
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -18,9 +17,19 @@ from conftest import last_json
 from skillbus import paths
 from skillbus.netns import Sandbox
 from skillbus.system import programs, start
+from skillbus.waiting import wait_for_text
 
 HERE = Path(__file__).resolve().parent
 LCM_TYPES = len(list((paths.REPO_ROOT / "lcmtypes").glob("*.lcm")))
+
+
+def mark_log(box, log: Path) -> None:
+    """Returns once the logger has recorded a marker published now (monitor.mark_log,
+    run inside the sandbox's network): it is recording, and has written everything
+    published before."""
+    code = f"from skillbus.monitor import mark_log; mark_log({str(log)!r}, timeout=20)"
+    mark = box.start(f"mark-{len(box.procs)}", [sys.executable, "-c", code])
+    assert box.wait(mark, 60) == 0, mark.stderr()[-2000:]
 
 
 @pytest.fixture(scope="module")
@@ -30,13 +39,22 @@ def demo_log(tmp_path_factory) -> Path:
     log = run / "run.lcmlog"
     with Sandbox(log_dir=run / "logs") as box:
         box.start("logger", [str(Path(sys.executable).parent / "lcm-logger"), "-f", str(log)])
-        time.sleep(0.5)
+        mark_log(box, log)  # recording before the system starts
         procs = start(box, programs(run), run)
         assert box.wait(procs["sim"], 600) == 0
         assert box.wait(procs["skill_mgr"], 60) == 0
         assert last_json(procs["skill_mgr"].stdout())["tasks"] == {"1": "Success: all succeeded"}
-        time.sleep(0.5)  # the logger writes out the last messages
+        mark_log(box, log)  # everything the run published is in the file
     return log
+
+
+def start_xvfb(box) -> str:
+    """A headless X server on a display it picks itself (-displayfd: free, also with other
+    runs on the machine); returns the display once the server has announced it, which
+    it does once it listens."""
+    xvfb = box.start("xvfb", ["Xvfb", "-displayfd", "1", "-screen", "0", "1200x800x24"])
+    number = xvfb.wait_for(re.compile(r"^(\d+)$", re.M), 30, stream="stdout", what="Xvfb announcing its display")
+    return f":{number.group(1)}"
 
 
 def java_lcm_jar() -> str:
@@ -65,15 +83,12 @@ def test_every_message_of_a_run_decodes_with_the_types_jar(demo_log, tmp_path):
 @pytest.mark.skipif(not shutil.which("Xvfb") or not shutil.which("import"),
                     reason="Xvfb and ImageMagick's import are needed to run lcm-spy headless")
 def test_lcm_spy_finds_every_type_and_shows_the_replayed_channels(demo_log, sandbox, tmp_path):
-    display = ":93"
-    sandbox.start("xvfb", ["Xvfb", display, "-screen", "0", "1200x800x24"])
-    time.sleep(1.0)
+    display = start_xvfb(sandbox)
     spy = sandbox.start("spy", [sys.executable, "-m", "skillbus.cli", "spy"], env={"DISPLAY": display})
-    deadline = time.monotonic() + 60
-    while not re.search(r"Found \d+ LCM types", spy.stdout() + spy.stderr()) and time.monotonic() < deadline:
-        time.sleep(0.2)
-    found = re.search(r"Found (\d+) LCM types", spy.stdout() + spy.stderr())
-    assert found and int(found.group(1)) >= LCM_TYPES, spy.stdout()[-2000:] + spy.stderr()[-2000:]
+    found = wait_for_text(lambda: spy.stdout() + spy.stderr(), re.compile(r"Found (\d+) LCM types"), 60,
+                          "lcm-spy finding the types", ended=lambda: spy.returncode, interval=0.2,
+                          diagnostic=lambda: spy.stdout()[-2000:] + spy.stderr()[-2000:])
+    assert int(found.group(1)) >= LCM_TYPES, spy.stdout()[-2000:] + spy.stderr()[-2000:]
     replay = sandbox.start("replay", [sys.executable, "-m", "skillbus.cli", "replay", str(demo_log), "--speed", "20"])
     assert sandbox.wait(replay, 120) == 0, replay.stderr()
     shot = tmp_path / "spy.png"
