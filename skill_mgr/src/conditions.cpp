@@ -53,7 +53,8 @@ bool compare(const wm::Value& have, const std::string& op, const skill_value_t& 
   return false;
 }
 
-// Whether the condition holds (before desired_state); `why` says what was missing.
+// Whether the condition holds (before desired_state); `why` is set when it cannot be
+// judged (and then the result means nothing).
 bool holds(const Condition& c, const std::vector<Param>& params, const wm::WorldStore* world, std::string& why) {
   const Param* subj = find(params, c.subject);
   if (c.kind == "IsSpecified" || c.kind == "Generate") {
@@ -120,7 +121,11 @@ ConditionResult check_conditions(const std::vector<Condition>& conditions, const
     std::string why_all;
     for (size_t k = i; k < j; ++k) {
       std::string why;
-      const bool ok = holds(conditions[k], params, world, why) == static_cast<bool>(conditions[k].desired_state);
+      const bool held = holds(conditions[k], params, world, why);
+      // What cannot be judged (no world model, an element that is not there) fails the
+      // condition whatever its desired state: "not holding X" is no answer about a
+      // missing X.
+      const bool ok = why.empty() && held == static_cast<bool>(conditions[k].desired_state);
       any |= ok;
       if (!ok) why_all += (why_all.empty() ? "" : "; ") + conditions[k].label + (why.empty() ? "" : " (" + why + ")");
     }

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "param_check.hpp"
 #include "skill_nodes.hpp"
 #include "skill_params.hpp"
 #include "tree/compound.hpp"
@@ -57,6 +58,15 @@ std::string build_expansion(TaskContext& ctx, const Implementation& owner, const
         remap[n.remap_from[r]] = n.remap_to[r];
       std::map<std::string, Param> specify;
       for (const auto& sp : n.specify) specify[sp.key] = sp;
+      if (!n.type.empty()) {  // values fixed for a skill are checked against its description
+        const auto impls = ctx.registry.find(n.type, n.label);
+        for (auto& [key, sp] : specify) {
+          if (impls.empty() || key.empty()) break;
+          const std::string bad = fit_specified(impls.front()->description, sp);
+          if (!bad.empty() && !unknown_keys(impls.front()->description, n).empty()) break;  // named below
+          if (!bad.empty()) return where + "specify " + key + ": " + bad;
+        }
+      }
       scopes[i] = scopes[n.parent]->child(std::move(remap), std::move(specify));
       std::unique_ptr<Node> node;
       if (n.type.empty()) {

@@ -78,6 +78,33 @@ std::string check_given(const skillbus_msgs::skill_description_t& d, const std::
   return "";
 }
 
+std::string fit_specified(const skillbus_msgs::skill_description_t& d, Param& p) {
+  const skill_param_t* decl = declaration(d, p.key);
+  if (!decl) return d.type + " has no parameter " + p.key;
+  const bool one_json = p.values.size() == 1 && p.values[0].type == skill_value_t::JSON;
+  if (decl->data_type == "list" && !one_json) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& v : p.values) {
+      switch (v.type) {
+        case skill_value_t::STRING: list.push_back(v.s); break;
+        case skill_value_t::INT: list.push_back(v.i); break;
+        case skill_value_t::FLOAT: list.push_back(v.f); break;
+        case skill_value_t::BOOL: list.push_back(static_cast<bool>(v.b)); break;
+        case skill_value_t::ELEMENT: list.push_back(v.element.id); break;
+        default: list.push_back(nlohmann::json::parse(v.s, nullptr, false)); break;
+      }
+    }
+    skill_value_t packed{};
+    packed.type = skill_value_t::JSON;
+    packed.s = list.dump();
+    p.values = {packed};
+    p.num_values = 1;
+  }
+  p.data_type = decl->data_type;
+  p.concept = decl->concept;
+  return check_given(d, {p});
+}
+
 std::string parse_text(const skillbus_msgs::skill_description_t& d, Param& p) {
   const skill_param_t* decl = declaration(d, p.key);
   if (!decl) return d.type + " has no parameter " + p.key + " (it has: " + keys_of(d) + ")";

@@ -26,6 +26,11 @@ std::string check_given(const skillbus_msgs::skill_description_t& d, const std::
 // Bools: true/false/1/0 (any case); lists and dicts: JSON text, kept as JSON.
 std::string parse_text(const skillbus_msgs::skill_description_t& d, Param& p);
 
+// A value a compound's tree fixes for a child (specify): checked like a given value; a
+// list parameter specified as several values (a Python list) becomes one JSON list.
+// "" or why it does not fit.
+std::string fit_specified(const skillbus_msgs::skill_description_t& d, Param& p);
+
 // Element parameters with a concrete id: "" or the first that is missing or of the wrong
 // concept. `skip` names keys not to check (the manager's own Robot without a world model).
 std::string check_elements(std::vector<Param>& params, const wm::WorldStore& world,

@@ -214,3 +214,18 @@ def test_a_processor_the_manager_does_not_know_is_reported_at_registration_and_e
     assert "processor Invert" not in proc.stderr()  # every standard class has its C++ counterpart
     rc, out, _ = run(system, "UsesFancy")
     assert rc == 1 and "unknown processor 'Fancy' (known: InferInvalid, Invert(processor), Loop(n)" in out, out
+
+
+def test_every_instance_that_runs_is_initialised(system):
+    rc, out, _ = run(system, "Greet")
+    assert rc == 0 and "greeting ready" in out, out
+
+
+def test_a_list_specified_by_a_compound_arrives_as_one_list(system):
+    rc, out, _ = run(system, "CountTwo")
+    assert rc == 0 and "2 items: ['a', 'b']" in out, out
+
+
+def test_a_specified_value_of_the_wrong_type_is_an_error_naming_it(system):
+    rc, out, _ = run(system, "BadSpecifyType")
+    assert rc == 1 and "specify N: parameter N of Echo is a int, not a str" in out, out

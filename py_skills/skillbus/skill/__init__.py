@@ -11,7 +11,7 @@ from skillbus.skill.conditions import (ConditionAbstractRelation, ConditionBase,
                                        ConditionProperty, ConditionRelation)
 from skillbus.skill.description import SkillDescription
 from skillbus.skill.params import Param, ParamHandler, ParamTypes
-from skillbus.skill.processors import (InferInvalid, Loop, NoFail, ParallelFf, ParallelFs, Processor,
+from skillbus.skill.processors import (InferInvalid, Invert, Loop, NoFail, ParallelFf, ParallelFs, Processor,
                                        RetryOnFail, Selector, SelectorStar, Sequential, Serial, SerialStar)
 from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, SkillWrapper, State
 from skillbus.world.element import Element
@@ -19,7 +19,7 @@ from skillbus.world.element import Element
 __all__ = [
     "ConditionAbstractRelation", "ConditionBase", "ConditionGenerate", "ConditionHasProperty",
     "ConditionIsSpecified", "ConditionOnType", "ConditionOr", "ConditionProperty", "ConditionRelation",
-    "Element", "InferInvalid", "Loop", "NoFail", "ParallelFf", "ParallelFs", "Param", "ParamHandler",
+    "Element", "InferInvalid", "Invert", "Loop", "NoFail", "ParallelFf", "ParallelFs", "Param", "ParamHandler",
     "ParamTypes", "PrimitiveBase", "Processor", "RetryOnFail", "Selector", "SelectorStar", "Sequential",
     "Serial", "SerialStar", "SkillBase", "SkillCore", "SkillDescription", "SkillWrapper", "State",
 ]

@@ -155,6 +155,10 @@ class SkillProcess:
             if t.action == skill_tick_t.START:
                 skill = cls()
                 skill.wmi = self.wmi
+                hook = "onInit"  # every instance that runs is initialised (not only the one checked at load)
+                if skill.onInit() is False:
+                    return self._reply(skill, State.Failure, skill.message or f"{t.label}: onInit() returned False", -1)
+                hook = "onStart"
                 apply_param_msgs(skill, t.params)
                 self.instances[t.instance] = skill
                 if skill.onStart() is False:

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../wm/wm_test_util.hpp"
+#include "conditions.hpp"
 #include "grounding.hpp"
 #include "param_check.hpp"
 
@@ -159,4 +160,37 @@ TEST(ParamCheck, GivenValuesMustHaveTheirParametersType) {
   gain.values = {i};
   EXPECT_EQ(check_given(d, {gain}), "");  // an int is a fine float
   EXPECT_EQ(check_given(d, {text("Nope", "1")}), "Echo has no parameter Nope (it has: N, Flag, Gain, Items)");
+}
+
+TEST(Conditions, WhatCannotBeJudgedFailsWhateverTheDesiredState) {
+  auto w = demo_world();
+  Condition not_holding{};
+  not_holding.kind = "Relation";
+  not_holding.label = "NotHolding";
+  not_holding.owl = "skiros:contain";
+  not_holding.subject = "Table";
+  not_holding.object = "Object";
+  not_holding.desired_state = false;
+  std::vector<Param> gone{element_param("Table", "skiros:Table", "skiros:Table-1"),
+                          element_param("Object", "skiros:Product", "skiros:Cube-99")};
+  EXPECT_FALSE(check_conditions({not_holding}, gone, &w).ok);  // a missing element is no answer
+  std::vector<Param> there{element_param("Table", "skiros:Table", "skiros:Table-1"),
+                           element_param("Object", "skiros:Product", "skiros:Cube-3")};
+  EXPECT_TRUE(check_conditions({not_holding}, there, &w).ok);   // Cube-3 is not on the table
+  EXPECT_FALSE(check_conditions({not_holding}, there, nullptr).ok);  // no world model: cannot judge
+  std::vector<Param> on{element_param("Table", "skiros:Table", "skiros:Table-1"),
+                        element_param("Object", "skiros:Product", "skiros:Cube-2")};
+  EXPECT_FALSE(check_conditions({not_holding}, on, &w).ok);     // Cube-2 is
+}
+
+TEST(ParamCheck, ASpecifiedListBecomesOneJsonListAndAWrongTypeIsNamed) {
+  const auto d = echo();
+  Param items = text("Items", "a");
+  items.values.push_back(items.values[0]);
+  items.values[1].s = "b";
+  EXPECT_EQ(fit_specified(d, items), "");
+  ASSERT_EQ(items.values.size(), 1u);
+  EXPECT_EQ(items.values[0].s, "[\"a\",\"b\"]");
+  Param n = text("N", "five");
+  EXPECT_EQ(fit_specified(d, n), "parameter N of Echo is a int, not a str");
 }

@@ -119,6 +119,7 @@ const Case kCases[] = {
   {"loop two rounds", "Loop(2)", {"S", "S"}, "RS", {"<S>|<S>|", "<S>|<S>|"}},
   {"loop fails when a child fails", "Loop(3)", {"S", "SF"}, "RF", {"<S>|<S>|", "<S>|<F>|"}},
   {"loop forever", "Loop", {"S"}, "RRRR", {"<S>|<S>|<S>|<S>|"}, 4},
+  {"loop of zero rounds runs nothing", "Loop(0)", {"S"}, "S", {"|"}},
   // RetryOnFail(n): start over after a failure, at most n more attempts.
   {"retry succeeds on the second attempt", "RetryOnFail(2)", {"S", "FS"}, "RS",
    {"<S>|<S>|", "<F>|<S>|"}},

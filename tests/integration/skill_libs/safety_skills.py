@@ -150,3 +150,62 @@ class relabel(PrimitiveBase):
         o.label = o.label + "-seen"
         self.wmi.update_element(o)
         return self.success(f"relabelled {o.id}")
+
+
+class Greet(SkillDescription):
+    def createDescription(self):
+        pass
+
+
+class greet(PrimitiveBase):
+    """Relies on onInit, as SkiROS2 skills do (set up once, used in every run)."""
+
+    def createDescription(self):
+        self.setDescription(Greet(), "greet")
+
+    def onInit(self):
+        self.greeting = "ready"
+        return True
+
+    def execute(self):
+        return self.success(f"greeting {self.greeting}")
+
+
+class Count(SkillDescription):
+    def createDescription(self):
+        self.addParam("Items", list, ParamTypes.Required)
+
+
+class count(PrimitiveBase):
+    def createDescription(self):
+        self.setDescription(Count(), "count")
+
+    def execute(self):
+        items = self.params["Items"].value
+        return self.success(f"{len(items)} items: {items}")
+
+
+class CountTwo(SkillDescription):
+    def createDescription(self):
+        pass
+
+
+class count_two(SkillBase):
+    def createDescription(self):
+        self.setDescription(CountTwo(), "count_two")
+
+    def expand(self, skill):
+        skill(self.skill("Count", "", specify={"Items": ["a", "b"]}))
+
+
+class BadSpecifyType(SkillDescription):
+    def createDescription(self):
+        pass
+
+
+class bad_specify_type(SkillBase):
+    def createDescription(self):
+        self.setDescription(BadSpecifyType(), "bad_specify_type")
+
+    def expand(self, skill):
+        skill(self.skill("Echo", "", specify={"N": "five"}))

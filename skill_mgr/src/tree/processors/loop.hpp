@@ -12,6 +12,10 @@ class Loop : public Processor {
  public:
   explicit Loop(int rounds) : rounds_(rounds) {}
   State process(const Children& children) override {
+    if (rounds_ == 0) {  // nothing to run: done at once
+      say("0 rounds done");
+      return State::Success;
+    }
     const State s = round_.process(children);
     if (s != State::Success) {
       say("round " + std::to_string(done_ + 1) + ": " + round_.message());
