@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from skillbus import paths
+from skillbus.waiting import poll_until, wait_until
 
 BIN_CENTRE, BIN_HALF, BIN_TOP = (0.0, 0.6), 0.15, 0.25
 
@@ -113,9 +114,7 @@ class Watcher:
     def stop(self, wait_final: float = 2.0) -> None:
         """Stops the thread once the task's final progress is in (or wait_final has passed:
         whatever is still in the socket is read first)."""
-        deadline = time.monotonic() + wait_final
-        while self.final is None and self._thread.is_alive() and time.monotonic() < deadline:
-            time.sleep(0.02)
+        poll_until(lambda: self.final is not None or not self._thread.is_alive(), wait_final, interval=0.02)
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(5)
@@ -126,7 +125,7 @@ def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
     from skillbus.bus import open_bus
     from skillbus.world import WorldModelInterface
     from skillbus.world.poses import world_pose
-    wm = subprocess.Popen([str(paths.build_dir() / "wm_server" / "wm_server"), "--wall-clock", "--data",
+    wm = subprocess.Popen([str(paths.binary("wm_server")), "--wall-clock", "--data",
                            str(run_dir / "wm"), "--name", "wm-readback"], stdout=subprocess.DEVNULL,
                           stderr=subprocess.DEVNULL)
     try:
@@ -148,6 +147,7 @@ def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
 
 def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
     from skillbus import launch
+    from skillbus.monitor import mark_log
     from skillbus.system import Program, programs
     if run_dir.exists():
         shutil.rmtree(run_dir)
@@ -161,17 +161,15 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
     try:
         launch.start(conf, wait_s=60)  # (shuts down what it started when it fails)
         try:
-            while True:
-                st = launch.status(conf)
-                if st.get("sim") in ("EXITED", "FATAL", "STOPPED"):
-                    break
-                time.sleep(0.2)
-                if time.monotonic() - t0 > 900:
-                    raise RuntimeError("the demo did not end within 15 minutes")
-            deadline = time.monotonic() + 30
-            while time.monotonic() < deadline and any(launch.status(conf).get(n) == "RUNNING"
-                                                      for n in ("wm", "skill_mgr", "skills", "gripper")):
-                time.sleep(0.2)
+            wait_until(lambda: launch.status(conf).get("sim") in ("EXITED", "FATAL", "STOPPED"),
+                       900 - (time.monotonic() - t0), "the end of the demo's session (15 minutes at most)",
+                       interval=0.2)
+            poll_until(lambda: not any(launch.status(conf).get(n) == "RUNNING"
+                                       for n in ("wm", "skill_mgr", "skills", "gripper")), 30, interval=0.2)
+            try:  # the logger has written all of the run before it is stopped
+                mark_log(run_dir / "demo.lcmlog")
+            except TimeoutError as e:
+                print(f"warning: the LCM log may lack the end of the run: {e}", file=sys.stderr)
         finally:
             held = signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, signal.SIGTERM))
             try:
@@ -254,7 +252,7 @@ def main(args) -> int:
         except Interrupted as e:
             print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
             return 128 + e.signum
-        except RuntimeError as e:  # (a launch that failed: it names the program and shows its log)
+        except (RuntimeError, TimeoutError) as e:  # (a launch that failed names the program and shows its log)
             print(f"error: {e}", file=sys.stderr)
             return 1
     finally:
