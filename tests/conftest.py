@@ -1,5 +1,7 @@
 """Shared pytest fixtures. Multi-process tests get a Sandbox: a private network namespace
-whose processes are always stopped, also when a test fails or times out."""
+whose processes are always stopped, also when a test fails or times out. A test that
+cannot run (no namespace can be made) fails, naming why, unless SKILLBUS_ALLOW_SKIP=1
+(tests/support/skip_policy.py, docs/testing.md)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,9 @@ import pytest
 from skillbus import paths
 from skillbus import netns
 from skillbus.netns import Sandbox, SandboxError
+# The skip policy: a test that cannot run fails unless SKILLBUS_ALLOW_SKIP=1 (its hooks
+# are registered by being here).
+from support.skip_policy import cannot_run, pytest_configure, pytest_make_collect_report, pytest_runtest_makereport  # noqa: F401
 
 TESTS = Path(__file__).resolve().parent
 
@@ -21,7 +26,7 @@ def sandbox(tmp_path):
         box = Sandbox(log_dir=tmp_path / "logs")
         box.__enter__()
     except SandboxError as e:
-        pytest.skip(str(e))
+        cannot_run(str(e))
     try:
         yield box
     finally:
