@@ -18,14 +18,19 @@ build: setup
 	@# The generated Python bindings live in the build tree; put them on the venv's path.
 	@$(PY) -c "import site,sys; open(site.getsitepackages()[0] + '/skillbus_msgs.pth','w').write(sys.argv[1] + '\n')" $(abspath $(BUILD))/gen/python
 
+# pytest: the examples in the package's docstrings (--doctest-modules over py_skills/skillbus),
+# then the tests. A test that cannot run fails; SKILLBUS_ALLOW_SKIP=1 lets it be skipped
+# (docs/testing.md).
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
 	$(PY) -m pytest -q -rs tests
 
 test-cpp: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-py: build
+	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
 	$(PY) -m pytest -q -rs tests
 
 demo: build

@@ -1,7 +1,21 @@
 """Joint positions for top-down tool poses of the demo arm (sim_server/models/arm6.urdf),
-solved in closed form for the tests of the physics server: the arm's yaw, a two-link
-shoulder-elbow solution in the arm's vertical plane, and the wrist pitch that points the
-tool straight down. (The skills use the general IK; this serves tests, benchmarks and scripts.)"""
+solved in closed form: the arm's yaw, a two-link shoulder-elbow solution in the arm's
+vertical plane, and the wrist pitch that points the tool straight down.
+
+Public API, for command scripts (skillbus.sim.scripts, ``skillbus sim-script``), the
+benchmarks and the tests: ``top_down`` and the joint names ``ARM``. The skills use the
+general IK of the motion service instead; this needs no server.
+
+>>> q = top_down(0.5, 0.0, 0.5)
+>>> [round(x, 4) for x in q]
+[0.0, 0.6252, 1.465, 0.0, 1.0513, 0.0]
+>>> round(q[1] + q[2] + q[4], 12) == round(math.pi, 12)  # shoulder, elbow, wrist: straight down
+True
+>>> top_down(2.0, 0.0, 0.5)
+Traceback (most recent call last):
+    ...
+ValueError: (2.0, 0.0, 0.5) is out of reach
+"""
 
 from __future__ import annotations
 

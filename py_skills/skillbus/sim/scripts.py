@@ -1,5 +1,18 @@
 """Command scripts for the physics server (the format of skillbus sim-script and of
-sim_server --script), shared by its tests and benchmarks."""
+sim_server --script): examples to start from, and the scripts the tests and benchmarks
+play (grasp, lift and release; a sweep of every joint; grasp and carry).
+
+Public API (not a test fixture: bench/sim_physics.py uses it as the tests do): ``arm``,
+``gripper`` (one step each), ``grasp_lift_release``, ``sweep``, ``grasp_and_carry``,
+``CUBE`` and ``HOME`` for the demo scene. A script is a dict; ``json.dump`` it for
+``skillbus sim-script``:
+
+>>> step = gripper(4.0, "close", 0.0)
+>>> step["gripper"]["id"], step["gripper"]["width"], step["at_s"]
+('close', 0.0, 4.0)
+>>> [s["at_s"] for s in grasp_lift_release()["steps"]]
+[0.0, 2.2, 4.0, 5.0, 7.5]
+"""
 
 from __future__ import annotations
 
