@@ -13,6 +13,7 @@ from codec_samples import samples  # noqa: E402
 
 from skillbus.bus import open_bus  # noqa: E402
 from skillbus.msgs import decode  # noqa: E402
+from skillbus.waiting import poll_until  # noqa: E402
 
 
 def fields(v):
@@ -54,8 +55,7 @@ def main() -> int:
 
     for name in sys.argv[3:]:
         bus.subscribe(f"SB_CODEC_C2P_{name}", check(name))
-    while len(verdict) < len(sys.argv[3:]) and time.monotonic() < end:
-        bus.handle(0.05)
+    poll_until(lambda: len(verdict) >= len(sys.argv[3:]), max(0.0, end - time.monotonic()), step=bus.handle)
     print(json.dumps({n: verdict.get(n, "never received") for n in sys.argv[3:]}))
     return 0
 
