@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "blackboard.hpp"
+#include "skillbus/wm/store.hpp"
 #include "skillbus_msgs/skill_condition_t.hpp"
-#include "store.hpp"
 
 namespace skillbus::skills {
 

@@ -3,7 +3,7 @@
 #include <functional>
 #include <set>
 
-#include "convert.hpp"
+#include "skillbus/wm/convert.hpp"
 
 namespace skillbus::skills {
 

@@ -1,42 +1,61 @@
 // skill_mgr: the skill manager. See skill_mgr/README.md.
 #include <cstdio>
 
-#include "../../common/apps/args.hpp"
 #include "manager.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
 
 using namespace skillbus;
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv, {"url", "name", "period-ms", "tick-hz", "tick-timeout-ms", "ontology", "start", "robot", "liveness-ms"}, {"wall-clock"});
+  CLI::App app{"The skill manager: runs skill tasks (trees of the skills its skill processes offer) against "
+               "the world model, a lockstep participant unless --wall-clock. Prints a one-line JSON summary when it ends.",
+               "skill_mgr"};
+  apps::configure(app);
+  std::string url;
   skills::ManagerOptions o;
-  o.name = args.str("name", "skill_mgr");
-  o.wall_clock = args.flag("wall-clock");
-  o.frame_period_ns = static_cast<int64_t>(args.real("period-ms", 10.0) * 1e6);
-  const double hz = args.real("tick-hz", 25.0);
-  if (hz <= 0) apps::Args::die("--tick-hz must be positive");
+  double period_ms = 10.0, hz = 25.0;
+  int64_t tick_timeout_ms = 1000, liveness_ms = 3000;
+  apps::add_url_option(app, url);
+  app.add_option("--name", o.name, "its lockstep participant name");
+  app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");
+  app.add_option("--period-ms", period_ms, "wall clock: the frame period, ms")->check(apps::positive());
+  app.add_option("--tick-hz", hz, "skill ticks per second of (sim) time; a whole number of frames")
+      ->check(apps::positive());
+  app.add_option("--tick-timeout-ms", tick_timeout_ms, "how long a skill process may take to answer a tick");
+  apps::add_list_option(app, "--ontology", o.ontology_files,
+                        "OWL/Turtle files for its world copy (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
+  app.add_option("--start", o.start_at_first_tick, "a task started at the first tick: TYPE or TYPE:LABEL");
+  app.add_option("--robot", o.robot, "the element id of the agent this manager drives");
+  app.add_option("--liveness-ms", liveness_ms, "wall clock: drop a skill process's skills after this long without a heartbeat")
+      ->check(apps::positive());
+  apps::parse_or_exit(app, argc, argv);
+  o.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
+  if (o.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
   o.tick_period_ns = static_cast<int64_t>(1e9 / hz);
   if (o.tick_period_ns % o.frame_period_ns != 0)
-    apps::Args::die("the tick period (1/--tick-hz) must be a whole number of frames (--period-ms)");
-  o.tick_timeout = std::chrono::milliseconds(args.num("tick-timeout-ms", 1000));
-  o.ontology_files = args.list("ontology");
-  o.start_at_first_tick = args.str("start");
-  o.robot = args.str("robot");
-  o.liveness_timeout = std::chrono::milliseconds(args.num("liveness-ms", 3000));
-  if (o.liveness_timeout.count() <= 0) apps::Args::die("--liveness-ms must be positive");
+    apps::usage_error(app, "the tick period (1/--tick-hz) must be a whole number of frames (--period-ms)");
+  o.tick_timeout = std::chrono::milliseconds(tick_timeout_ms);
+  o.liveness_timeout = std::chrono::milliseconds(liveness_ms);
+  if (o.liveness_timeout.count() <= 0) apps::usage_error(app, "--liveness-ms must be positive");
   if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<skills::Manager> mgr;
   apps::start_or_exit("skill_mgr", [&] {
-    bus = open_bus(args.str("url"));
+    bus = open_bus(url);
     mgr = std::make_unique<skills::Manager>(*bus, o);
   });
   apps::stop_on_signals();
   const RunResult r = mgr->run_until([] { return apps::stop_requested() != 0; });
-  std::string tasks;
-  for (const auto& [id, result] : mgr->results())
-    tasks += (tasks.empty() ? "" : ", ") + std::string("\"") + std::to_string(id) + "\": \"" + apps::json_escape(result) + "\"";
-  std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"digest\": \"%s\", \"tasks\": {%s}}\n",
-              r.ok ? "true" : "false", apps::json_escape(r.error).c_str(), static_cast<long long>(r.frames), r.digest_hex().c_str(),
-              tasks.c_str());
+  apps::Summary tasks = apps::Summary::object();
+  for (const auto& [id, result] : mgr->results()) tasks[std::to_string(id)] = result;
+  apps::Summary out;
+  out["ok"] = r.ok;
+  out["error"] = r.error;
+  out["frames"] = r.frames;
+  out["digest"] = r.digest_hex();
+  out["tasks"] = tasks;
+  apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

@@ -4,7 +4,7 @@
 #include <cctype>
 #include <nlohmann/json.hpp>
 
-#include "convert.hpp"
+#include "skillbus/wm/convert.hpp"
 
 namespace skillbus::skills {
 

@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "blackboard.hpp"
+#include "skillbus/wm/store.hpp"
 #include "skillbus_msgs/skill_description_t.hpp"
-#include "store.hpp"
 
 namespace skillbus::skills {
 

@@ -4,9 +4,9 @@
 #include <set>
 
 #include "conditions.hpp"
-#include "convert.hpp"
 #include "grounding.hpp"
 #include "param_check.hpp"
+#include "skillbus/wm/convert.hpp"
 
 namespace skillbus::skills {
 

@@ -8,7 +8,7 @@
 
 #include "blackboard.hpp"
 #include "registry.hpp"
-#include "store.hpp"
+#include "skillbus/wm/store.hpp"
 #include "task_context.hpp"
 
 namespace skillbus::skills {

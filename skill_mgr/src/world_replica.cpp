@@ -3,7 +3,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "convert.hpp"
+#include "skillbus/wm/convert.hpp"
 #include "skillbus_msgs/wm_change_t.hpp"
 #include "skillbus_msgs/wm_elements_t.hpp"
 #include "skillbus_msgs/wm_query_t.hpp"

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "ontology.hpp"
-#include "rdf.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
-#include "store.hpp"
+#include "skillbus/wm/ontology.hpp"
+#include "skillbus/wm/rdf.hpp"
+#include "skillbus/wm/store.hpp"
 
 namespace skillbus::skills {
 

@@ -1,4 +1,4 @@
-#include "convert.hpp"
+#include "skillbus/wm/convert.hpp"
 
 namespace skillbus::wm {
 

@@ -1,4 +1,4 @@
-#include "journal.hpp"
+#include "skillbus/wm/journal.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,8 +10,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "model.hpp"
 #include "skillbus/bus.hpp"
+#include "skillbus/wm/model.hpp"
 
 namespace skillbus::wm {
 

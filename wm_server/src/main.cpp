@@ -1,36 +1,55 @@
 // wm_server: the world model server. See wm_server/README.md.
 #include <cstdio>
 
-#include "../../common/apps/args.hpp"
-#include "server.hpp"
+#include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/lifecycle.hpp"
+#include "skillbus/apps/summary.hpp"
+#include "skillbus/wm/server.hpp"
 
 using namespace skillbus;
 
 int main(int argc, char** argv) {
-  apps::Args args(argc, argv,
-                  {"url", "data", "ontology", "scene", "name", "period-ms", "snapshot-every", "crash-after-commits"}, {"wall-clock"});
+  CLI::App app{"The world model server: elements, relations, the ontology and poses, with a durable journal; "
+               "a lockstep participant unless --wall-clock. Prints a one-line JSON summary when it ends.",
+               "wm_server"};
+  apps::configure(app);
+  std::string url;
   wm::ServerOptions o;
-  o.data_dir = args.str("data", "wm_data");
-  o.ontology_files = args.list("ontology");
+  double period_ms = 10.0;
+  apps::add_url_option(app, url);
+  app.add_option("--data", o.data_dir,
+                 "the journal and snapshot directory (empty: start from --scene; else recover it)")
+      ->type_name("DIR");
+  apps::add_list_option(app, "--ontology", o.ontology_files,
+                        "OWL/Turtle files, loaded in order (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
+  app.add_option("--scene", o.scene_file, "a Turtle scene loaded when the data directory is empty")->type_name("FILE");
+  app.add_option("--name", o.name, "its lockstep participant name");
+  app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");
+  app.add_option("--period-ms", period_ms, "wall clock: the frame period, ms")->check(apps::positive());
+  app.add_option("--snapshot-every", o.snapshot_every, "commits between snapshots");
+  app.add_option("--crash-after-commits", o.crash_after_commits,
+                 "tests: die after this many durable commits, before replying (-1: never)");
+  apps::parse_or_exit(app, argc, argv);
   if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
-  o.scene_file = args.str("scene");
-  o.name = args.str("name", "wm");
-  o.wall_clock = args.flag("wall-clock");
-  o.frame_period_ns = static_cast<int64_t>(args.real("period-ms", 10.0) * 1e6);
-  o.snapshot_every = args.num("snapshot-every", 1000);
-  o.crash_after_commits = args.num("crash-after-commits", -1);
+  o.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
+  if (o.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
+
   std::unique_ptr<Bus> bus;
   std::unique_ptr<wm::WorldModelServer> server;
   apps::start_or_exit("wm_server", [&] {
-    bus = open_bus(args.str("url"));
+    bus = open_bus(url);
     server = std::make_unique<wm::WorldModelServer>(*bus, o);
   });
   apps::stop_on_signals();
   const RunResult r = server->run_until([] { return apps::stop_requested() != 0; });
-  std::printf("{\"ok\": %s, \"error\": \"%s\", \"frames\": %lld, \"version\": %lld, \"elements\": %zu, \"digest\": \"%s\", "
-              "\"rejected\": %ld}\n",
-              r.ok ? "true" : "false", r.error.c_str(), static_cast<long long>(r.frames),
-              static_cast<long long>(server->store().version()), server->store().elements().size(),
-              r.digest_hex().c_str(), server->rejected());
+  apps::Summary out;
+  out["ok"] = r.ok;
+  out["error"] = r.error;
+  out["frames"] = r.frames;
+  out["version"] = server->store().version();
+  out["elements"] = server->store().elements().size();
+  out["digest"] = r.digest_hex();
+  out["rejected"] = server->rejected();
+  apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

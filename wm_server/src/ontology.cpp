@@ -1,8 +1,8 @@
-#include "ontology.hpp"
+#include "skillbus/wm/ontology.hpp"
 
 #include <deque>
 
-#include "model.hpp"
+#include "skillbus/wm/model.hpp"
 
 namespace skillbus::wm {
 

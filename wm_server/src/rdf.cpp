@@ -1,11 +1,11 @@
-#include "rdf.hpp"
+#include "skillbus/wm/rdf.hpp"
 
 #include <serd/serd.h>
 
 #include <cstdarg>
 #include <cstdio>
 
-#include "model.hpp"
+#include "skillbus/wm/model.hpp"
 
 namespace skillbus::wm {
 

@@ -1,4 +1,4 @@
-#include "scene.hpp"
+#include "skillbus/wm/scene.hpp"
 
 #include <charconv>
 #include <cstdlib>

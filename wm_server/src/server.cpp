@@ -1,13 +1,13 @@
-#include "server.hpp"
+#include "skillbus/wm/server.hpp"
 
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
 
-#include "convert.hpp"
-#include "scene.hpp"
+#include "skillbus/wm/convert.hpp"
+#include "skillbus/wm/scene.hpp"
+#include "skillbus/wm/transforms.hpp"
 #include "skillbus_msgs/wm_value_t.hpp"
-#include "transforms.hpp"
 
 namespace skillbus::wm {
 

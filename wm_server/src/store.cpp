@@ -1,4 +1,4 @@
-#include "store.hpp"
+#include "skillbus/wm/store.hpp"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "transforms.hpp"
+#include "skillbus/wm/transforms.hpp"
 
 #include <set>
 

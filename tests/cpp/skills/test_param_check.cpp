@@ -2,10 +2,10 @@
 // is an error naming it, never another value.
 #include <gtest/gtest.h>
 
-#include "../wm/wm_test_util.hpp"
 #include "conditions.hpp"
 #include "grounding.hpp"
 #include "param_check.hpp"
+#include "wm/wm_test_util.hpp"
 
 using namespace skillbus;
 using namespace skillbus::skills;

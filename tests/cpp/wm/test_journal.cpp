@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "journal.hpp"
-#include "model.hpp"
+#include "skillbus/wm/journal.hpp"
+#include "skillbus/wm/model.hpp"
 
 using namespace skillbus::wm;
 namespace fs = std::filesystem;

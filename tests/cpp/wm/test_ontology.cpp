@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "model.hpp"
+#include "skillbus/wm/model.hpp"
 #include "wm_test_util.hpp"
 
 using namespace skillbus::wm;

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "scene.hpp"
+#include "skillbus/wm/scene.hpp"
 #include "wm_test_util.hpp"
 
 using namespace skillbus::wm;

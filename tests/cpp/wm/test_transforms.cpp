@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "transforms.hpp"
+#include "skillbus/wm/transforms.hpp"
 #include "wm_test_util.hpp"
 
 using namespace skillbus::wm;

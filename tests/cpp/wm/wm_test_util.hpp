@@ -4,8 +4,8 @@
 #include <iterator>
 #include <string>
 
-#include "ontology.hpp"
-#include "store.hpp"
+#include "skillbus/wm/ontology.hpp"
+#include "skillbus/wm/store.hpp"
 
 namespace skillbus::wm::test {
 

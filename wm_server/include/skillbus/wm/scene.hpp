@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "ontology.hpp"
-#include "store.hpp"
+#include "skillbus/wm/ontology.hpp"
+#include "skillbus/wm/store.hpp"
 
 namespace skillbus::wm {
 

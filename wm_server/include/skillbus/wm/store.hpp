@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "model.hpp"
-#include "ontology.hpp"
+#include "skillbus/wm/model.hpp"
+#include "skillbus/wm/ontology.hpp"
 
 namespace skillbus::wm {
 

@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <string>
 
-#include "store.hpp"
+#include "skillbus/wm/store.hpp"
 
 namespace skillbus::wm {
 

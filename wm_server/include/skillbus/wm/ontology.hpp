@@ -14,7 +14,7 @@
 #include <tuple>
 #include <vector>
 
-#include "rdf.hpp"
+#include "skillbus/wm/rdf.hpp"
 
 namespace skillbus::wm {
 

@@ -7,11 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "journal.hpp"
-#include "ontology.hpp"
-#include "rdf.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
+#include "skillbus/wm/journal.hpp"
+#include "skillbus/wm/ontology.hpp"
+#include "skillbus/wm/rdf.hpp"
+#include "skillbus/wm/store.hpp"
 #include "skillbus_msgs/wm_change_t.hpp"
 #include "skillbus_msgs/wm_commit_t.hpp"
 #include "skillbus_msgs/wm_elements_t.hpp"
@@ -19,7 +20,6 @@
 #include "skillbus_msgs/wm_scene_t.hpp"
 #include "skillbus_msgs/wm_transform_t.hpp"
 #include "skillbus_msgs/wm_txn_t.hpp"
-#include "store.hpp"
 
 namespace skillbus::wm {
 

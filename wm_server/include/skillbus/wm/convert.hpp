@@ -1,7 +1,7 @@
 // Between the world model's types and their LCM messages (lcmtypes/wm_*.lcm).
 #pragma once
 
-#include "model.hpp"
+#include "skillbus/wm/model.hpp"
 #include "skillbus_msgs/wm_element_t.hpp"
 #include "skillbus_msgs/wm_op_t.hpp"
 #include "skillbus_msgs/wm_relation_t.hpp"
