@@ -9,6 +9,7 @@ namespace skillbus {
 std::string clock_channel() { return channel("SB_LOCKSTEP_CLOCK"); }
 std::string ack_channel() { return channel("SB_LOCKSTEP_ACK"); }
 std::string join_channel() { return channel("SB_LOCKSTEP_JOIN"); }
+std::string end_channel() { return channel("SB_LOCKSTEP_END"); }
 
 bool peek_stamp(const uint8_t* data, size_t size, Stamp& out) {
   if (size < 8 + 8 + 8 + 4 + 1 + 4 || size > static_cast<size_t>(INT32_MAX)) return false;

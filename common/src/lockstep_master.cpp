@@ -4,8 +4,10 @@
 #include <thread>
 
 #include "skillbus/lockstep.hpp"
+
 #include "skillbus_msgs/lockstep_ack_t.hpp"
 #include "skillbus_msgs/lockstep_clock_t.hpp"
+#include "skillbus_msgs/lockstep_end_t.hpp"
 #include "skillbus_msgs/lockstep_join_t.hpp"
 
 namespace skillbus {
@@ -45,6 +47,16 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
   subs_.push_back(bus_.subscribe(ack_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_ack(d, n, ch);
   }));
+  subscribe(end_channel(), [this](const StampedMessage& m) {
+    skillbus_msgs::lockstep_end_t e{};
+    if (!decode_msg(m.data.data(), m.data.size(), e) || e.after_frames < 0)
+      return bad_.record(m.channel, "not a lockstep_end_t", m.data.size());
+    const int64_t at = m.stamp.frame + e.after_frames;
+    if (end_at_ < 0 || at < end_at_) {
+      end_at_ = at;
+      SB_INFO(kLog, m.stamp.sender << " asks to end the session after frame " << at << ": " << e.why);
+    }
+  });
 }
 
 LockstepMaster::~LockstepMaster() {
@@ -240,6 +252,7 @@ RunResult LockstepMaster::run() {
     std::vector<ChannelCount> carried;
     while ((cfg_.frames < 0 || frame < cfg_.frames) && !stop_requested_) {
       if (!run_frame(frame, sim_time, carried, error)) break;
+      if (end_at_ >= 0 && frame >= end_at_) stop_requested_ = true;  // a normal end, asked for
       ++frame;
       sim_time += cfg_.frame_period_ns;
     }

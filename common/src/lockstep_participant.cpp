@@ -4,8 +4,10 @@
 #include <thread>
 
 #include "skillbus/lockstep.hpp"
+
 #include "skillbus_msgs/lockstep_ack_t.hpp"
 #include "skillbus_msgs/lockstep_clock_t.hpp"
+#include "skillbus_msgs/lockstep_end_t.hpp"
 #include "skillbus_msgs/lockstep_join_t.hpp"
 
 namespace skillbus {
@@ -42,6 +44,13 @@ void LockstepParticipant::subscribe(const std::string& ch, MessageHandler handle
     if (m.stamp.sender == cfg_.name) return;
     handlers_[c](m);
   }));
+}
+
+void LockstepParticipant::request_end(int64_t after_frames, const std::string& why) {
+  skillbus_msgs::lockstep_end_t e{};
+  e.after_frames = after_frames;
+  e.why = why;
+  publish(end_channel(), e);
 }
 
 void LockstepParticipant::stop() { stop_requested_ = true; }

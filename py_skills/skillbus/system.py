@@ -55,8 +55,6 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         sim.append("--pipeline")
     if lockstep:
         sim += ["--participants", ",".join(PARTICIPANTS), "--join-timeout-ms", "60000"]
-        if task and stop_after_task:
-            sim += ["--stop-after-task", "1"]
     else:
         sim += ["--wall-clock"]
     sim += list(extra_sim)
@@ -64,6 +62,8 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     mgr = [str(paths.binary("skill_mgr")), *clock, "--tick-timeout-ms", "2000"]
     if task:
         mgr += ["--start", task]
+        if lockstep and stop_after_task:  # the task's end ends the session (10 frames of grace), through lockstep
+            mgr += ["--end-session-after-task", "10"]
     skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm", "--gripper", f"{can}:5"]
     for lib in LIBRARIES:
         skills += ["--library", lib]

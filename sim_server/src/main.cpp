@@ -27,7 +27,6 @@ int main(int argc, char** argv) {
   app.add_option("--speed", o.speed, "wall clock: sim seconds per wall second")->check(apps::positive());
   app.add_option("--frames", o.frames, "frames to run (-1: until stopped)");
   app.add_option("--duration-s", o.duration_s, "sim time to run (> 0: overrides --frames)");
-  app.add_option("--stop-after-task", o.stop_after_task, "lockstep: end the run when this skill task has finished");
   app.add_flag("--pipeline", o.pipeline,
                "lockstep: step the physics while the participants work (commands take effect a frame later)");
   app.add_option("--collision", o.collision_detector, "collision detector bullet, dart or fcl (empty: the scene's)");

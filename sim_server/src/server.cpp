@@ -12,7 +12,6 @@
 #include "skillbus_msgs/sim_control_t.hpp"
 #include "skillbus_msgs/sim_gripper_cmd_t.hpp"
 #include "skillbus_msgs/sim_status_t.hpp"
-#include "skillbus_msgs/skill_progress_t.hpp"
 
 namespace skillbus::sim {
 
@@ -255,20 +254,6 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
     publish_frame([&](const std::string& ch, const auto& msg) { master.publish(ch, msg); });
     start_s += std::chrono::duration<double>(wall::now() - t0).count();
   };
-  if (opt_.stop_after_task >= 0) {
-    // The run ends at a frame fixed by the task (its end, plus a grace for the last
-    // messages to settle), so a whole task run is reproducible frame for frame.
-    master.subscribe(channel("SB_SKILL_PROGRESS"), [this](const StampedMessage& m) {
-      skillbus_msgs::skill_progress_t p;
-      if (!decode_msg(m.data.data(), m.data.size(), p)) return bad_.record(m.channel, "not a skill_progress_t", m.data.size());
-      if (p.task == opt_.stop_after_task && (p.state == 3 || p.state == 4) && task_done_at_ < 0) {
-        task_done_at_ = m.stamp.frame;
-        task_state_ = p.state;
-        SB_INFO(kLog, "task " << p.task << " finished (" << (p.state == 3 ? "success" : "failure") << ") in frame "
-                              << m.stamp.frame << "; the run ends " << opt_.stop_grace_frames << " frames later");
-      }
-    });
-  }
   if (opt_.pipeline) {
     master.on_clock_sent = [&](int64_t, int64_t) {
       const auto t0 = wall::now();
@@ -286,7 +271,6 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
     }
     end_s += std::chrono::duration<double>(wall::now() - t0).count();
     if (should_stop()) master.stop();  // a normal end: the participants finish cleanly
-    if (task_done_at_ >= 0 && frame >= task_done_at_ + opt_.stop_grace_frames) master.stop();
   };
   const RunResult r = master.run();
   write_recording();

@@ -28,9 +28,13 @@ int main(int argc, char** argv) {
                         "OWL/Turtle files for its world copy (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
   app.add_option("--start", o.start_at_first_tick, "a task started at the first tick: TYPE or TYPE:LABEL");
   app.add_option("--robot", o.robot, "the element id of the agent this manager drives");
+  app.add_option("--end-session-after-task", o.end_session_after_frames,
+                 "lockstep: when the --start task ends, ask the clock master to end the session this many frames later");
   app.add_option("--liveness-ms", liveness_ms, "wall clock: drop a skill process's skills after this long without a heartbeat")
       ->check(apps::positive());
   apps::parse_or_exit(app, argc, argv);
+  if (o.end_session_after_frames >= 0 && (o.start_at_first_tick.empty() || o.wall_clock))
+    apps::usage_error(app, "--end-session-after-task needs --start and lockstep (no --wall-clock)");
   o.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
   if (o.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
   o.tick_period_ns = static_cast<int64_t>(1e9 / hz);

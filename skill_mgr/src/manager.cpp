@@ -62,6 +62,7 @@ Manager::Manager(Bus& bus, ManagerOptions options)
       req.params.push_back(p);  // data_type empty: typed in begin()
     }
     req.num_params = static_cast<int32_t>(req.params.size());
+    start_task_ = next_task_;
     starts_.emplace_back(next_task_++, req);
   }
   incarnation_ = std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -191,7 +192,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
   if (impls.empty() || !bad.empty()) {
     const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;
     SB_WARN(kLog, "task " << id << ": " << req.type << " cannot start: " << why);
-    results_[id] = "Failure: " + why;
+    record_result(id, "Failure: " + why);
     return;
   }
   if (!world_.ready() && opt_.wall_clock && std::chrono::steady_clock::now() - last_world_try_ > std::chrono::seconds(5)) {
@@ -243,11 +244,17 @@ void Manager::publish_progress(const Task& t) {
   participant_.publish(channel("SB_SKILL_PROGRESS"), p);
 }
 
+void Manager::record_result(int64_t id, const std::string& result) {
+  results_[id] = result;
+  if (id == start_task_ && opt_.end_session_after_frames >= 0 && !opt_.wall_clock)
+    participant_.request_end(opt_.end_session_after_frames, "task " + std::to_string(id) + " ended: " + result);
+}
+
 void Manager::end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator& it) {
   Task& t = *it->second;
   if (finished(t.root->state())) {
     SB_INFO(kLog, "task " << t.id << ": " << t.type << " " << to_string(t.root->state()) << ": " << t.root->message());
-    results_[t.id] = std::string(to_string(t.root->state())) + ": " + t.root->message();
+    record_result(t.id, std::string(to_string(t.root->state())) + ": " + t.root->message());
     it = tasks_.erase(it);
   } else {
     ++it;
@@ -273,7 +280,7 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
   while (!stopped_queued_.empty()) {  // a task stopped before it began still ends visibly
     const auto [id, type] = stopped_queued_.front();
     stopped_queued_.pop_front();
-    results_[id] = "Failure: stopped before it started";
+    record_result(id, "Failure: stopped before it started");
     skill_progress_t p{};
     p.task = id;
     p.state = state_code(State::Failure);

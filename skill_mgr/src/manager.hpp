@@ -28,6 +28,7 @@ struct ManagerOptions {
   std::chrono::milliseconds tick_timeout{1000};
   std::vector<std::string> ontology_files;  // for the world replica (conditions, grounding)
   std::string start_at_first_tick;           // "TYPE" or "TYPE:LABEL": a task started at the first tick
+  int64_t end_session_after_frames = -1;     // lockstep: when that task ends, end the session this many frames later
   std::string robot;                         // element id of the agent this manager drives
   // Wall clock: a skill process without a heartbeat for this long has its skills dropped.
   std::chrono::milliseconds liveness_timeout{3000};
@@ -56,6 +57,8 @@ class Manager {
  private:
   void on_frame(int64_t frame, int64_t sim_time_ns);
   void end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator& it);
+  // How a task ended; the --start task's end may end the lockstep session.
+  void record_result(int64_t id, const std::string& result);
   // Liveness (wall clock): announce this manager, drop the skills of silent processes.
   void announce();
   void drop_silent_processes();
@@ -79,6 +82,7 @@ class Manager {
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;
   int64_t incarnation_ = 0;  // this run of the manager (not behaviour: an identity)
+  int64_t start_task_ = -1;  // the --start task's id
   std::map<std::string, std::chrono::steady_clock::time_point> heard_from_;  // process -> last heartbeat
   std::chrono::steady_clock::time_point last_announce_{};
   std::chrono::steady_clock::time_point last_world_try_{};

@@ -99,6 +99,7 @@ class LockstepMaster {
   Digest session_digest_{};
   bool stop_requested_ = false;
   std::string stop_reason_;
+  int64_t end_at_ = -1;  // a participant asked to end after this frame (lockstep_end_t)
   std::chrono::steady_clock::time_point clock_sent_{};
   std::map<std::string, double> ack_seconds_;
   double wait_seconds_ = 0;
@@ -132,6 +133,9 @@ class LockstepParticipant {
 
   RunResult run();
   void stop();
+  // Asks the master to end the session `after_frames` after the current frame (published
+  // with this frame, so the end is at a frame the participant's work decides).
+  void request_end(int64_t after_frames, const std::string& why);
   int64_t frame() const { return outbox_.frame(); }
   const BadInputCounter& bad_input() const { return bad_; }
   const std::string& name() const { return cfg_.name; }

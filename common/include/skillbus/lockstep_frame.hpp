@@ -23,6 +23,7 @@ namespace skillbus {
 std::string clock_channel();  // SB_LOCKSTEP_CLOCK
 std::string ack_channel();    // SB_LOCKSTEP_ACK
 std::string join_channel();   // SB_LOCKSTEP_JOIN
+std::string end_channel();    // SB_LOCKSTEP_END (a participant asks to end the session)
 
 struct Stamp {
   int64_t frame = -1;

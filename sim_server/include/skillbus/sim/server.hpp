@@ -39,11 +39,9 @@ struct ServerOptions {
   double speed = 1.0;                      // wall-clock mode: sim seconds per wall second
   int64_t frames = -1;                     // -1: until stopped
   double duration_s = 0;                   // > 0: run this much sim time (overrides frames)
-  int64_t stop_after_task = -1;            // lockstep: end the run when this skill task has finished
   // Lockstep: step the physics while the participants work (the commands of frame n
   // are applied in frame n + 1, one frame later than without it).
   bool pipeline = false;
-  int64_t stop_grace_frames = 10;          // ... this many frames after its last progress
   std::string collision_detector;          // overrides the scene's when set
   double step_ms = 0, frame_ms = 0;        // override the scene's when > 0
   std::chrono::milliseconds join_timeout{10000}, ack_timeout{5000}, message_timeout{2000};
@@ -90,8 +88,6 @@ class SimServer {
   long accepted_ = 0, rejected_ = 0;
   int64_t frame_ = -1, sim_time_ns_ = 0;
   bool paused_ = false;
-  int64_t task_done_at_ = -1;  // frame the watched task finished in
-  int8_t task_state_ = 0;
   std::vector<ScriptStep> script_;
   // Pipelined lockstep: commands of this frame, applied at the next frame's step.
   std::vector<std::pair<std::string, Bytes>> pending_commands_;
