@@ -1,0 +1,92 @@
+"""The C++ programs' command lines (skillbus_apps on CLI11): --help lists every option
+with a description and exits 0 without opening the bus; a wrong option or value ends the
+program with exit code 2 and one line on stderr naming it. No network namespace needed:
+nothing here opens the bus (SKILLBUS_BUS_URL points nowhere to make sure)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+
+import pytest
+
+from skillbus import paths
+
+# Every program and the options scripts and tests use (their names must not change).
+PROGRAMS = {
+    "wm_server": ["--url", "--data", "--ontology", "--scene", "--name", "--wall-clock", "--period-ms",
+                  "--snapshot-every", "--crash-after-commits"],
+    "skill_mgr": ["--url", "--name", "--wall-clock", "--period-ms", "--tick-hz", "--tick-timeout-ms", "--ontology",
+                  "--start", "--robot", "--end-session-after-task", "--liveness-ms"],
+    "sim_server": ["--url", "--scene", "--script", "--record-script", "--name", "--participants", "--wall-clock",
+                   "--speed", "--frames", "--duration-s", "--pipeline", "--collision",
+                   "--step-ms", "--frame-ms", "--join-timeout-ms", "--ack-timeout-ms", "--message-timeout-ms"],
+    "motion_server": ["--url", "--scene"],
+    "sb_clock": ["--url", "--name", "--participants", "--frames", "--period-ms", "--join-timeout-ms",
+                 "--ack-timeout-ms", "--message-timeout-ms", "--lose-clocks-every", "--demo"],
+    "sb_demo_participant": ["--url", "--name", "--wall-clock", "--frames", "--clock-timeout-ms",
+                            "--message-timeout-ms", "--drop-at-frame", "--slow-at-frame", "--bare"],
+    "sb_rpc_counter": ["--url", "--area", "--drop-every", "--exit-after-idle-ms"],
+}
+
+# A numeric option of each program and a value it must refuse.
+BAD_VALUES = {
+    "wm_server": ("--snapshot-every", "often"),
+    "skill_mgr": ("--tick-hz", "0"),
+    "sim_server": ("--frames", "12x"),
+    "sb_clock": ("--period-ms", "-1"),
+    "sb_demo_participant": ("--drop-at-frame", "1.5"),
+    "sb_rpc_counter": ("--drop-every", "some"),
+}
+
+
+def run(name: str, *args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, SKILLBUS_BUS_URL="nowhere://this-bus-must-not-be-opened")
+    return subprocess.run([str(paths.binary(name)), *args], capture_output=True, text=True, timeout=30, env=env)
+
+
+@pytest.mark.parametrize("name", sorted(PROGRAMS))
+def test_help_lists_every_option_and_opens_no_bus(name):
+    r = run(name, "--help")
+    assert r.returncode == 0, r.stderr
+    assert f"Usage: {name} [OPTIONS]" in r.stdout
+    listed = dict(re.findall(r"^\s+(--[a-z-]+)\S*\s+(.*)$", r.stdout, re.M))
+    for option in PROGRAMS[name]:
+        assert option in listed, f"{name} --help does not list {option}:\n{r.stdout}"
+        assert listed[option].strip(), f"{name} --help has no description for {option}"
+    assert r.stderr == ""
+
+
+@pytest.mark.parametrize("name", sorted(PROGRAMS))
+def test_an_unknown_option_is_named_in_one_line(name):
+    r = run(name, "--no-such-option", "1")
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stdout == ""
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith(f"{name}: error: ") and "--no-such-option" in lines[0], lines[0]
+
+
+@pytest.mark.parametrize("name", sorted(BAD_VALUES))
+def test_a_wrong_value_is_named_in_one_line(name):
+    option, value = BAD_VALUES[name]
+    r = run(name, option, value)
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith(f"{name}: error: ") and option in lines[0], lines[0]
+
+
+@pytest.mark.parametrize("name", ["sim_server", "motion_server", "sb_demo_participant"])
+def test_a_missing_required_option_is_named(name):
+    required = "--name" if name == "sb_demo_participant" else "--scene"
+    r = run(name)
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stderr.startswith(f"{name}: error: {required}") and len(r.stderr.splitlines()) == 1, r.stderr
+
+
+def test_a_bus_that_cannot_be_opened_is_one_line_too():
+    r = run("sb_rpc_counter")  # parses, then opens the bus of SKILLBUS_BUS_URL
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stderr.startswith("sb_rpc_counter: cannot start: bus URL 'nowhere://") and len(r.stderr.splitlines()) == 1
