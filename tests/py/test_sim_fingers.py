@@ -3,7 +3,7 @@ following error, all from the width and force the physics server reports."""
 
 import pytest
 
-from skillbus.can.device import FOLLOWING_TIMEOUT_S, SimFingers
+from skillbus.can.fingers import FOLLOWING_TIMEOUT_S, SimFingers
 
 
 def make():

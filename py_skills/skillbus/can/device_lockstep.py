@@ -1,0 +1,74 @@
+"""The simulated gripper as a lockstep participant (``skillbus gripper-device --lockstep``):
+its fingers are the physics server's (SimFingers); CAN goes through the lockstep link,
+and everything the device sends (TPDO, heartbeat, EMCY) is driven by sim frames."""
+
+from __future__ import annotations
+
+import json
+
+import canopen
+
+from skillbus.can.device import EDS, GripperDevice
+from skillbus.can.fingers import SimFingers
+
+
+def run(args) -> int:
+    """The device as a lockstep participant, its fingers those of the physics server."""
+    import can
+
+    from skillbus.bus import open_bus
+    from skillbus.can.lockstep_link import LockstepCanLink, sdo_ids
+    from skillbus.lockstep import LockstepParticipant
+    from skillbus.msgs import decode, sim_state_t
+    from skillbus.sim.messages import gripper_channel, state_channel
+
+    bus = open_bus(args.url)
+    p = LockstepParticipant(bus, args.name, kind="gripper-device")
+    network = canopen.Network()
+    link = LockstepCanLink(p, can.Bus(interface=args.interface, channel=args.channel), args.channel, network,
+                           sdo_ids(args.node_id))
+    fingers = SimFingers(lambda m: p.publish(gripper_channel(), m))
+    dev = GripperDevice(network, args.node_id, args.eds or EDS, fingers=fingers)
+    dev.event_every = 10
+    bad = [0]
+
+    raw: list[bytes | None] = [None]
+
+    def on_state(m) -> None:
+        raw[0] = m.data
+
+    def take_state() -> None:
+        # Decoded only while the fingers move or were just told to: at rest nothing in
+        # the state can change what the device reports (it is the only one moving them).
+        if raw[0] is None or not (fingers.moving or not fingers.acknowledged or last_state[0] is None):
+            return
+        s = decode(sim_state_t, raw[0])
+        raw[0] = None
+        if s is None:
+            bad[0] += 1
+            return
+        last_state[0] = s
+        fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts}, s.finger_width_target)
+
+    p.subscribe(state_channel(), on_state)
+    last: list[int | None] = [None]
+    last_state: list = [None]
+
+    def on_frame(frame: int, sim_time_ns: int) -> None:
+        if last[0] is None:
+            dev.boot()  # boot-up in the first frame: nothing but SDO goes out before the run
+        dt = (sim_time_ns - last[0]) * 1e-9 if last[0] is not None else 0.0
+        last[0] = sim_time_ns
+        take_state()
+        dev.step(dt)
+        dev.heartbeat_if_due(sim_time_ns)
+
+    p.on_frame = link.wrap(on_frame)
+    print(json.dumps({"node": args.node_id, "channel": args.channel, "lockstep": args.name}), flush=True)
+    r = p.run()
+    p.close()
+    link.shutdown()
+    print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex,
+                      "can_sent": link.stats["sent"], "can_received": link.stats["received"],
+                      "rpdo_errors": dev.rpdo_errors, "bad_input": bad[0]}), flush=True)
+    return 0 if r.ok else 1

@@ -1,0 +1,47 @@
+"""The simulated gripper on the wall clock with the physics server's fingers
+(``skillbus gripper-device --physics``; the physics server in wall-clock mode): CAN
+through canopen's notifier, frames from a local timer."""
+
+from __future__ import annotations
+
+import json
+
+import canopen
+
+from skillbus.can.device import EDS, GripperDevice
+from skillbus.can.fingers import SimFingers
+
+
+def run(args) -> int:
+    """The device on the wall clock with the physics server's fingers (the physics server
+    in wall-clock mode): CAN through canopen's notifier, frames from a local timer."""
+    from skillbus.bus import open_bus
+    from skillbus.lockstep import LockstepParticipant
+    from skillbus.msgs import decode, sim_state_t
+    from skillbus.sim.messages import gripper_channel, state_channel
+
+    bus = open_bus(args.url)
+    p = LockstepParticipant(bus, args.name, kind="gripper-device", wall_clock=True,
+                            wall_frame_period_ns=int(args.period_ms * 1e6))
+    network = canopen.Network()
+    network.connect(interface=args.interface, channel=args.channel)
+    fingers = SimFingers(lambda m: bus.publish(gripper_channel(), m.encode()))
+    dev = GripperDevice(network, args.node_id, args.eds or EDS, fingers=fingers)
+
+    def on_state(m) -> None:
+        s = decode(sim_state_t, m.data)
+        if s is not None:
+            with dev.lock:
+                fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts}, s.finger_width_target)
+
+    p.subscribe(state_channel(), on_state)
+    dev.boot()
+    print(json.dumps({"node": args.node_id, "channel": args.channel, "physics": True}), flush=True)
+    p.on_frame = lambda frame, t: dev.step(args.period_ms / 1000.0)
+    try:
+        p.run()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        network.disconnect()
+    return 0

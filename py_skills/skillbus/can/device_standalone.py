@@ -1,0 +1,32 @@
+"""The simulated gripper standalone (``skillbus gripper-device``): its own finger model
+(FingerModel, an object of --object-width between the fingers) stepped on a wall-clock
+timer every --period-ms; for tests of the driver without the physics server."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import canopen
+
+from skillbus.can.device import EDS, GripperDevice
+
+
+def run(args) -> int:
+    network = canopen.Network()
+    network.connect(interface=args.interface, channel=args.channel)
+    dev = GripperDevice(network, args.node_id, args.eds or EDS, args.object_width)
+    dev.boot()
+    print(json.dumps({"node": args.node_id, "channel": args.channel}), flush=True)
+    period = args.period_ms / 1000.0
+    next_t = time.monotonic()
+    try:
+        while True:  # standalone: the finger model on a wall-clock timer
+            next_t += period
+            dev.step(period)
+            time.sleep(max(0.0, next_t - time.monotonic()))
+    except KeyboardInterrupt:
+        pass
+    finally:
+        network.disconnect()
+    return 0
