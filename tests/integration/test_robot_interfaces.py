@@ -2,7 +2,6 @@
 --interface), and a skill that needs one the process lacks fails naming it."""
 
 import sys
-import time
 
 from test_skills import LIBS, cli, mgr_binary
 
@@ -13,10 +12,7 @@ def skills_process(sandbox, name, *args):
 
 
 def registered(proc, timeout=30):
-    deadline = time.monotonic() + timeout
-    while "registered" not in proc.stderr():
-        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
-        time.sleep(0.05)
+    proc.wait_for("registered", timeout)
 
 
 def test_an_interface_from_the_configuration_file_reaches_the_skill(sandbox, tmp_path):

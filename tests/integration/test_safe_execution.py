@@ -206,10 +206,7 @@ def test_set_parent_keeps_the_world_pose(system):
 def test_a_processor_the_manager_does_not_know_is_reported_at_registration_and_expansion(system):
     proc = system.start("fancy", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "fancy",
                                   "--library", "fancy_processor_skills"], env={"PYTHONPATH": str(LIBS)})
-    deadline = time.monotonic() + 30
-    while "registered" not in proc.stderr():
-        assert time.monotonic() < deadline and proc.returncode is None, proc.stderr()[-2000:]
-        time.sleep(0.05)
+    proc.wait_for("registered", 30)
     assert "processor Fancy (fancy_processor_skills) is not known to the skill manager (it knows: " in proc.stderr()
     assert "processor Invert" not in proc.stderr()  # every standard class has its C++ counterpart
     rc, out, _ = run(system, "UsesFancy")
