@@ -17,6 +17,7 @@ import copy
 import enum
 from typing import Any, Iterator
 
+from skillbus.msgs import skill_param_t
 from skillbus.world.element import Element
 
 
@@ -25,9 +26,9 @@ class ParamTypes(enum.IntEnum):
     it is static (overwrites the blackboard each run). Optional: may stay empty; a value in
     the description is a default, used when the blackboard has none. Inferred: a required
     element that pre-conditions may fill in from the world model."""
-    Required = 0
-    Optional = 1
-    Inferred = 2
+    Required = skill_param_t.REQUIRED  # the numbers are the IDL's (lcmtypes/skill_param_t.lcm)
+    Optional = skill_param_t.OPTIONAL
+    Inferred = skill_param_t.INFERRED
 
 
 _TYPES = (int, float, str, bool, list, dict, Element)
