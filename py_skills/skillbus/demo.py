@@ -25,7 +25,10 @@ from pathlib import Path
 from typing import Any
 
 from skillbus import paths
+from skillbus.skill.skill import State
 from skillbus.waiting import poll_until, wait_until
+
+ENDED = (State.Success, State.Failure)
 
 BIN_CENTRE, BIN_HALF, BIN_TOP = (0.0, 0.6), 0.15, 0.25
 
@@ -76,10 +79,10 @@ class Watcher:
         if p.task != self.task or self.final is not None:
             return
         self.latest = p
-        if p.state in (3, 4):
+        if p.state in ENDED:
             self.final = p
         names = {n.id: n for n in p.nodes}
-        running = [n for n in p.nodes if n.state == 2 and n.type]
+        running = [n for n in p.nodes if n.state == State.Running and n.type]
         if not running:
             return
         leaf = running[-1]

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from skillbus import launch
+from skillbus.skill import State
 from skillbus.bus import channel, open_bus
 from skillbus.demo import in_bin
 from skillbus.msgs import decode, sim_state_t, skill_progress_t
@@ -47,7 +48,7 @@ state = {"pick": False, "sim": None}
 
 def on_progress(ch, data):
     p = decode(skill_progress_t, data)
-    if p is not None and any(n.type == "Pick" and n.state == 2 for n in p.nodes):
+    if p is not None and any(n.type == "Pick" and n.state == State.Running for n in p.nodes):
         state["pick"] = True
 
 

@@ -10,6 +10,7 @@ import sys
 import lcm
 
 from skillbus.msgs import decode, skill_progress_t
+from skillbus.skill import State
 from test_launch_run_dir import box, netns_procs  # noqa: F401 (box: a fixture)
 
 LIVE = re.compile(r"^  t=\s*(\d+\.\d+) s  (.*)$", re.M)
@@ -38,7 +39,7 @@ def test_the_live_view_follows_the_task_to_its_end(box, tmp_path):  # noqa: F811
     assert not left, left  # the demo shut its system down
 
     progress = logged_progress(run_dir / "demo.lcmlog")
-    final = [p for p in progress if p.state in (3, 4)]
+    final = [p for p in progress if p.state in (State.Success, State.Failure)]
     assert final, f"no final progress of task 1 in the log ({len(progress)} messages)"
     end_s = final[0].header.sim_time_ns * 1e-9
     assert end_s > 10, end_s
@@ -55,7 +56,7 @@ def test_the_live_view_follows_the_task_to_its_end(box, tmp_path):  # noqa: F811
     changes = []
     prev = None
     for p in progress:
-        running = [n for n in p.nodes if n.state == 2 and n.type]
+        running = [n for n in p.nodes if n.state == State.Running and n.type]
         key = (running[-1].type, running[-1].message) if running else None
         if running and key != prev:
             changes.append(round(p.header.sim_time_ns * 1e-9, 2))

@@ -15,6 +15,8 @@ import math
 import sys
 import time
 from pathlib import Path
+
+from skillbus.skill import State
 from typing import Callable
 
 ARM_PARAMS = {"Arm": "skiros:Arm-8", "Target": "skiros:Bin-5", "Height": "0.45"}
@@ -63,7 +65,7 @@ def stop_during_motion(bus, start: Callable[[], int], stop: Callable[[int], None
 
     def on_progress(ch, data):
         p = decode(skill_progress_t, data)
-        if p is not None and p.task == task_box["id"] and p.state in (3, 4) and not final:
+        if p is not None and p.task == task_box["id"] and p.state in (State.Success, State.Failure) and not final:
             final.update(state=int(p.state), message=p.nodes[0].message if p.nodes else "")
 
     subs = [bus.subscribe(channel("SB_SIM_STATE"), on_state),
@@ -182,7 +184,7 @@ def run_to_end(bus, client, lst, skill: str, params: dict, timeout: float = 30.0
 
     def on_progress(ch, data):
         p = decode(skill_progress_t, data)
-        if p is not None and p.task == task["id"] and p.state in (3, 4) and not final:
+        if p is not None and p.task == task["id"] and p.state in (State.Success, State.Failure) and not final:
             final.update(state=int(p.state), message=p.nodes[0].message if p.nodes else "")
 
     sub = bus.subscribe(channel("SB_SKILL_PROGRESS"), on_progress)

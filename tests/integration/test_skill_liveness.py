@@ -84,7 +84,7 @@ def test_a_live_process_is_never_dropped(sandbox):
 
 STOP_QUEUED = """
 from skillbus.bus import channel, open_bus
-from skillbus.msgs import decode, skill_progress_t, skill_start_t, skill_task_t
+from skillbus.msgs import decode, skill_progress_t, skill_start_t, skill_state_t, skill_task_t
 from skillbus.rpc import RpcClient
 from skillbus.waiting import poll_until
 bus = open_bus()
@@ -96,8 +96,8 @@ req = skill_start_t(); req.type = "Wait"
 task = c.call("start", req, skill_task_t, timeout=5.0).task
 stop = skill_start_t(); stop.task = task
 c.call("stop", stop, skill_task_t, timeout=5.0)
-poll_until(lambda: any(p.task == task and p.state == 4 for p in ends), 3.0, step=bus.handle)
-final = [p for p in ends if p.task == task and p.state == 4]
+poll_until(lambda: any(p.task == task and p.state == skill_state_t.FAILURE for p in ends), 3.0, step=bus.handle)
+final = [p for p in ends if p.task == task and p.state == skill_state_t.FAILURE]
 print(final[0].nodes[0].message if final else "no end seen")
 """
 

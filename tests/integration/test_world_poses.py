@@ -14,6 +14,8 @@ import sys
 import time
 from pathlib import Path
 
+from skillbus.skill import State
+
 TOLERANCE_M = 0.01
 
 
@@ -74,11 +76,11 @@ def observe_clear_table(timeout: float = 400.0) -> dict:
             if p is None:
                 continue
             for n in p.nodes:
-                if n.type in started and n.state == 2 and n.id not in seen_running:
+                if n.type in started and n.state == State.Running and n.id not in seen_running:
                     seen_running.add(n.id)
                     started[n.type].append(p.header.frame)
-            done = [n for n in p.nodes if n.type == "Place" and n.state == 3 and n.id not in placed]
-            if p.state in (3, 4):
+            done = [n for n in p.nodes if n.type == "Place" and n.state == State.Success and n.id not in placed]
+            if p.state in (State.Success, State.Failure):
                 final = p
             if not done and final is None:
                 continue

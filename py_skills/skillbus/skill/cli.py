@@ -14,11 +14,14 @@ from skillbus.bus import BusError, channel, open_bus
 from skillbus.msgs import (decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t,
                            skill_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, no_answer
+from skillbus.skill.params import ParamTypes
+from skillbus.skill.skill import State
 from skillbus.waiting import poll_until
 from skillbus.world.element import Element
 
-STATES = {0: "Uninitialized", 1: "Idle", 2: "Running", 3: "Success", 4: "Failure"}
-PARAM_TYPES = {0: "Required", 1: "Optional", 2: "Inferred"}
+# Names of the IDL's numbers (skill_state_t, skill_param_t), for printing.
+STATES = {int(s): s.name for s in State}
+PARAM_TYPES = {int(t): t.name for t in ParamTypes}
 
 MANAGER_TIMEOUT = 2.0   # s: how long a command waits for the skill manager's answer
 STOP_ACK_TIMEOUT = 2.0  # s: for the acknowledgement of the stop of an interrupted run
@@ -293,7 +296,7 @@ def _run(args, intr: Interrupts) -> int:
                 else:
                     print(f"--- task {p.task}, tick {p.tick}")
                     print_tree(p, args.verbose)
-        if p.state in (3, 4):
+        if p.state in (State.Success, State.Failure):
             final.append(p)
 
     # The bus layer's queue (DEFAULT_QUEUE_CAPACITY) holds the progress that arrives while
@@ -325,7 +328,7 @@ def _run(args, intr: Interrupts) -> int:
     if code is not None and not final:
         _stop(client, bus, task.task, final, intr)
     if code is None:
-        code = 0 if final[0].state == 3 else 1
+        code = 0 if final[0].state == State.Success else 1
     if as_json:
         # the final tree, or when its end was not seen, the last one (state Running, ...)
         p = final[0] if final else last[0]
