@@ -22,7 +22,8 @@ from typing import Any
 
 from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t
-from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer
+from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, request_channel
+from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
 from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
@@ -102,22 +103,22 @@ class SkillProcess:
                 for name, cls in sorted(all_processors().items()) if name not in names]
 
     def register(self, timeout: float = 30.0) -> skill_register_t:
-        """Announces the skills to the manager; retries until it answers or `timeout`."""
+        """Announces the skills to the manager; retries until it answers. Raises
+        WaitTimeout (naming the manager's channel and the last error) after `timeout`."""
         client = RpcClient(self.bus, "SKILL", self.name)
-        deadline = time.monotonic() + timeout
-        while True:
-            try:
-                for e in self.check_processors(client):
-                    if e not in self.errors:
-                        log.error("%s", e)
-                        self.errors.append(e)
-                reply = client.call("register", self.registration(), skill_register_t, timeout=2.0)
-                for e in reply.errors:
-                    log.error("the manager refused: %s", e)
-                return reply
-            except RpcError:
-                if time.monotonic() >= deadline:
-                    raise
+
+        def attempt() -> skill_register_t:
+            for e in self.check_processors(client):
+                if e not in self.errors:
+                    log.error("%s", e)
+                    self.errors.append(e)
+            return client.call("register", self.registration(), skill_register_t, timeout=2.0)
+
+        reply = wait_until(attempt, timeout, f"registration with the skill manager on {request_channel('SKILL')}",
+                           interval=0.0, retry_on=(RpcError,))
+        for e in reply.errors:
+            log.error("the manager refused: %s", e)
+        return reply
 
     # -- RPC methods ------------------------------------------------------------
     def _reply(self, skill: SkillCore | None, state: State, message: str, code: int = 0) -> skill_tick_reply_t:
@@ -279,7 +280,11 @@ def main(args) -> int:
         return 2
     proc = SkillProcess(bus, args.name, args.library, wmi, participant)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
-    reply = proc.register(timeout=args.register_timeout)
+    try:
+        reply = proc.register(timeout=args.register_timeout)
+    except WaitTimeout as e:
+        print(f"error: {e}: is the skill manager running, in this network namespace?", file=sys.stderr)
+        return 1
     log.info("registered %d skill(s) with the manager (%d refused)", len(proc.classes), len(reply.errors))
     if participant is not None:
         # Under lockstep the process follows the frames (its world-model replica changes
@@ -330,6 +335,6 @@ class Liveness:
                 try:
                     self.proc.register(timeout=2.0)
                     log.info("registered again: the skill manager did not list this process")
-                except RpcError as e:
+                except WaitTimeout as e:
                     log.warning("registering again failed (%s); will retry at the next announcement", e)
             self.bus.handle(max(0.0, min(self.HEARTBEAT_S, next_beat - time.monotonic())))
