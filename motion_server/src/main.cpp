@@ -52,7 +52,7 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_
   if (p.ok) out.goal.assign(p.goal.data(), p.goal.data() + p.goal.size());
   else out.goal.assign(joints.size(), 0.0);
   for (const auto& [t, qs] : p.points) {
-    skillbus_msgs::sim_traj_point_t pt{};
+    skillbus_msgs::joint_traj_point_t pt{};
     pt.time_from_start_ns = t;
     pt.positions.assign(qs.data(), qs.data() + qs.size());
     pt.num_positions = static_cast<int32_t>(pt.positions.size());

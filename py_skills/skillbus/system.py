@@ -64,7 +64,12 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         mgr += ["--start", task]
         if lockstep and stop_after_task:  # the task's end ends the session (10 frames of grace), through lockstep
             mgr += ["--end-session-after-task", "10"]
-    skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm", "--gripper", f"{can}:5"]
+    # The robot interfaces, each named: the arm and the camera (the robot's channels, which
+    # the physics server or real drivers serve) and the CANopen gripper. The camera is its
+    # own interface, not implied by --arm: a robot may have an arm without a camera, or a
+    # camera from another driver.
+    skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm",
+              "--interface", "camera=skillbus.robot.camera", "--gripper", f"{can}:5"]
     for lib in LIBRARIES:
         skills += ["--library", lib]
     if lockstep:

@@ -1,5 +1,5 @@
 // Private to sim_physics (DART): the state behind Physics' pimpl, shared by physics.cpp
-// (building, control, stepping, commands) and state.cpp (the state message, the digest).
+// (building, control, stepping, commands) and state.cpp (the state messages, the digest).
 #pragma once
 
 #include <Eigen/Core>
@@ -28,6 +28,9 @@ struct Physics::Impl {
   void build();    // the world and the controllers from the scene (again on reset)
   void control();  // the controllers' forces for the next step
   void step();
+  // For the state messages (state.cpp):
+  void tool_pose(double* out) const;  // the tool centre point (world): x y z qx qy qz qw
+  double tracking_error() const;      // rad, max |reference - position| over the arm joints
 };
 
 }  // namespace skillbus::sim

@@ -7,7 +7,10 @@
 
 #include "skillbus/lockstep_frame.hpp"
 #include "skillbus/log.hpp"
-#include "skillbus_msgs/sim_arm_cmd_t.hpp"
+#include "skillbus_msgs/robot_arm_cmd_t.hpp"
+#include "skillbus_msgs/robot_arm_state_t.hpp"
+#include "skillbus_msgs/robot_cmd_reply_t.hpp"
+#include "skillbus_msgs/robot_objects_t.hpp"
 #include "skillbus_msgs/sim_cmd_reply_t.hpp"
 #include "skillbus_msgs/sim_control_t.hpp"
 #include "skillbus_msgs/sim_gripper_cmd_t.hpp"
@@ -22,8 +25,11 @@ namespace {
 constexpr const char* kLog = "sim_server";
 }
 
+std::string robot_arm_state_channel() { return channel("SB_ROBOT_ARM_STATE"); }
+std::string robot_arm_cmd_channel() { return channel("SB_ROBOT_ARM_CMD"); }
+std::string robot_reply_channel() { return channel("SB_ROBOT_CMD_REPLY"); }
+std::string robot_objects_channel() { return channel("SB_ROBOT_OBJECTS"); }
 std::string state_channel() { return channel("SB_SIM_STATE"); }
-std::string arm_channel() { return channel("SB_SIM_ARM_CMD"); }
 std::string gripper_channel() { return channel("SB_SIM_GRIPPER_CMD"); }
 std::string reply_channel() { return channel("SB_SIM_CMD_REPLY"); }
 
@@ -56,24 +62,19 @@ Scene SimServer::load(const std::string& path) const {
 }
 
 void SimServer::reply(const std::string& id, const std::string& command, const std::string& error) {
-  skillbus_msgs::sim_cmd_reply_t r{};
-  r.id = id;
-  r.command = command;
-  r.accepted = error.empty();
-  r.error = error;
   if (error.empty()) {
     ++accepted_;
   } else {
     ++rejected_;
     SB_WARN(kLog, "rejected " << command << " command '" << id << "': " << error);
   }
-  pending_replies_.push_back(r);
+  pending_replies_.push_back({id, command, error});
 }
 
 void SimServer::on_arm(const uint8_t* data, size_t size, const std::string& ch) {
-  skillbus_msgs::sim_arm_cmd_t m;
+  skillbus_msgs::robot_arm_cmd_t m;
   if (!decode_msg(data, size, m)) {
-    bad_.record(ch, "does not decode as sim_arm_cmd_t", size);
+    bad_.record(ch, "does not decode as robot_arm_cmd_t", size);
     ++rejected_;
     return;
   }
@@ -133,7 +134,7 @@ void SimServer::apply_pending() {
   const auto cmds = std::move(pending_commands_);
   pending_commands_.clear();
   for (const auto& [ch, data] : cmds) {
-    if (ch == arm_channel())
+    if (ch == robot_arm_cmd_channel())
       on_arm(data.data(), data.size(), ch);
     else
       on_gripper(data.data(), data.size(), ch);
@@ -150,10 +151,34 @@ void SimServer::play_script() {
   }
 }
 
+// Every frame: the replies to the commands applied since the last frame (arm commands are
+// the robot's, finger commands the simulator's), the robot's arm state and camera, and
+// the simulator's ground truth.
 template <class Publish>
 void SimServer::publish_frame(Publish&& publish) {
-  for (const auto& r : pending_replies_) publish(reply_channel(), r);
+  for (const auto& p : pending_replies_) {
+    if (p.command == "arm") {
+      skillbus_msgs::robot_cmd_reply_t r{};
+      r.id = p.id;
+      r.command = p.command;
+      r.accepted = p.error.empty();
+      r.error = p.error;
+      publish(robot_reply_channel(), r);
+    } else {
+      skillbus_msgs::sim_cmd_reply_t r{};
+      r.id = p.id;
+      r.accepted = p.error.empty();
+      r.error = p.error;
+      publish(reply_channel(), r);
+    }
+  }
   pending_replies_.clear();
+  skillbus_msgs::robot_arm_state_t arm{};
+  physics_->fill_arm_state(arm);
+  publish(robot_arm_state_channel(), arm);
+  skillbus_msgs::robot_objects_t objects{};
+  physics_->fill_objects(objects);
+  publish(robot_objects_channel(), objects);
   skillbus_msgs::sim_state_t s{};
   physics_->fill_state(s);
   publish(state_channel(), s);
@@ -238,10 +263,10 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   if (opt_.pipeline) {
     // Kept in canonical order for the next frame's step (apply_pending).
     auto keep = [this](const StampedMessage& m) { pending_commands_.emplace_back(m.channel, m.data); };
-    master.subscribe(arm_channel(), keep);
+    master.subscribe(robot_arm_cmd_channel(), keep);
     master.subscribe(gripper_channel(), keep);
   } else {
-    master.subscribe(arm_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
+    master.subscribe(robot_arm_cmd_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
     master.subscribe(gripper_channel(),
                      [this](const StampedMessage& m) { on_gripper(m.data.data(), m.data.size(), m.channel); });
   }
@@ -285,7 +310,7 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
 
 ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop) {
   using clock = std::chrono::steady_clock;
-  const int arm_sub = bus_.subscribe(arm_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
+  const int arm_sub = bus_.subscribe(robot_arm_cmd_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_arm(d, n, ch);
   });
   const int grip_sub = bus_.subscribe(gripper_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {

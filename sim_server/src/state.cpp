@@ -1,4 +1,6 @@
-// The physics' outputs: the state message every frame, and the digest of the world.
+// The physics' outputs: the state messages every frame (the simulator's ground truth, and
+// the robot's arm state and camera as a real robot's drivers report them), and the
+// digest of the world.
 #include <cmath>
 #include <dart/collision/CollisionObject.hpp>
 #include <dart/collision/CollisionResult.hpp>
@@ -16,6 +18,53 @@ namespace skillbus::sim {
 
 using dart::dynamics::BodyNode;
 
+// The tool link moved by the scene's tool offset.
+void Physics::Impl::tool_pose(double* out) const {
+  Eigen::Isometry3d tcp = layout.tool->getWorldTransform();
+  tcp.translate(Eigen::Vector3d(0, 0, scene.robot.tool_offset));
+  from_iso(tcp, out);
+}
+
+double Physics::Impl::tracking_error() const {
+  const std::vector<double> want = arm.reference_positions(total_steps);
+  double err = 0;
+  for (size_t k = 0; k < layout.arm_dofs.size(); ++k)
+    err = std::max(err, std::abs(want[k] - world.robot->getPosition(layout.arm_dofs[k])));
+  return err;
+}
+
+void Physics::fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const {
+  const Impl& m = *impl_;
+  const auto& r = m.world.robot;
+  const size_t n = m.layout.arm_dofs.size();
+  out.num_joints = static_cast<int32_t>(n);
+  out.joint_names.resize(n);
+  out.position.resize(n);
+  out.velocity.resize(n);
+  out.effort.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = m.layout.arm_dofs[k];
+    out.joint_names[k] = r->getDof(i)->getJoint()->getName();
+    out.position[k] = r->getPosition(i);
+    out.velocity[k] = r->getVelocity(i);
+    out.effort[k] = m.applied[static_cast<Eigen::Index>(i)];
+  }
+  m.tool_pose(out.tool_pose);
+  out.arm_command_id = m.arm.command_id();
+  out.arm_moving = m.arm.moving();
+  out.arm_tracking_error = m.tracking_error();
+}
+
+void Physics::fill_objects(skillbus_msgs::robot_objects_t& out) const {
+  const auto& objects = impl_->world.objects;
+  out.num_objects = static_cast<int32_t>(objects.size());
+  out.objects.resize(objects.size());
+  for (size_t k = 0; k < objects.size(); ++k) {
+    out.objects[k].name = objects[k]->getName();
+    from_iso(objects[k]->getRootBodyNode()->getWorldTransform(), out.objects[k].pose);
+  }
+}
+
 void Physics::fill_state(skillbus_msgs::sim_state_t& out) const {
   const Impl& m = *impl_;
   const auto& r = m.world.robot;
@@ -31,19 +80,13 @@ void Physics::fill_state(skillbus_msgs::sim_state_t& out) const {
     out.velocity[i] = r->getVelocity(i);
     out.effort[i] = m.applied[i];
   }
-  Eigen::Isometry3d tcp = m.layout.tool->getWorldTransform();
-  tcp.translate(Eigen::Vector3d(0, 0, m.scene.robot.tool_offset));
-  from_iso(tcp, out.tool_pose);
+  m.tool_pose(out.tool_pose);
   out.finger_width = r->getPosition(m.layout.left_dof) + r->getPosition(m.layout.right_dof);
   out.finger_force = -0.5 * (m.applied[m.layout.left_dof] + m.applied[m.layout.right_dof]);
   out.finger_width_target = 2 * m.fingers.target();
   out.arm_command_id = m.arm.command_id();
   out.arm_moving = m.arm.moving();
-  std::vector<double> want = m.arm.reference_positions(m.total_steps);
-  double err = 0;
-  for (size_t k = 0; k < m.layout.arm_dofs.size(); ++k)
-    err = std::max(err, std::abs(want[k] - r->getPosition(m.layout.arm_dofs[k])));
-  out.arm_tracking_error = err;
+  out.arm_tracking_error = m.tracking_error();
 
   const auto& objects = m.world.objects;
   out.num_objects = static_cast<int32_t>(objects.size());

@@ -74,8 +74,9 @@ def test_every_message_of_a_run_decodes_with_the_types_jar(demo_log, tmp_path):
     r = json.loads(out)
     assert r["types"] == LCM_TYPES  # every .lcm file became a class in the jar
     channels = r["channels"]
-    for ch in ("SB_SIM_STATE", "SB_SIM_ARM_CMD", "SB_SIM_GRIPPER_CMD", "SB_SKILL_PROGRESS", "SB_WM_TXN",
-               "SB_WM_CHANGES", "SB_CAN_SYNC", "SB_LOCKSTEP_CLOCK", "SB_MOTION_REQ", "SB_MOTION_REP"):
+    for ch in ("SB_SIM_STATE", "SB_ROBOT_ARM_STATE", "SB_ROBOT_OBJECTS", "SB_ROBOT_ARM_CMD", "SB_ROBOT_CMD_REPLY",
+               "SB_SIM_GRIPPER_CMD", "SB_SKILL_PROGRESS", "SB_WM_TXN", "SB_WM_CHANGES", "SB_CAN_SYNC",
+               "SB_LOCKSTEP_CLOCK", "SB_MOTION_REQ", "SB_MOTION_REP"):
         assert channels.get(ch, [0, 0])[0] > 0, (ch, channels)
     assert all(bad == 0 for _, bad in channels.values()), channels
 

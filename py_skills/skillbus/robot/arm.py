@@ -1,6 +1,9 @@
-"""The arm of a skill process (``skills-process --arm``): the robot's state as the
-physics server (or a real arm's driver) publishes it on SB_SIM_STATE, trajectories out on
-SB_SIM_ARM_CMD, and motion planning by the motion service (RPC area MOTION).
+"""The arm of a skill process (``skills-process --arm``): the arm's state as its driver
+publishes it (robot_arm_state_t on SB_ROBOT_ARM_STATE), trajectories out
+(robot_arm_cmd_t on SB_ROBOT_ARM_CMD, answered by robot_cmd_reply_t on
+SB_ROBOT_CMD_REPLY), and motion planning by the motion service (RPC area MOTION). The
+driver is the physics server or a real arm's: this module cannot tell them apart (it
+never imports skillbus.sim nor reads the simulator's channels).
 
 Under lockstep the state is a lockstep subscription (a tick of frame n sees the state of
 frame n) and commands are lockstep publications (from a tick of frame n they go out in
@@ -13,10 +16,10 @@ import logging
 from typing import Any
 
 from skillbus.bus import Bus
-from skillbus.msgs import (decode, motion_plan_t, motion_request_t, sim_arm_cmd_t, sim_cmd_reply_t, sim_object_t,
-                           sim_state_t, sim_traj_point_t)
+from skillbus.msgs import (decode, joint_traj_point_t, motion_plan_t, motion_request_t, robot_arm_state_t,
+                           robot_cmd_reply_t)
+from skillbus.robot.messages import arm_cmd_channel, arm_command, arm_state_channel, reply_channel, traj_point
 from skillbus.rpc import RpcClient
-from skillbus.sim.messages import arm_channel, reply_channel, state_channel
 
 log = logging.getLogger("arm")
 
@@ -30,24 +33,24 @@ class Arm:
         self.bus, self.participant = bus, participant
         self.motion = RpcClient(bus, "MOTION", name)
         self.motion_timeout = motion_timeout
-        self._state: sim_state_t | None = None
+        self._state: robot_arm_state_t | None = None
         self._raw: bytes | None = None  # decoded only when a skill asks (ticks are rarer than frames)
-        self.replies: dict[str, sim_cmd_reply_t] = {}
+        self.replies: dict[str, robot_cmd_reply_t] = {}
         self.bad = 0
         if participant is not None:
-            participant.subscribe(state_channel(), lambda m: self._on_state(m.data))
+            participant.subscribe(arm_state_channel(), lambda m: self._on_state(m.data))
             participant.subscribe(reply_channel(), lambda m: self._on_reply(m.data))
         else:
-            bus.subscribe(state_channel(), lambda ch, d: self._on_state(d))
+            bus.subscribe(arm_state_channel(), lambda ch, d: self._on_state(d))
             bus.subscribe(reply_channel(), lambda ch, d: self._on_reply(d))
 
     def _on_state(self, data: bytes) -> None:
         self._raw = data
 
     @property
-    def state(self) -> sim_state_t | None:
+    def state(self) -> robot_arm_state_t | None:
         if self._raw is not None:
-            s = decode(sim_state_t, self._raw)
+            s = decode(robot_arm_state_t, self._raw)
             self._raw = None
             if s is None:
                 self.bad += 1
@@ -56,7 +59,7 @@ class Arm:
         return self._state
 
     def _on_reply(self, data: bytes) -> None:
-        r = decode(sim_cmd_reply_t, data)
+        r = decode(robot_cmd_reply_t, data)
         if r is None:
             self.bad += 1
             return
@@ -67,19 +70,15 @@ class Arm:
 
     # -- what the skills use ---------------------------------------------------
     def joint_names(self) -> list[str]:
-        s = self._need_state()
-        return [n for n in s.joint_names if not n.startswith("finger")]
+        return list(self._need_state().joint_names)
 
     def joints(self) -> list[float]:
-        s = self._need_state()
-        return [q for n, q in zip(s.joint_names, s.position) if not n.startswith("finger")]
+        return list(self._need_state().position)
 
-    def objects(self) -> list[sim_object_t]:
-        return list(self._need_state().objects)
-
-    def _need_state(self) -> sim_state_t:
+    def _need_state(self) -> robot_arm_state_t:
         if self.state is None:
-            raise ArmError("no robot state yet (is the physics server or the arm driver running?)")
+            raise ArmError(f"no arm state yet on {arm_state_channel()} (is the physics server or the arm's driver "
+                           "running?)")
         return self.state
 
     def plan(self, target: list[float], cartesian: bool = False, speed_scale: float = 0.5) -> motion_plan_t:
@@ -102,22 +101,15 @@ class Arm:
         where the state showed it (it brakes past it and comes back). Returns the
         target."""
         q = self.joints()
-        p = sim_traj_point_t()
-        p.time_from_start_ns = 0
-        p.positions, p.num_positions = list(q), len(q)
-        p.velocities, p.num_velocities = [], 0
-        self._send(cmd_id, self.joint_names(), [p])
+        self._send(cmd_id, self.joint_names(), [traj_point(0.0, q)])
         return q
 
-    def _send(self, cmd_id: str, joint_names: list[str], points: list[sim_traj_point_t]) -> None:
-        m = sim_arm_cmd_t()
-        m.id = cmd_id
-        m.joint_names, m.num_joints = joint_names, len(joint_names)
-        m.points, m.num_points = points, len(points)
+    def _send(self, cmd_id: str, joint_names: list[str], points: list[joint_traj_point_t]) -> None:
+        m = arm_command(cmd_id, joint_names, points)
         if self.participant is not None:
-            self.participant.publish(arm_channel(), m)
+            self.participant.publish(arm_cmd_channel(), m)
         else:
-            self.bus.publish(arm_channel(), m.encode())
+            self.bus.publish(arm_cmd_channel(), m.encode())
 
     def finished(self, cmd_id: str, tolerance: float = 0.01) -> tuple[bool, str]:
         """(done, error): done when the arm has played `cmd_id` and settled; error when
@@ -132,8 +124,8 @@ class Arm:
 
 
 def interface(bus: Bus, participant: Any = None, arg: str = "", **options: Any) -> Arm:
-    """The arm interface (skillbus.robot.interfaces): the robot state and commands over
-    the bus, planning by the motion service. `arg` is unused."""
+    """The arm interface (skillbus.robot.interfaces): the arm's state and commands over
+    the robot's channels, planning by the motion service. `arg` is unused."""
     return Arm(bus, participant)
 
 

@@ -1,23 +1,24 @@
-"""Builders for the physics server's commands and a plain view of its state.
+"""The physics server's own channels (the simulator's, not the robot's): its ground truth
+and the simulated fingers. A builder for the finger command and a plain view of the
+state.
 
-Channels: SB_SIM_ARM_CMD (sim_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t),
-SB_SIM_STATE (sim_state_t), SB_SIM_CMD_REPLY (sim_cmd_reply_t); see docs/sim_server.md.
+Channels: SB_SIM_STATE (sim_state_t, the ground truth), SB_SIM_GRIPPER_CMD
+(sim_gripper_cmd_t, from the simulated gripper device), SB_SIM_CMD_REPLY
+(sim_cmd_reply_t, the finger commands' replies); see docs/sim_server.md. The arm is the
+robot's: skillbus.robot.messages (SB_ROBOT_*), which the physics server speaks as a real
+robot's drivers do.
 """
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any
 
 from skillbus.bus import channel
-from skillbus.msgs import sim_arm_cmd_t, sim_gripper_cmd_t, sim_state_t, sim_traj_point_t
+from skillbus.msgs import sim_gripper_cmd_t, sim_state_t
 
 
 def state_channel() -> str:
     return channel("SB_SIM_STATE")
-
-
-def arm_channel() -> str:
-    return channel("SB_SIM_ARM_CMD")
 
 
 def gripper_channel() -> str:
@@ -25,27 +26,8 @@ def gripper_channel() -> str:
 
 
 def reply_channel() -> str:
+    """The finger commands' replies (arm commands are answered on SB_ROBOT_CMD_REPLY)."""
     return channel("SB_SIM_CMD_REPLY")
-
-
-def arm_command(cmd_id: str, joints: Sequence[str],
-                points: Sequence[tuple[float, Sequence[float]]]) -> sim_arm_cmd_t:
-    """A timed joint trajectory: points are (seconds from start, positions). A single
-    point at 0 s is a position target timed by the velocity limits."""
-    m = sim_arm_cmd_t()
-    m.id = cmd_id
-    m.joint_names = list(joints)
-    m.num_joints = len(m.joint_names)
-    m.points = []
-    for t, q in points:
-        p = sim_traj_point_t()
-        p.time_from_start_ns = int(round(t * 1e9))
-        p.positions = [float(x) for x in q]
-        p.num_positions = len(p.positions)
-        p.velocities, p.num_velocities = [], 0
-        m.points.append(p)
-    m.num_points = len(m.points)
-    return m
 
 
 def gripper_command(cmd_id: str, width: float, speed: float = 0.1, force_limit: float = 20.0) -> sim_gripper_cmd_t:

@@ -9,10 +9,13 @@ The script (JSON) lists commands at sim times::
      ],
      "record_every": 10}
 
-A step is sent in the first frame whose sim time is at least ``at_s``, so the same
-script gives the same messages in the same frames on every run. Every
-``record_every``-th state (and every command reply) goes to ``--out`` as JSON.
-Timing comes only from the frames: no wall clock, no randomness.
+An ``arm`` step is the robot's arm command (robot_arm_cmd_t on SB_ROBOT_ARM_CMD, as the
+skills send it), a ``gripper`` step the simulated fingers' (sim_gripper_cmd_t on
+SB_SIM_GRIPPER_CMD). A step is sent in the first frame whose sim time is at least
+``at_s``, so the same script gives the same messages in the same frames on every run.
+Every ``record_every``-th ground-truth state (sim_state_t) and every command reply (both
+channels) go to ``--out`` as JSON. Timing comes only from the frames: no wall clock, no
+randomness.
 """
 
 from __future__ import annotations
@@ -24,9 +27,9 @@ from typing import Any
 
 from skillbus.bus import open_bus
 from skillbus.lockstep import LockstepParticipant, StampedMessage
-from skillbus.msgs import decode, sim_cmd_reply_t, sim_state_t, test_sample_t
-from skillbus.sim.messages import (arm_channel, arm_command, gripper_channel, gripper_command, reply_channel,
-                                   state_channel, state_dict)
+from skillbus.msgs import decode, robot_cmd_reply_t, sim_cmd_reply_t, sim_state_t, test_sample_t
+from skillbus.robot import messages as robot
+from skillbus.sim.messages import gripper_channel, gripper_command, reply_channel, state_channel, state_dict
 
 
 class ScriptError(ValueError):
@@ -60,7 +63,8 @@ class ScriptPlayer:
         self.last_msg: sim_state_t | None = None
         self.bad = 0
         p.subscribe(state_channel(), self.on_state)
-        p.subscribe(reply_channel(), self.on_reply)
+        p.subscribe(reply_channel(), lambda m: self.on_reply(m, sim_cmd_reply_t))
+        p.subscribe(robot.reply_channel(), lambda m: self.on_reply(m, robot_cmd_reply_t))
         p.on_frame = self.on_frame
 
     def on_state(self, m: StampedMessage) -> None:
@@ -72,12 +76,13 @@ class ScriptPlayer:
         if s.header.frame % self.record_every == 0:
             self.states.append(state_dict(s))
 
-    def on_reply(self, m: StampedMessage) -> None:
-        r = decode(sim_cmd_reply_t, m.data)
+    def on_reply(self, m: StampedMessage, msg_type: type) -> None:
+        r = decode(msg_type, m.data)
         if r is None:
             self.bad += 1
             return
-        self.replies.append({"frame": r.header.frame, "id": r.id, "command": r.command,
+        command = r.command if msg_type is robot_cmd_reply_t else "gripper"  # the simulator's replies: fingers
+        self.replies.append({"frame": r.header.frame, "id": r.id, "command": command,
                              "accepted": bool(r.accepted), "error": r.error})
 
     def on_frame(self, frame: int, sim_time_ns: int) -> None:
@@ -85,8 +90,8 @@ class ScriptPlayer:
             step = self.steps.pop(0)
             if "arm" in step:
                 a = step["arm"]
-                self.p.publish(arm_channel(), arm_command(a.get("id", ""), a["joints"],
-                                                          [(t, q) for t, q in a["points"]]))
+                self.p.publish(robot.arm_cmd_channel(), robot.arm_command(a.get("id", ""), a["joints"],
+                                                                          [(t, q) for t, q in a["points"]]))
             if "gripper" in step:
                 g = step["gripper"]
                 self.p.publish(gripper_channel(), gripper_command(g.get("id", ""), g["width"], g.get("speed", 0.1),
@@ -94,10 +99,10 @@ class ScriptPlayer:
             if "wrong_type" in step:  # tests: a stamped message of another type on a command channel
                 junk = test_sample_t()
                 junk.text = "not a command"
-                self.p.publish(arm_channel() if step["wrong_type"] == "arm" else gripper_channel(), junk)
+                self.p.publish(robot.arm_cmd_channel() if step["wrong_type"] == "arm" else gripper_channel(), junk)
             if "raw" in step:  # tests: bytes that are not a valid command, on a command channel
                 r = step["raw"]
-                self.p.bus.publish(arm_channel() if r.get("channel") == "arm" else gripper_channel(),
+                self.p.bus.publish(robot.arm_cmd_channel() if r.get("channel") == "arm" else gripper_channel(),
                                    bytes.fromhex(r["hex"]))
 
 

@@ -1,6 +1,7 @@
 """Manipulation skills: Locate, MoveArm, LiftArm, and the compounds Pick, Place and
-ClearTable. The primitives need a skill process started with ``--arm --world-model``;
-the gripper skills (skillbus.skills.gripper) need ``--gripper``.
+ClearTable. MoveArm and LiftArm need a skill process started with ``--arm
+--world-model``, Locate one with a camera (``--interface camera=skillbus.robot.camera
+--world-model``); the gripper skills (skillbus.skills.gripper) need ``--gripper``.
 
 Tool poses: the tool points straight down; its yaw follows the target's yaw, folded to
 within 45 degrees (a cube looks the same every 90 degrees), so the wrist turns least.
@@ -15,6 +16,7 @@ import time
 
 from skillbus import tick_context
 from skillbus.robot import arm as arm_service
+from skillbus.robot import camera as camera_service
 from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SerialStar,
                             SkillBase, SkillDescription)
 from skillbus.msgs import wm_op_t
@@ -92,15 +94,16 @@ class ClearTable(SkillDescription):
 
 # -- primitives -----------------------------------------------------------------------
 class locate(PrimitiveBase):
-    """The simulated camera: every object the robot's state reports is written into the
-    world model with its pose: known elements (by label) are updated; unknown ones are
-    added as products contained in the Location. Finishes when its replica shows it all."""
+    """Every object the robot's camera sees (the process's camera interface) is written
+    into the world model with its pose: known elements (by label) are updated; unknown
+    ones are added as products contained in the Location. Finishes when its replica shows
+    it all."""
 
     def createDescription(self):
         self.setDescription(Locate(), "locate")
 
     def onStart(self):
-        self.arm = arm_service.arm()
+        self.camera = camera_service.camera()
         self.expected: dict[str, tuple] = {}
         self.adding: dict[int, tuple] = {}  # lockstep: request id -> (name, position, orientation)
         self.added: list[str] = []
@@ -123,7 +126,7 @@ class locate(PrimitiveBase):
         if not self.started:
             self.started = True
             by_label = {e.label: e for e in self.wmi.get_elements() if e.label}
-            for o in self.arm.objects():
+            for o in self.camera.objects():
                 p, q = tuple(o.pose[:3]), tuple(o.pose[3:])
                 e = by_label.get(o.name)
                 if e is None:
@@ -132,7 +135,7 @@ class locate(PrimitiveBase):
                 set_world_pose(self.wmi, e.id, p, q)
                 self.expected[e.id] = p
             if not self.expected and not self.adding:
-                return self.fail("located nothing (the robot reports no objects)", -1)
+                return self.fail("located nothing (the camera sees no objects)", -1)
             return self.step(f"writing {len(self.expected) + len(self.adding)} object pose(s)")
         for rid, (name, p, q) in list(self.adding.items()):
             r = self.wmi.results.get(rid)

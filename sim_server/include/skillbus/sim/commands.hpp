@@ -1,4 +1,4 @@
-// Arm and finger commands as the physics takes them (decoded from sim_arm_cmd_t and
+// Arm and finger commands as the physics takes them (decoded from robot_arm_cmd_t and
 // sim_gripper_cmd_t, or read from a script).
 #pragma once
 

@@ -3,7 +3,7 @@
 // finger controller (finger_controller.hpp: position ramp with a force limit), stepped a
 // frame at a time. DART stays behind this header (pimpl) so nothing else compiles it:
 // src/world.* builds the world and sets up the robot, src/physics.cpp controls and
-// steps it, src/state.cpp reads the state message and the digest out of it.
+// steps it, src/state.cpp reads the state messages and the digest out of it.
 #pragma once
 
 #include <cstdint>
@@ -14,6 +14,8 @@
 #include "skillbus/digest.hpp"
 #include "skillbus/scene/scene.hpp"
 #include "skillbus/sim/commands.hpp"
+#include "skillbus_msgs/robot_arm_state_t.hpp"
+#include "skillbus_msgs/robot_objects_t.hpp"
 #include "skillbus_msgs/sim_state_t.hpp"
 
 namespace skillbus::sim {
@@ -34,7 +36,13 @@ class Physics {
   std::string command_gripper(const GripperCommand& cmd);
 
   void step_frame();  // frame_ms / step_ms physics steps with the controllers
+  // The simulator's ground truth (SB_SIM_STATE): every joint, fingers, objects, contacts.
   void fill_state(skillbus_msgs::sim_state_t& out) const;
+  // The robot as a real arm's driver would report it (SB_ROBOT_ARM_STATE): the arm's
+  // joints only, the tool pose, the trajectory being tracked.
+  void fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const;
+  // A perfect camera (SB_ROBOT_OBJECTS): every free object's name and exact pose.
+  void fill_objects(skillbus_msgs::robot_objects_t& out) const;
   // SHA-256 over every skeleton's positions and velocities (bit patterns), in scene order.
   Digest digest() const;
 

@@ -1,9 +1,14 @@
-// The physics server process: the robot interface over LCM (arm and finger commands in,
-// state out every frame), the control services over RPC (area SIM), and the clock:
-// lockstep master with the participants named at launch, or paced to the wall clock.
+// The physics server process: the robot's interface over LCM as a real robot's drivers
+// speak it (arm trajectories in; arm state, camera detections and replies out every
+// frame), the simulated fingers' channel (finger commands in, from the simulated gripper
+// device), the simulator's ground truth every frame, the control services over RPC (area
+// SIM), and the clock: lockstep master with the participants named at launch, or paced
+// to the wall clock.
 //
-// Reads:   SB_SIM_ARM_CMD (sim_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t), SB_SIM_REQ
-// Writes:  SB_SIM_STATE (sim_state_t), SB_SIM_CMD_REPLY (sim_cmd_reply_t), SB_SIM_REP,
+// Reads:   SB_ROBOT_ARM_CMD (robot_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t), SB_SIM_REQ
+// Writes:  SB_ROBOT_ARM_STATE (robot_arm_state_t), SB_ROBOT_OBJECTS (robot_objects_t),
+//          SB_ROBOT_CMD_REPLY (robot_cmd_reply_t, arm commands), SB_SIM_STATE (sim_state_t),
+//          SB_SIM_CMD_REPLY (sim_cmd_reply_t, finger commands), SB_SIM_REP,
 //          SB_LOCKSTEP_CLOCK (as master)
 #pragma once
 
@@ -19,13 +24,17 @@
 #include "skillbus/rpc.hpp"
 #include "skillbus/sim/physics.hpp"
 #include "skillbus/sim/script.hpp"
-#include "skillbus_msgs/sim_cmd_reply_t.hpp"
 #include "skillbus_msgs/sim_status_t.hpp"
 
 namespace skillbus::sim {
 
+// The robot's channels (any robot: this server, or a real robot's drivers).
+std::string robot_arm_state_channel();  // SB_ROBOT_ARM_STATE
+std::string robot_arm_cmd_channel();    // SB_ROBOT_ARM_CMD
+std::string robot_reply_channel();      // SB_ROBOT_CMD_REPLY
+std::string robot_objects_channel();    // SB_ROBOT_OBJECTS
+// The simulator's own: its ground truth and the simulated fingers.
 std::string state_channel();    // SB_SIM_STATE
-std::string arm_channel();      // SB_SIM_ARM_CMD
 std::string gripper_channel();  // SB_SIM_GRIPPER_CMD
 std::string reply_channel();    // SB_SIM_CMD_REPLY
 
@@ -84,7 +93,10 @@ class SimServer {
   std::unique_ptr<Physics> physics_;
   std::unique_ptr<RpcServer> rpc_;
   BadInputCounter bad_{"sim_server"};
-  std::vector<skillbus_msgs::sim_cmd_reply_t> pending_replies_;
+  struct Reply {
+    std::string id, command, error;  // command: "arm" (SB_ROBOT_CMD_REPLY) or "gripper" (SB_SIM_CMD_REPLY)
+  };
+  std::vector<Reply> pending_replies_;  // published at the next frame's start, in this order
   long accepted_ = 0, rejected_ = 0;
   int64_t frame_ = -1, sim_time_ns_ = 0;
   bool paused_ = false;

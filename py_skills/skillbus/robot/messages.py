@@ -1,0 +1,64 @@
+"""The robot's channels and a builder for its arm command: what any robot's drivers speak
+(the physics server is one implementation, a real arm's driver and camera another).
+
+| channel | type | who publishes |
+|---|---|---|
+| SB_ROBOT_ARM_STATE | robot_arm_state_t | the arm's driver, every frame: arm joints, tool pose, the trajectory tracked |
+| SB_ROBOT_OBJECTS | robot_objects_t | the camera's driver: every object seen, name and world pose |
+| SB_ROBOT_ARM_CMD | robot_arm_cmd_t | the skills (skillbus.robot.arm), scripts: a timed joint trajectory |
+| SB_ROBOT_CMD_REPLY | robot_cmd_reply_t | the arm's driver: each command accepted, or rejected with why |
+
+Nothing here knows the simulator (docs/sim_server.md, "Robot interface").
+
+>>> m = arm_command("up", ["joint2"], [(1.0, [0.3])])
+>>> m.joint_names, m.points[0].time_from_start_ns, m.points[0].positions
+(['joint2'], 1000000000, [0.3])
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from skillbus.bus import channel
+from skillbus.msgs import joint_traj_point_t, robot_arm_cmd_t
+
+
+def arm_state_channel() -> str:
+    return channel("SB_ROBOT_ARM_STATE")
+
+
+def arm_cmd_channel() -> str:
+    return channel("SB_ROBOT_ARM_CMD")
+
+
+def reply_channel() -> str:
+    return channel("SB_ROBOT_CMD_REPLY")
+
+
+def objects_channel() -> str:
+    return channel("SB_ROBOT_OBJECTS")
+
+
+def traj_point(t: float, positions: Sequence[float]) -> joint_traj_point_t:
+    """A trajectory point due `t` seconds after the command's start (no velocities: the
+    follower derives them)."""
+    p = joint_traj_point_t()
+    p.time_from_start_ns = int(round(t * 1e9))
+    p.positions = [float(x) for x in positions]
+    p.num_positions = len(p.positions)
+    p.velocities, p.num_velocities = [], 0
+    return p
+
+
+def arm_command(cmd_id: str, joints: Sequence[str],
+                points: Sequence[tuple[float, Sequence[float]] | joint_traj_point_t]) -> robot_arm_cmd_t:
+    """A timed joint trajectory: points are (seconds from start, positions) or ready
+    joint_traj_point_t. A single point at 0 s is a position target timed by the velocity
+    limits."""
+    m = robot_arm_cmd_t()
+    m.id = cmd_id
+    m.joint_names = list(joints)
+    m.num_joints = len(m.joint_names)
+    m.points = [p if isinstance(p, joint_traj_point_t) else traj_point(p[0], p[1]) for p in points]
+    m.num_points = len(m.points)
+    return m
