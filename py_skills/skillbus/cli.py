@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from skillbus.log import setup_logging
@@ -99,6 +100,11 @@ def main(argv: list[str] | None = None) -> int:
     except BusError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
+    except BrokenPipeError:
+        # The reader of our output went away (skillbus skills | head): it read what it
+        # wanted. Nothing more may be written to the closed pipe, not even at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:  # Ctrl-C in a command that has nothing to clean up: no traceback
         print("interrupted", file=sys.stderr)
         return 130

@@ -12,6 +12,8 @@ def setup_logging(level: str | None = None) -> None:
     level = (level or os.environ.get("SKILLBUS_LOG_LEVEL", "info")).upper()
     logging.basicConfig(stream=sys.stderr, level=getattr(logging, level, logging.INFO),
                         format="[%(levelname)s] %(name)s: %(message)s")
+    if level != "DEBUG":  # the canopen library narrates every PDO it reads at INFO: only its warnings
+        logging.getLogger("canopen").setLevel(logging.WARNING)
 
 
 class BadInputCounter:

@@ -150,6 +150,8 @@ def main_log(args) -> int:
             return 0
         for line in lines(args.file, args.node_id, args.eds or EDS):
             print(line)
+    except BrokenPipeError:
+        raise  # the reader went away (| head): the CLI ends quietly
     except (OSError, ValueError) as e:
         print(f"error: {args.file}: {e}", file=sys.stderr)
         return 2

@@ -112,6 +112,8 @@ def main(args: argparse.Namespace) -> int:
         elif c == "tree":
             print(json.dumps(containment_tree(wmi), indent=2)) if args.json else print_tree(wmi)
         return 0
+    except BrokenPipeError:
+        raise  # the reader went away (skillbus wm tree | head): not an error of the world model
     except (WorldModelError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
