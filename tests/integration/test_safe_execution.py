@@ -147,15 +147,21 @@ def test_a_consumer_that_empties_its_queue_finishes(system):
     assert "drained in 4 ticks" in out, out
 
 
-# ---- 12. remaps and specifies to keys that do not exist -----------------------------
-def test_a_remap_of_a_missing_key_is_an_error_naming_it(system):
-    rc, out, _ = run(system, "BadRemap")
-    assert rc == 1 and "remap Inn -> Out: Echo has no parameter Inn" in out, out
+# ---- 12. what a compound's tree fixes for its children is checked (and item 1's siblings)
+TREES = [
+    # skill, exit code, what the result must say
+    ("BadRemap", 1, "remap Inn -> Out: Echo has no parameter Inn"),          # a remap of a missing key
+    ("BadSpecify", 1, "specify NN: Echo has no parameter NN"),               # a specify of a missing key
+    ("BadSpecifyType", 1, "specify N: parameter N of Echo is a int, not a str"),  # of the wrong type
+    ("CountTwo", 0, "2 items: ['a', 'b']"),                                   # a specified list: one list
+    ("Greet", 0, "greeting ready"),                                           # onInit on the running instance
+]
 
 
-def test_a_specify_of_a_missing_key_is_an_error_naming_it(system):
-    rc, out, _ = run(system, "BadSpecify")
-    assert rc == 1 and "specify NN: Echo has no parameter NN" in out, out
+@pytest.mark.parametrize("skill,code,said", TREES, ids=[t[0] for t in TREES])
+def test_trees_and_instances(system, skill, code, said):
+    rc, out, _ = run(system, skill)
+    assert rc == code and said in out, out
 
 
 # ---- 13. a hold-condition false at start ---------------------------------------------
@@ -211,18 +217,3 @@ def test_a_processor_the_manager_does_not_know_is_reported_at_registration_and_e
     assert "processor Invert" not in proc.stderr()  # every standard class has its C++ counterpart
     rc, out, _ = run(system, "UsesFancy")
     assert rc == 1 and "unknown processor 'Fancy' (known: InferInvalid, Invert(processor), Loop(n)" in out, out
-
-
-def test_every_instance_that_runs_is_initialised(system):
-    rc, out, _ = run(system, "Greet")
-    assert rc == 0 and "greeting ready" in out, out
-
-
-def test_a_list_specified_by_a_compound_arrives_as_one_list(system):
-    rc, out, _ = run(system, "CountTwo")
-    assert rc == 0 and "2 items: ['a', 'b']" in out, out
-
-
-def test_a_specified_value_of_the_wrong_type_is_an_error_naming_it(system):
-    rc, out, _ = run(system, "BadSpecifyType")
-    assert rc == 1 and "specify N: parameter N of Echo is a int, not a str" in out, out
