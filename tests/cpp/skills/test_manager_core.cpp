@@ -1,0 +1,129 @@
+// The skill manager's core without processes: the registry, the blackboard seen through
+// scopes (remaps, specified values, a user's values) and the gathering of a node's
+// parameters.
+#include <gtest/gtest.h>
+
+#include "blackboard.hpp"
+#include "registry.hpp"
+#include "skill_params.hpp"
+
+using namespace skillbus::skills;
+using skillbus_msgs::skill_param_t;
+using skillbus_msgs::skill_value_t;
+
+namespace {
+
+skillbus_msgs::skill_description_t description(const std::string& type, const std::string& label) {
+  skillbus_msgs::skill_description_t d{};
+  d.type = type;
+  d.label = label;
+  return d;
+}
+
+skillbus_msgs::skill_register_t announcement(const std::string& process, int64_t incarnation,
+                                             std::vector<skillbus_msgs::skill_description_t> skills) {
+  skillbus_msgs::skill_register_t r{};
+  r.process = process;
+  r.rpc_area = "SKPROC_" + process;
+  r.incarnation = incarnation;
+  r.skills = std::move(skills);
+  r.num_skills = static_cast<int32_t>(r.skills.size());
+  return r;
+}
+
+Param value(const std::string& key, int64_t i) {
+  Param p{};
+  p.key = key;
+  p.data_type = "int";
+  skill_value_t v{};
+  v.type = skill_value_t::INT;
+  v.i = i;
+  p.values = {v};
+  p.num_values = 1;
+  return p;
+}
+
+Param decl(const std::string& key, int8_t kind, std::vector<int64_t> defaults = {}) {
+  Param p = value(key, 0);
+  p.values.clear();
+  p.num_values = 0;
+  p.param_type = kind;
+  for (int64_t d : defaults) p.defaults.push_back(value(key, d).values[0]);
+  p.num_defaults = static_cast<int32_t>(p.defaults.size());
+  return p;
+}
+
+}  // namespace
+
+TEST(Registry, AnnouncementsReplaceAProcessesSkillsAndLabelsAreUnique) {
+  Registry r;
+  EXPECT_TRUE(r.add(announcement("a", 1, {description("Pick", "pick"), description("Place", "place")})).empty());
+  const auto refused = r.add(announcement("b", 7, {description("Pick", "pick"), description("Pick", "pick_fast")}));
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_EQ(refused[0], "skill pick of b: the label is served by a");
+  EXPECT_EQ(r.find("Pick").size(), 2u);          // pick (a) and pick_fast (b), in label order
+  EXPECT_EQ(r.find("Pick", "pick_fast").front()->process, "b");
+  r.add(announcement("a", 2, {description("Place", "place")}));  // a restarted, without Pick now
+  EXPECT_EQ(r.find("Pick").size(), 1u);
+  EXPECT_EQ(r.incarnation_of("a"), 2);
+  EXPECT_EQ(r.processes(), (std::vector<std::string>{"a", "b"}));
+}
+
+TEST(Registry, ADroppedProcessIsNamedUntilItsTypeIsServedAgain) {
+  Registry r;
+  r.add(announcement("echoes", 1, {description("Echo", "echo")}));
+  r.remove("echoes", "skill process echoes stopped answering");
+  EXPECT_TRUE(r.find("Echo").empty());
+  EXPECT_EQ(r.incarnation_of("echoes"), 0);
+  EXPECT_EQ(r.gone("Echo"), "skill process echoes stopped answering");
+  r.add(announcement("echoes", 2, {description("Echo", "echo")}));
+  EXPECT_EQ(r.gone("Echo"), "");
+}
+
+TEST(Scope, RemapsComposeDownTheTreeAndSpecifiedValuesReachDescendants) {
+  Scope root;
+  auto pick = root.child({{"Target", "Object"}}, {});           // Pick's child MoveArm reads Target as Object
+  auto move = pick->child({{"Goal", "Target"}}, {});            // and a grandchild reads Goal as that
+  EXPECT_EQ(move->key("Goal"), "Object");
+  EXPECT_EQ(move->key("Other"), "Other");
+  auto fixed = root.child({}, {{"Object", value("Object", 3)}});  // a compound's specify
+  auto under = fixed->child({{"Target", "Object"}}, {});
+  ASSERT_NE(under->specified("Target"), nullptr);
+  EXPECT_EQ(under->specified("Target")->values[0].i, 3);
+  EXPECT_EQ(under->specified("Speed"), nullptr);
+}
+
+TEST(GatherParams, OrderIsSpecifiedStaticUnlessGivenBlackboardDefault) {
+  auto d = description("Echo", "echo");
+  d.params = {decl("N", skill_param_t::REQUIRED, {1}),   // static
+              decl("M", skill_param_t::OPTIONAL, {2}),   // a default
+              decl("K", skill_param_t::REQUIRED)};       // must be given
+  d.num_params = 3;
+  Blackboard bb;
+  Scope root;
+  std::string missing;
+  auto ps = gather_params(d, root, bb, &missing);
+  EXPECT_EQ(ps[0].values[0].i, 1);
+  EXPECT_EQ(ps[1].values[0].i, 2);
+  EXPECT_EQ(missing, "missing parameter K of Echo");
+  bb.set("N", value("N", 9));  // a skill wrote N: the static value still wins
+  bb.set("M", value("M", 8));  // the blackboard beats a default
+  bb.give("K", value("K", 5));
+  missing.clear();
+  ps = gather_params(d, root, bb, &missing);
+  EXPECT_EQ(ps[0].values[0].i, 1);
+  EXPECT_EQ(ps[1].values[0].i, 8);
+  EXPECT_EQ(ps[2].values[0].i, 5);
+  EXPECT_EQ(missing, "");
+  bb.give("N", value("N", 5));  // the user's value beats the static one
+  ps = gather_params(d, root, bb, nullptr);
+  EXPECT_EQ(ps[0].values[0].i, 5);
+}
+
+TEST(SameValues, ComparesByEncodingIncludingEmptiness) {
+  EXPECT_TRUE(same_values(value("N", 1), value("N", 1)));
+  EXPECT_FALSE(same_values(value("N", 1), value("N", 2)));
+  Param emptied = value("N", 1);
+  emptied.values.clear();
+  EXPECT_FALSE(same_values(value("N", 1), emptied));  // an emptied value is a change
+}
