@@ -15,12 +15,14 @@ PROBE = r'''
 import json, sys
 from pathlib import Path
 
+import skillbus.skills.gripper  # noqa: F401
 import skillbus.skills.manipulation  # noqa: F401
 from skillbus.msgs import motion_plan_t, robot_arm_state_t, robot_object_t, robot_objects_t
 from skillbus.robot import arm, camera
 from skillbus.robot.messages import traj_point
 
-out = {"sim_modules": sorted(m for m in sys.modules if m == "skillbus.sim" or m.startswith("skillbus.sim."))}
+out = {"sim_modules": sorted(m for m in sys.modules if m == "skillbus.sim" or m.startswith("skillbus.sim.")
+                            or m.startswith("skillbus.can.device"))}  # the simulated gripper device too
 out["naming_sb_sim"] = sorted(
     name for name, m in sys.modules.items()
     if (name == "skillbus" or name.startswith("skillbus.")) and getattr(m, "__file__", None) and "SB_SIM_" in Path(m.__file__).read_text())

@@ -22,7 +22,7 @@ import can
 import canopen
 
 from skillbus.can import cia402 as c
-from skillbus.can.device import EDS
+from skillbus.can.eds import EDS
 
 NMT_COMMANDS = {0x01: "start", 0x02: "stop", 0x80: "enter pre-operational", 0x81: "reset node",
                 0x82: "reset communication"}

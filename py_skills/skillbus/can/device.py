@@ -30,10 +30,10 @@ from pathlib import Path
 import canopen
 
 from skillbus.can import cia402 as c
+from skillbus.can.eds import EDS  # noqa: F401  (also the runners' import)
 from skillbus.can.fingers import MAX_WIDTH_UM, FingerModel, SimFingers
 
 log = logging.getLogger("gripper-device")
-EDS = Path(__file__).resolve().parents[3] / "deploy" / "can" / "skillbus_gripper.eds"
 RATED_FORCE = 400            # 40 N: above this, a long block is an over-current fault
 BLOCKED_TIMEOUT_S = 1.0
 

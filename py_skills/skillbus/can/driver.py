@@ -31,7 +31,7 @@ import canopen
 
 from skillbus import tick_context
 from skillbus.can import cia402 as c
-from skillbus.can.device import EDS
+from skillbus.can.eds import EDS
 from skillbus.waiting import WaitTimeout, wait_until
 
 log = logging.getLogger("gripper-driver")
