@@ -1,5 +1,6 @@
 #include "skillbus/scene/scene.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -85,6 +86,16 @@ void check_file(const Reader& r, const std::string& key, const std::string& path
   if (!fs::is_regular_file(path)) r.fail_field(key, "names a file that does not exist: " + path);
 }
 
+// A concept of the world model's ontology without "skiros:" (it becomes part of an IRI,
+// skiros:<type>-<n>): a letter, then letters, digits or _.
+std::string concept_type(const Reader& r, const std::string& def) {
+  const std::string t = r.str("type", def);
+  bool ok = !t.empty() && std::isalpha(static_cast<unsigned char>(t[0]));
+  for (char c : t) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+  if (!ok) r.fail_field("type", "must be a concept name (a letter, then letters, digits or _), not '" + t + "'");
+  return t;
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& path) {
@@ -130,6 +141,8 @@ Scene parse_scene(const std::string& text, const std::string& path) {
     s.robot.tool_offset = r.num("tool_offset", 0.0);
     s.robot.left_finger_joint = r.str("left_finger_joint", "", true);
     s.robot.right_finger_joint = r.str("right_finger_joint", "", true);
+    s.robot.arm = r.str("arm", "arm");
+    s.robot.gripper = r.str("gripper", "gripper");
     if (r.has("initial_joints")) {
       const json& ij = r.sub("initial_joints");
       if (!ij.is_object()) r.fail_field("initial_joints", "must be an object {joint: position}");
@@ -153,7 +166,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
       FixtureSpec f;
       f.name = r.str("name", "", true);
       unique_name(r, f.name);
-      f.type = r.str("type", "Fixture");
+      f.type = concept_type(r, f.type);
       f.urdf = resolve(base, r.str("urdf", "", true));
       check_file(r, "urdf", f.urdf);
       f.pose = r.pose("pose");
@@ -170,7 +183,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
       ObjectSpec o;
       o.name = r.str("name", "", true);
       unique_name(r, o.name);
-      o.type = r.str("type", "Object");
+      o.type = concept_type(r, o.type);
       o.shape = r.str("shape", "", true);
       if (o.shape == "box") {
         o.size = r.vec<3>("size", {}, true);
@@ -202,6 +215,50 @@ Scene parse_scene(const std::string& text, const std::string& path) {
     }
   }
   return s;
+}
+
+std::string to_json(const Scene& s, int indent) {
+  using oj = nlohmann::ordered_json;
+  auto pose = [](const Pose& p) { return oj(std::vector<double>(p.begin(), p.end())); };
+  oj j;
+  j["name"] = s.name;
+  j["physics"] = {{"step_ms", s.physics.step_ms},
+                  {"frame_ms", s.physics.frame_ms},
+                  {"gravity", std::vector<double>(s.physics.gravity.begin(), s.physics.gravity.end())},
+                  {"collision_detector", s.physics.collision_detector},
+                  {"lcp_solver", s.physics.lcp_solver}};
+  oj joints = oj::object();
+  for (const auto& [name, q] : s.robot.initial_joints) joints[name] = q;
+  j["robot"] = {{"name", s.robot.name},
+                {"urdf", s.robot.urdf},
+                {"pose", pose(s.robot.pose)},
+                {"tool_link", s.robot.tool_link},
+                {"tool_offset", s.robot.tool_offset},
+                {"left_finger_joint", s.robot.left_finger_joint},
+                {"right_finger_joint", s.robot.right_finger_joint},
+                {"initial_joints", joints},
+                {"arm", s.robot.arm},
+                {"gripper", s.robot.gripper}};
+  j["fixtures"] = oj::array();
+  for (const auto& f : s.fixtures)
+    j["fixtures"].push_back(
+        {{"name", f.name}, {"type", f.type}, {"urdf", f.urdf}, {"pose", pose(f.pose)}, {"friction", f.friction}});
+  j["objects"] = oj::array();
+  for (const auto& o : s.objects) {
+    oj e = {{"name", o.name}, {"type", o.type}, {"shape", o.shape}};
+    if (o.shape == "box") {
+      e["size"] = std::vector<double>(o.size.begin(), o.size.end());
+    } else {
+      e["radius"] = o.size[0];
+      e["height"] = o.size[1];
+    }
+    e["mass"] = o.mass;
+    e["friction"] = o.friction;
+    e["pose"] = pose(o.pose);
+    if (!o.on.empty()) e["on"] = o.on;
+    j["objects"].push_back(e);
+  }
+  return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 Scene load_scene(const std::string& path) {

@@ -29,16 +29,20 @@ struct RobotSpec {
   std::string tool_link;                    // the link the tool centre point hangs on
   double tool_offset = 0.0;                 // m along that link's z axis
   std::string left_finger_joint, right_finger_joint;
+  std::string arm = "arm", gripper = "gripper";  // labels of the world model's Arm and Gripper
 };
 
 struct FixtureSpec {
-  std::string name, type, urdf;
+  std::string name;
+  std::string type = "Location";            // the world model's concept, without "skiros:"
+  std::string urdf;
   Pose pose{0, 0, 0, 0, 0, 0, 1};
   double friction = 0.8;
 };
 
 struct ObjectSpec {
-  std::string name, type;
+  std::string name;
+  std::string type = "Product";             // the world model's concept, without "skiros:"
   std::string shape;                        // "box" or "cylinder"
   std::array<double, 3> size{0, 0, 0};      // box: x y z; cylinder: radius, height, 0
   double mass = 0.1;                        // kg
@@ -67,6 +71,13 @@ struct Scene {
 // Reads and checks a scene file. Throws SceneError naming the file and the offending
 // field (e.g. "scene.json: objects[1].mass must be > 0").
 Scene load_scene(const std::string& path);
+// `path` names the file in messages and is the folder relative URDF paths start from
+// ("": "<scene>" in messages, the current folder).
 Scene parse_scene(const std::string& json_text, const std::string& path);
+
+// The scene as a scene file again, normalized: every default filled in, URDF paths
+// absolute, quaternions unit (what `sb_scene check --json` prints). Reading it back gives
+// the same Scene. indent < 0: one line.
+std::string to_json(const Scene& scene, int indent = -1);
 
 }  // namespace skillbus::scene
