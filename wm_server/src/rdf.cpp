@@ -2,6 +2,7 @@
 
 #include <serd/serd.h>
 
+#include <cctype>
 #include <cstdarg>
 #include <cstdio>
 
@@ -145,6 +146,28 @@ SerdNode term_node(const Term& t) {
   }
 }
 
+// The prefixed name of an IRI ("skiros:Cube-2") when its local part is a plain Turtle
+// local name, else "". serd writes an IRI as a prefixed name only when its local part is
+// letters and digits, so ids such as Cube-2 would come out as full <...#Cube-2>.
+std::string prefixed_name(const std::string& iri, const Prefixes& prefixes) {
+  const std::string c = prefixes.compact(iri);
+  if (c == iri) return "";
+  const std::string local = c.substr(c.find(':') + 1);
+  bool ok = !local.empty() && local[0] != '-';
+  for (char ch : local) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-');
+  return ok ? c : "";
+}
+
+// A subject or object: an IRI as a prefixed name where one fits (predicates stay IRIs:
+// serd writes rdf:type as "a" and the others' local parts are plain names).
+SerdNode resource_node(const Term& t, const Prefixes& prefixes, std::string& storage) {
+  if (t.kind == Term::Iri) {
+    storage = prefixed_name(t.value, prefixes);
+    if (!storage.empty()) return serd_node_from_string(SERD_CURIE, reinterpret_cast<const uint8_t*>(storage.c_str()));
+  }
+  return term_node(t);
+}
+
 }  // namespace
 
 std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& prefixes) {
@@ -159,7 +182,8 @@ std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& pre
     serd_writer_set_prefix(w, &name, &uri);
   }
   for (const auto& t : triples) {
-    SerdNode s = term_node(t.s), p = term_node(t.p), o = term_node(t.o);
+    std::string s_name, o_name;
+    SerdNode s = resource_node(t.s, prefixes, s_name), p = term_node(t.p), o = resource_node(t.o, prefixes, o_name);
     SerdNode dt = t.o.datatype.empty() ? SERD_NODE_NULL : uri_node(t.o.datatype);
     SerdNode lang =
         t.o.lang.empty() ? SERD_NODE_NULL : serd_node_from_string(SERD_LITERAL, reinterpret_cast<const uint8_t*>(t.o.lang.c_str()));

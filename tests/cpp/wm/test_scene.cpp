@@ -77,6 +77,21 @@ TEST(Scene, SaveThenLoadGivesTheSameWorld) {
   EXPECT_EQ(write_scene(b, px2), text);  // and saving is stable
 }
 
+TEST(Scene, IdsAreWrittenAsPrefixedNames) {
+  // serd alone would write <http://rvmi.aau.dk/ontologies/skiros.owl#Cube-1>
+  Ontology onto = ontology();
+  WorldStore a(onto);
+  a.apply({add(element("", "skiros:Cube", "c", {{"skiros:PositionX", {0.5}}}))});
+  const std::string text = write_scene(a, Prefixes());
+  EXPECT_NE(text.find("skiros:Cube-1\n\ta skiros:Cube"), std::string::npos) << text;
+  auto count = [&](const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("<http"), count("@prefix")) << text;  // full IRIs only in the @prefix lines
+}
+
 TEST(Scene, ExactFloatsSurviveTheRoundTrip) {
   Ontology onto = ontology();
   WorldStore a(onto);
