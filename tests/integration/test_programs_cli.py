@@ -23,6 +23,7 @@ PROGRAMS = {
                    "--speed", "--frames", "--duration-s", "--pipeline", "--collision",
                    "--step-ms", "--frame-ms", "--join-timeout-ms", "--ack-timeout-ms", "--message-timeout-ms"],
     "motion_server": ["--url", "--scene"],
+    "sb_scene": [],  # its subcommands check and turtle (their options: tests/py/test_scene_file.py)
     "sb_clock": ["--url", "--name", "--participants", "--frames", "--period-ms", "--join-timeout-ms",
                  "--ack-timeout-ms", "--message-timeout-ms", "--lose-clocks-every", "--demo"],
     "sb_demo_participant": ["--url", "--name", "--wall-clock", "--frames", "--clock-timeout-ms",

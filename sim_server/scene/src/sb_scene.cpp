@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
                "naming the file and the field, exit 2.",
                "sb_scene"};
   apps::configure(app);
-  app.require_subcommand(1);
+  app.require_subcommand(0, 1);  // one; checked after parsing, so that a wrong option is named first
   std::string file, out;
   bool as_json = false;
   CLI::App* check = app.add_subcommand("check", "check a scene file; --json: print it normalized (defaults filled "
@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
   turtle->add_option("FILE", file, "the scene file ('-': standard input)")->required();
   turtle->add_option("-o,--output", out, "write here instead of standard output")->type_name("OUT");
   apps::parse_or_exit(app, argc, argv);
+  if (!check->parsed() && !turtle->parsed()) apps::usage_error(app, "a subcommand is required: check or turtle");
 
   scene::Scene s;
   std::string text;
