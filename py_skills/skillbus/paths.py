@@ -20,6 +20,7 @@ _PROGRAMS = {
     "wm_server": "wm_server",
     "skill_mgr": "skill_mgr",
     "sim_server": "sim_server",
+    "sb_scene": "sim_server",
     "motion_server": "motion_server",
     "codec_peer": "tests/cpp",
 }

@@ -1,7 +1,11 @@
 """Scene files on the Python side: the world model's Turtle scene is generated from the
-same file as the physics server's world."""
+same file as the physics server's world, and both are read and checked by one reader
+(sb_scene, the physics server's C++ reader), so Python accepts exactly what the physics
+server accepts and names a mistake the same way."""
 
 import json
+import subprocess
+import sys
 
 import pytest
 
@@ -23,15 +27,87 @@ def test_positions_become_relative_to_the_containing_fixture():
     assert p[3:] == pytest.approx([0, 0, -s, s])     # and the object is turned back
 
 
-def test_mistakes_are_named(tmp_path):
-    f = tmp_path / "s.json"
-    f.write_text(json.dumps({"robot": {"name": "r"}, "fixtures": [{"name": "t"}],
-                             "objects": [{"name": "c", "on": "shelf"}]}))
-    with pytest.raises(scene.SceneError, match=r"objects\[0\].on names 'shelf', which is not a fixture"):
+def demo_doc() -> dict:
+    return json.loads(paths.demo_scene().read_text())
+
+
+def refused(tmp_path, doc) -> str:
+    f = tmp_path / "s.scene.json"
+    if isinstance(doc, str):
+        f.write_text(doc)
+    else:
+        scene.save(doc, f, paths.demo_scene())
+    with pytest.raises(scene.SceneError) as e:
         scene.load(f)
-    f.write_text(json.dumps({"robot": {"name": "r"}, "objects": [{"name": "c", "pose": [0, 0, 0]}]}))
-    with pytest.raises(scene.SceneError, match=r"objects\[0\].pose must be 7 numbers"):
-        scene.load(f)
-    f.write_text("{")
-    with pytest.raises(scene.SceneError):
-        scene.load(f)
+    message = str(e.value)
+    assert message.startswith(f"{f}: "), message  # the file, then the field
+    return message[len(f"{f}: "):]
+
+
+def test_mistakes_are_named_with_their_field(tmp_path):
+    d = demo_doc()
+    del d["objects"][0]["size"]
+    assert refused(tmp_path, d) == "objects[0].size is missing"           # was a KeyError traceback
+    d = demo_doc()
+    d["objects"][1]["mass"] = -0.2
+    assert refused(tmp_path, d) == "objects[1].mass must be > 0"          # was accepted
+    d = demo_doc()
+    d["objects"][0]["on"] = "shelf"
+    assert refused(tmp_path, d) == "objects[0].on names 'shelf', which is not a fixture"
+    d = demo_doc()
+    d["objects"][2]["pose"] = [0, 0, 0]
+    assert refused(tmp_path, d) == "objects[2].pose must be an array of 7 numbers"
+    d = demo_doc()
+    d["fixtures"][1]["name"] = "table"
+    assert refused(tmp_path, d) == "fixtures[1].name 'table' is used twice in the scene"
+    d = demo_doc()
+    d["objects"][0]["type"] = "Red Cube"
+    assert refused(tmp_path, d).startswith("objects[0].type must be a concept name")
+    d = demo_doc()
+    del d["robot"]
+    assert refused(tmp_path, d) == "robot is missing"
+    assert refused(tmp_path, "{").startswith("not valid JSON: ")
+    with pytest.raises(scene.SceneError, match=r"cannot open the scene file"):
+        scene.load(tmp_path / "none.scene.json")
+
+
+def test_load_gives_the_scene_normalized():
+    s = scene.load(paths.demo_scene())
+    assert s["robot"]["urdf"] == str(paths.REPO_ROOT / "sim_server" / "models" / "arm6.urdf")  # absolute
+    assert s["physics"]["lcp_solver"] == "dantzig"  # a default filled in
+    assert [o["name"] for o in s["objects"]] == ["red", "green", "blue"]
+    assert s["objects"][0]["pose"] == [0.4, 0.15, 0.425, 0.0, 0.0, 0.0, 1.0]
+
+
+def test_defaults_and_a_quaternion_normalized(tmp_path):
+    d = demo_doc()
+    d["objects"] = [{"name": "can", "shape": "cylinder", "radius": 0.03, "height": 0.1, "pose": [0, 0, 0.05, 0, 0, 2, 2]}]
+    f = scene.save(d, tmp_path / "can.scene.json", paths.demo_scene())
+    can = scene.load(f)["objects"][0]
+    assert can["type"] == "Product" and can["mass"] == 0.1 and can["friction"] == 0.8 and "on" not in can
+    assert can["pose"][3:] == pytest.approx([0, 0, 2 ** -0.5, 2 ** -0.5])
+
+
+def test_a_changed_document_is_numbered_again():
+    belief = scene.load(paths.demo_scene())
+    belief["objects"] = [o for o in belief["objects"] if o["name"] != "green"]
+    ttl = scene.to_turtle(belief)
+    assert "skiros:Cube-3\n\ta skiros:Cube ,\n\t\towl:NamedIndividual ;\n\trdfs:label \"blue\"" in ttl
+    assert "skiros:Robot-5\n" in ttl and "green" not in ttl
+
+
+def skillbus_scene(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "skillbus.cli", "scene", *args], capture_output=True, text=True,
+                          timeout=60)
+
+
+def test_the_command_line_checks_and_names_the_field(tmp_path):
+    r = skillbus_scene("check", str(paths.demo_scene()))
+    assert r.returncode == 0 and "a valid scene ('demo': robot 'arm_robot', 2 fixture(s), 3 object(s))" in r.stdout
+    d = demo_doc()
+    del d["objects"][0]["size"]
+    f = scene.save(d, tmp_path / "nosize.scene.json", paths.demo_scene())
+    for action in ("check", "turtle"):
+        r = skillbus_scene(action, str(f))
+        assert r.returncode == 2 and r.stderr == f"error: {f}: objects[0].size is missing\n", r.stderr
+        assert r.stdout == ""

@@ -1,5 +1,5 @@
 """Command-line parts for the physics server: ``skillbus sim ...``, ``skillbus sim-script``
-and ``skillbus scene turtle``."""
+and ``skillbus scene check|turtle`` (which run sb_scene, the C++ reader and Turtle writer)."""
 
 from __future__ import annotations
 
@@ -25,10 +25,13 @@ def add_parsers(sub) -> None:
     p.add_argument("--out", default=None, help="write the recorded states and replies here (JSON)")
     p.add_argument("--clock-timeout", type=float, default=10.0)
 
-    sc = sub.add_parser("scene", help="scene files: turn one into the world model's Turtle scene")
-    sc.add_argument("action", choices=["turtle"])
+    sc = sub.add_parser("scene", help="scene files: check one, or turn it into the world model's Turtle scene")
+    sc.add_argument("action", choices=["check", "turtle"],
+                    help="check: the physics server's checks (one line, or --json the normalized scene); "
+                         "turtle: the world model's Turtle scene")
     sc.add_argument("scene", help="the scene file (JSON, docs/scene.md)")
     sc.add_argument("-o", "--output", default=None, help="write here instead of stdout")
+    sc.add_argument("--json", action="store_true", help="check: print the normalized scene (JSON)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -38,8 +41,13 @@ def main(args: argparse.Namespace) -> int:
     if args.command == "scene":
         from skillbus.sim import scene
         try:
-            text = scene.to_turtle(scene.load(args.scene))
-        except scene.SceneError as e:
+            if args.action == "turtle":
+                text = scene.to_turtle(scene.load(args.scene))
+            elif args.json:
+                text = json.dumps(scene.load(args.scene), indent=1) + "\n"
+            else:
+                text = scene.check(args.scene) + "\n"
+        except (scene.SceneError, FileNotFoundError) as e:
             print(f"error: {e}", file=sys.stderr)
             return 2
         if args.output:

@@ -2,128 +2,69 @@
 model's Turtle scene so that the world model (belief) and the physics server (truth)
 start from the same file.
 
-Element ids follow the file: Scene-0, then each fixture followed by the objects that
-start on it, then objects on nothing, then the robot with its gripper and arm. Poses in
-the scene file are in the world frame; in the world model a pose is relative to the
-element that contains it (docs/world_model.md), so positions are converted.
+There is one reader and one Turtle writer, in C++: the program ``sb_scene``
+(sim_server/scene), built on the library the physics server and the motion server read
+scene files with. This module runs it: ``load`` is ``sb_scene check FILE --json`` (the
+physics server's checks; the scene normalized: defaults filled in, URDF paths absolute,
+unit quaternions), ``to_turtle`` is ``sb_scene turtle`` (element ids in the file's order,
+poses relative to the container, labels escaped by the world model's Turtle writer). A
+scene that does not pass raises SceneError with the program's message, which names the
+file and the field.
 """
 
 from __future__ import annotations
 
 import json
-import math
+import subprocess
 from pathlib import Path
 from typing import Any
 
+from skillbus import paths
 from skillbus.quat import relative
+
+_PREFIX = "sb_scene: error: "
+
 
 class SceneError(ValueError):
     pass
 
 
 def relative_pose(parent: list[float], child: list[float]) -> list[float]:
-    """child's pose in parent's frame (both x y z qx qy qz qw in the world frame)."""
+    """child's pose in parent's frame (both x y z qx qy qz qw in the world frame).
+
+    >>> relative_pose([1, 0, 0, 0, 0, 0, 1], [1.5, 0.2, 0.5, 0, 0, 0, 1])
+    [0.5, 0.2, 0.5, 0, 0, 0, 1]
+    """
     p, q = relative(parent, child)
     return [*p, *q]
 
 
-def _pose(where: str, v: Any) -> list[float]:
-    if v is None:
-        return [0, 0, 0, 0, 0, 0, 1]
-    if not (isinstance(v, list) and len(v) == 7 and all(isinstance(x, (int, float)) for x in v)):
-        raise SceneError(f"{where}.pose must be 7 numbers: x y z qx qy qz qw")
-    n = math.sqrt(sum(x * x for x in v[3:]))
-    if n < 1e-9:
-        raise SceneError(f"{where}.pose has a zero quaternion")
-    return [float(x) for x in v[:3]] + [float(x) / n for x in v[3:]]
+def _run(*args: str, stdin: str | None = None) -> str:
+    """sb_scene's standard output; SceneError with its message when it refuses."""
+    r = subprocess.run([str(paths.binary("sb_scene")), *args], input=stdin, capture_output=True, text=True,
+                       timeout=60)
+    if r.returncode != 0:
+        lines = r.stderr.strip().splitlines() or [f"sb_scene {args[0]} ended with exit code {r.returncode}"]
+        raise SceneError(lines[-1].removeprefix(_PREFIX))
+    return r.stdout
+
+
+def check(path: str | Path) -> str:
+    """Checks a scene file; the program's one line ("FILE: a valid scene (...)")."""
+    return _run("check", str(path)).rstrip("\n")
 
 
 def load(path: str | Path) -> dict[str, Any]:
-    try:
-        s = json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise SceneError(f"{path}: {e}") from e
-    if not isinstance(s, dict) or not isinstance(s.get("robot"), dict):
-        raise SceneError(f"{path}: needs a robot object")
-    s.setdefault("fixtures", [])
-    s.setdefault("objects", [])
-    names = {s["robot"].get("name")}
-    for kind in ("fixtures", "objects"):
-        for i, e in enumerate(s[kind]):
-            if not isinstance(e, dict) or not e.get("name"):
-                raise SceneError(f"{path}: {kind}[{i}] needs a name")
-            if e["name"] in names:
-                raise SceneError(f"{path}: {kind}[{i}].name '{e['name']}' is used twice in the scene")
-            names.add(e["name"])
-            e["pose"] = _pose(f"{path}: {kind}[{i}]", e.get("pose"))
-    fixtures = {f["name"] for f in s["fixtures"]}
-    for i, o in enumerate(s["objects"]):
-        if o.get("on") and o["on"] not in fixtures:
-            raise SceneError(f"{path}: objects[{i}].on names '{o['on']}', which is not a fixture")
-    return s
-
-
-def _num(v: float) -> str:
-    r = round(float(v), 6)
-    return repr(0.0 if r == 0 else r)
+    """The scene file at `path`, checked and normalized (a scene document again, with
+    every default filled in and URDF paths absolute, so it can be changed and written
+    anywhere)."""
+    return json.loads(_run("check", str(path), "--json"))
 
 
 def to_turtle(scene: dict[str, Any]) -> str:
-    ids: dict[str, str] = {}
-    order: list[tuple[str, dict[str, Any], dict[str, Any] | None]] = []  # (id, element, parent)
-    n = 1
-    for f in scene["fixtures"]:
-        ids[f["name"]] = f"{f.get('type', 'Location')}-{n}"
-        n += 1
-        order.append((ids[f["name"]], f, None))
-        for o in scene["objects"]:
-            if o.get("on") == f["name"]:
-                ids[o["name"]] = f"{o.get('type', 'Product')}-{n}"
-                n += 1
-                order.append((ids[o["name"]], o, f))
-    for o in scene["objects"]:
-        if not o.get("on"):
-            ids[o["name"]] = f"{o.get('type', 'Product')}-{n}"
-            n += 1
-            order.append((ids[o["name"]], o, None))
-    robot = scene["robot"]
-    rid, gid, aid = f"Robot-{n}", f"Gripper-{n + 1}", f"Arm-{n + 2}"
-
-    out = [f"# The {scene.get('name', 'scene')} world (world-model side), generated by "
-           f"`skillbus scene turtle` from its scene file: do not edit, regenerate.",
-           "@prefix skiros: <http://rvmi.aau.dk/ontologies/skiros.owl#> .",
-           "@prefix owl: <http://www.w3.org/2002/07/owl#> .",
-           "@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .",
-           "@prefix xsd: <http://www.w3.org/2001/XMLSchema#> .", ""]
-    top = [i for i, _, parent in order if parent is None] + [rid]
-    out.append(f"skiros:Scene-0 a skiros:Scene, owl:NamedIndividual ; rdfs:label \"{scene.get('name', 'scene')}\" ;")
-    out.append('    skiros:FrameId "map"^^xsd:string ;')
-    out.append("    skiros:contain " + ", ".join(f"skiros:{i}" for i in top) + " .")
-
-    def f(v: float) -> str:
-        return f'"{_num(v)}"^^xsd:float'
-
-    for eid, e, parent in order:
-        pose = relative_pose(parent["pose"], e["pose"]) if parent else e["pose"]
-        cls = eid.rsplit("-", 1)[0]
-        lines = [f"skiros:{eid} a skiros:{cls}, owl:NamedIndividual ; rdfs:label \"{e['name']}\" ;",
-                 f"    skiros:PositionX {f(pose[0])} ; skiros:PositionY {f(pose[1])} ; skiros:PositionZ {f(pose[2])} ;",
-                 f"    skiros:OrientationX {f(pose[3])} ; skiros:OrientationY {f(pose[4])} ; "
-                 f"skiros:OrientationZ {f(pose[5])} ; skiros:OrientationW {f(pose[6])}"]
-        if "shape" in e:
-            size = e["size"][0] if e["shape"] == "box" else 2 * e.get("radius", 0)
-            lines[-1] += f" ;\n    skiros:Size {f(size)} ; skiros:Weight {f(e.get('mass', 0.1))}"
-        children = [i for i, _, p in order if p is e]
-        if children:
-            lines[-1] += " ;\n    skiros:contain " + ", ".join(f"skiros:{i}" for i in children)
-        out.append("\n".join(lines) + " .")
-    rp = _pose("robot", robot.get("pose"))
-    out.append(f"skiros:{rid} a skiros:Robot, owl:NamedIndividual ; rdfs:label \"{robot['name']}\" ;\n"
-               f"    skiros:PositionX {f(rp[0])} ; skiros:PositionY {f(rp[1])} ; skiros:PositionZ {f(rp[2])} ;\n"
-               f"    skiros:hasA skiros:{gid}, skiros:{aid} .")
-    out.append(f"skiros:{gid} a skiros:Gripper, owl:NamedIndividual ; rdfs:label \"{robot.get('gripper', 'gripper')}\" .")
-    out.append(f"skiros:{aid} a skiros:Arm, owl:NamedIndividual ; rdfs:label \"{robot.get('arm', 'arm')}\" .")
-    return "\n".join(out) + "\n"
+    """The world model's Turtle scene for a scene document (from `load`, perhaps changed;
+    relative URDF paths in it start from the current folder). Checked as a file is."""
+    return _run("turtle", "-", stdin=json.dumps(scene))
 
 
 def save(doc: dict[str, Any], path: str | Path, source: str | Path) -> Path:
