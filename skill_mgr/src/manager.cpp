@@ -2,13 +2,13 @@
 
 #include <sstream>
 
+#include "liveness.hpp"
 #include "param_check.hpp"
 #include "remote_primitive.hpp"
 #include "skill_nodes.hpp"
 #include "skillbus_msgs/skill_processors_t.hpp"
 #include "skillbus_msgs/skill_state_t.hpp"
 #include "tree/processor_registry.hpp"
-#include "skillbus_msgs/skill_alive_t.hpp"
 #include "skillbus_msgs/skill_list_t.hpp"
 #include "skillbus_msgs/skill_register_t.hpp"
 
@@ -65,21 +65,12 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     start_task_ = next_task_;
     starts_.emplace_back(next_task_++, req);
   }
-  incarnation_ = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                     std::chrono::system_clock::now().time_since_epoch()).count();
-  if (opt_.wall_clock) {
-    bus_.subscribe(channel("SB_SKILL_HEARTBEAT"), [this](const std::string&, const uint8_t* data, size_t size) {
-      skill_alive_t a;
-      if (!decode_msg(data, size, a)) return;
-      // A heartbeat of an unknown process or of an older run of it is not a registration.
-      if (registry_.incarnation_of(a.sender) == a.incarnation) heard_from_[a.sender] = std::chrono::steady_clock::now();
-    });
-  }
+  if (opt_.wall_clock) liveness_ = std::make_unique<Liveness>(bus_, registry_, opt_.name, opt_.liveness_timeout);
   // RPC handlers only record requests: they can run while a tick waits for a skill
   // process, so they must not touch running trees.
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
     skill_register_t out = reg;
-    heard_from_[reg.process] = std::chrono::steady_clock::now();
+    if (liveness_) liveness_->registered(reg.process);
     out.errors = registry_.add(reg);
     out.num_errors = static_cast<int32_t>(out.errors.size());
     SB_INFO(kLog, "process " << reg.process << " registered " << reg.num_skills << " skill(s)"
@@ -271,10 +262,7 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     if (!world_.ensure(std::chrono::milliseconds(2000), &why)) SB_INFO(kLog, "no world model yet: " << why);
     last_world_try_ = std::chrono::steady_clock::now();
   }
-  if (opt_.wall_clock) {
-    announce();
-    drop_silent_processes();
-  }
+  if (liveness_) liveness_->on_frame();
   frame_ = frame;
   sim_time_ns_ = sim_time_ns;
   while (!stopped_queued_.empty()) {  // a task stopped before it began still ends visibly
@@ -334,36 +322,6 @@ std::string Manager::unknown_skill_error(const std::string& type, const std::str
                     " (available: " + (avail.empty() ? std::string("none") : avail) + ")";
   const std::string gone = registry_.gone(type);
   return gone.empty() ? out : out + "; " + gone;
-}
-
-void Manager::announce() {
-  const auto now = std::chrono::steady_clock::now();
-  if (now - last_announce_ < std::chrono::seconds(1)) return;
-  last_announce_ = now;
-  skill_alive_t a{};
-  a.header.frame = -1;
-  a.sender = opt_.name;
-  a.incarnation = incarnation_;
-  a.processes = registry_.processes();
-  a.num_processes = static_cast<int32_t>(a.processes.size());
-  publish_msg(bus_, channel("SB_SKILL_MANAGER"), a);
-}
-
-void Manager::drop_silent_processes() {
-  const auto now = std::chrono::steady_clock::now();
-  for (const auto& process : registry_.processes()) {
-    auto it = heard_from_.find(process);
-    if (it == heard_from_.end()) {
-      heard_from_[process] = now;  // registered before any heartbeat: count from now
-      continue;
-    }
-    if (now - it->second < opt_.liveness_timeout) continue;
-    const std::string why = "skill process " + process + " stopped answering (no heartbeat for " +
-                            std::to_string(opt_.liveness_timeout.count()) + " ms)";
-    registry_.remove(process, why);
-    heard_from_.erase(it);
-    SB_WARN(kLog, why << ": its skills are dropped until it registers again");
-  }
 }
 
 RunResult Manager::run_until(std::function<bool()> should_stop) {

@@ -9,6 +9,7 @@
 
 #include "registry.hpp"
 #include "blackboard.hpp"
+#include "liveness.hpp"
 #include "task_context.hpp"
 #include "tree/node.hpp"
 #include "world_replica.hpp"
@@ -59,9 +60,6 @@ class Manager {
   void end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator& it);
   // How a task ended; the --start task's end may end the lockstep session.
   void record_result(int64_t id, const std::string& result);
-  // Liveness (wall clock): announce this manager, drop the skills of silent processes.
-  void announce();
-  void drop_silent_processes();
   std::string unknown_skill_error(const std::string& type, const std::string& label) const;
   void begin(const skillbus_msgs::skill_start_t& req, int64_t id);
   void tick(Task& t);
@@ -81,10 +79,8 @@ class Manager {
   std::deque<std::pair<int64_t, std::string>> stopped_queued_;  // stopped before they began: (task, type)
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;
-  int64_t incarnation_ = 0;  // this run of the manager (not behaviour: an identity)
   int64_t start_task_ = -1;  // the --start task's id
-  std::map<std::string, std::chrono::steady_clock::time_point> heard_from_;  // process -> last heartbeat
-  std::chrono::steady_clock::time_point last_announce_{};
+  std::unique_ptr<Liveness> liveness_;  // wall clock only
   std::chrono::steady_clock::time_point last_world_try_{};
 };
 

@@ -1,0 +1,60 @@
+#include "liveness.hpp"
+
+#include "skillbus/log.hpp"
+#include "skillbus_msgs/skill_alive_t.hpp"
+
+namespace skillbus::skills {
+
+using skillbus_msgs::skill_alive_t;
+using steady = std::chrono::steady_clock;
+
+Liveness::Liveness(Bus& bus, Registry& registry, std::string manager_name, std::chrono::milliseconds timeout)
+    : bus_(bus), registry_(registry), name_(std::move(manager_name)), timeout_(timeout) {
+  incarnation_ =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  subscription_ = bus_.subscribe(channel("SB_SKILL_HEARTBEAT"), [this](const std::string&, const uint8_t* data, size_t size) {
+    skill_alive_t a;
+    if (!decode_msg(data, size, a)) return;
+    // A heartbeat of an unknown process or of an older run of it is not a registration.
+    if (registry_.incarnation_of(a.sender) == a.incarnation) heard_from_[a.sender] = steady::now();
+  });
+}
+
+void Liveness::registered(const std::string& process) { heard_from_[process] = steady::now(); }
+
+void Liveness::on_frame() {
+  announce();
+  drop_silent();
+}
+
+void Liveness::announce() {
+  const auto now = steady::now();
+  if (now - last_announce_ < std::chrono::seconds(1)) return;
+  last_announce_ = now;
+  skill_alive_t a{};
+  a.header.frame = -1;
+  a.sender = name_;
+  a.incarnation = incarnation_;
+  a.processes = registry_.processes();
+  a.num_processes = static_cast<int32_t>(a.processes.size());
+  publish_msg(bus_, channel("SB_SKILL_MANAGER"), a);
+}
+
+void Liveness::drop_silent() {
+  const auto now = steady::now();
+  for (const auto& process : registry_.processes()) {
+    auto it = heard_from_.find(process);
+    if (it == heard_from_.end()) {
+      heard_from_[process] = now;  // registered before any heartbeat: count from now
+      continue;
+    }
+    if (now - it->second < timeout_) continue;
+    const std::string why = "skill process " + process + " stopped answering (no heartbeat for " +
+                            std::to_string(timeout_.count()) + " ms)";
+    registry_.remove(process, why);
+    heard_from_.erase(it);
+    SB_WARN("skill_mgr", why << ": its skills are dropped until it registers again");
+  }
+}
+
+}  // namespace skillbus::skills
