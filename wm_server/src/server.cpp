@@ -53,13 +53,26 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
   rpc_.add_method<wm_query_t, wm_elements_t>("snapshot", [this](const wm_query_t& q) {
     if (q.offset < 0 || q.limit < 0) throw WmError("snapshot: offset and limit must not be negative");
     std::vector<const Element*> page;
+    const auto& all = store_.elements();
     int32_t i = 0;
-    for (const auto& [id, e] : store_.elements()) {
+    for (auto it = q.after.empty() ? all.begin() : all.upper_bound(q.after); it != all.end(); ++it) {
       if (i++ < q.offset) continue;
       if (q.limit > 0 && static_cast<int32_t>(page.size()) >= q.limit) break;
-      page.push_back(&e);
+      page.push_back(&it->second);
     }
     return elements_reply(page);
+  });
+  // A client whose request ids must not repeat across its restarts (a lockstep
+  // participant names its transactions by its name and a counter, the same every run)
+  // asks where its counter stands before it writes: the highest request id the server
+  // has answered for it (0: none), so a restarted client never gets an old answer.
+  rpc_.add_method<wm_commit_t, wm_commit_t>("last_request", [this](const wm_commit_t& q) {
+    wm_commit_t out{};
+    out.client_id = q.client_id;
+    auto it = last_request_.find(q.client_id);
+    out.request_id = it == last_request_.end() ? 0 : it->second;
+    out.version = store_.version();
+    return out;
   });
   rpc_.add_method<wm_txn_t, wm_commit_t>("commit", [this](const wm_txn_t& t) {
     wm_commit_t c = commit(t);
@@ -119,6 +132,8 @@ void WorldModelServer::recover() {
 }
 
 void WorldModelServer::remember(const wm_commit_t& c) {
+  int64_t& last = last_request_[c.client_id];
+  last = std::max(last, c.request_id);
   const std::string key = txn_key(c.client_id, c.request_id);
   if (recent_.emplace(key, c).second) recent_order_.push_back(key);
   while (recent_order_.size() > opt_.recent_memory) {

@@ -13,14 +13,14 @@ resync from a snapshot. Writes are transactions:
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any
 
 from skillbus.bus import Bus, channel
 from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elements_t, wm_op_t, wm_query_t,
-                           wm_relation_t, wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
-from skillbus.rpc import RpcClient, RpcRemoteError
-from skillbus.world.convert import element_from_msg, op, property_msg, relation_msg
+                           wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
+from skillbus.rpc import RpcClient, RpcError, RpcRemoteError
 from skillbus.waiting import poll_until
+from skillbus.world.convert import element_from_msg, op, property_msg, relation_msg
 from skillbus.world.element import Element
 
 Relation = tuple[str, str, str]
@@ -44,45 +44,80 @@ class WorldModelInterface:
         # name must not vary between runs (it is in the digest): the participant's name.
         self._txn_client_id = f"lockstep:{participant.name}" if participant is not None else self.rpc.client_id
         self._stale = False
+        self._collecting: list[wm_change_t] | None = None
         if participant is not None:
             participant.subscribe(channel("SB_WM_CHANGES"), lambda m: self._on_change(m.data))
             participant.subscribe(channel("SB_WM_TXN_RESULT"), self._on_result)
         else:
             self._sub = bus.subscribe(channel("SB_WM_CHANGES"), lambda ch, data: self._on_change(data))
         self.resync()
+        if participant is not None:
+            # The transaction names (lockstep:<name>, counter) are the same every run; a
+            # restarted participant goes on from where the server's answers end, so its
+            # first writes are never mistaken for retries of its previous run's.
+            q = wm_commit_t()
+            q.client_id = self._txn_client_id
+            self._txn_ids = self._call("last_request", q, wm_commit_t).request_id
 
     # -- replica ----------------------------------------------------------
     SNAPSHOT_PAGE = 200  # elements per snapshot reply: small messages survive UDP
 
     def resync(self) -> None:
-        """Replaces the replica with the server's world, read in pages of one version."""
-        for _attempt in range(10):
-            elements: dict[str, Element] = {}
-            relations: set[Relation] = set()
-            version, offset = None, 0
-            while True:
-                q = wm_query_t()
-                q.offset, q.limit = offset, self.SNAPSHOT_PAGE
-                page = self._call("snapshot", q, wm_elements_t)
-                if version is None:
-                    version = page.version
-                elif page.version != version:
-                    break  # the world changed while we read: start over
-                elements.update((m.id, element_from_msg(m)) for m in page.elements)
-                relations.update((r.subject, r.predicate, r.object) for r in page.relations)
-                offset += len(page.elements)
-                if not page.elements or offset >= page.total:
-                    break
-            if version is not None and (offset >= page.total or not page.elements) and page.version == version:
-                break
-        else:
-            raise WorldModelError("could not read a consistent snapshot: the world kept changing")
-        self._elements = elements
-        self._relations, self._by_node = set(), {}
-        for r in relations:
-            self._add_rel(r)
-        self.version = version
-        self._stale = False
+        """Replaces the replica with the server's world: pages of the snapshot by id (a
+        page is stable while others write), then the changes from the first page's version
+        on, replayed over them, so a busy world still gives a replica at once. Falls back
+        to reading again only when a change of that span never arrives."""
+        last_error = ""
+        for _attempt in range(5):
+            self._collecting = []  # changes that arrive while the pages are read
+            try:
+                elements, relations, first, last = self._read_pages()
+                changes = self._changes_up_to(first, last)
+            finally:
+                collected, self._collecting = self._collecting, None
+            if changes is None:
+                last_error = f"changes {first + 1}..{last} of the world did not all arrive"
+                continue
+            self._elements = elements
+            self._relations, self._by_node = set(), {}
+            for r in relations:
+                self._add_rel(r)
+            self.version = first
+            for ch in changes + sorted((c for c in collected if c.version > last), key=lambda c: c.version):
+                if ch.version == self.version + 1:
+                    self._apply_change(ch)
+            self._stale = False
+            return
+        raise WorldModelError(f"could not read the world: {last_error}")
+
+    def _read_pages(self) -> tuple[dict[str, Element], set[Relation], int, int]:
+        elements: dict[str, Element] = {}
+        relations: set[Relation] = set()
+        first = last = None
+        after = ""
+        while True:
+            q = wm_query_t()
+            q.after, q.limit = after, self.SNAPSHOT_PAGE
+            page = self._call("snapshot", q, wm_elements_t)
+            first = page.version if first is None else first
+            last = page.version
+            elements.update((m.id, element_from_msg(m)) for m in page.elements)
+            relations.update((r.subject, r.predicate, r.object) for r in page.relations)
+            if len(page.elements) < self.SNAPSHOT_PAGE:
+                return elements, relations, first, last
+            after = page.elements[-1].id
+
+    def _changes_up_to(self, first: int, last: int, timeout: float = 2.0) -> list | None:
+        """The changes first+1..last in order (they were made while the pages were read),
+        waiting for those still in flight; None if one never comes."""
+        def have() -> dict[int, wm_change_t]:
+            return {c.version: c for c in self._collecting if first < c.version <= last}
+        if last > first and self.participant is None:
+            poll_until(lambda: len(have()) >= last - first, timeout, step=self.bus.handle)
+        got = have()
+        if len(got) < last - first or any(c.reset for c in got.values()):
+            return None
+        return [got[v] for v in range(first + 1, last + 1)]
 
     def _fresh(self) -> None:
         if self._stale:
@@ -100,6 +135,9 @@ class WorldModelInterface:
 
     def _on_change(self, data: bytes) -> None:
         ch = decode(wm_change_t, data)
+        if ch is not None and self._collecting is not None:  # a resync is reading pages
+            self._collecting.append(ch)
+            return
         if ch is None or ch.version <= self.version or self._stale:
             return
         if ch.reset or ch.version != self.version + 1:
@@ -107,6 +145,9 @@ class WorldModelInterface:
             # this handler may run inside another call's wait.
             self._stale = True
             return
+        self._apply_change(ch)
+
+    def _apply_change(self, ch: wm_change_t) -> None:
         for o in ch.ops:
             rel = (o.relation.subject, o.relation.predicate, o.relation.object)
             if o.kind in (wm_op_t.ADD_ELEMENT, wm_op_t.UPDATE_ELEMENT):
@@ -185,11 +226,18 @@ class WorldModelInterface:
 
     # -- writes ----------------------------------------------------------------
     def commit(self, ops: list[wm_op_t], expected_version: int = -1) -> wm_commit_t:
+        """Applies `ops` as one transaction and returns its result (version, new ids) once
+        it is durable. Raises WorldModelError only when it was not applied (the server
+        refused it, saying why). An applied write never raises: if the replica cannot
+        catch up with it at once, the next read resyncs."""
         txn = self._txn(ops, expected_version)
         if self.participant is not None:
             raise WorldModelError("inside a lockstep participant, write with commit_async()")
         result = self._call("commit", txn, wm_commit_t)
-        self.sync(result.version)
+        try:
+            self.sync(result.version)  # read your writes
+        except (WorldModelError, RpcError):
+            self._stale = True  # applied and durable all the same: the next read catches up
         return result
 
     def commit_async(self, ops: list[wm_op_t], expected_version: int = -1) -> int:

@@ -68,6 +68,7 @@ class WorldModelServer {
   LockstepParticipant participant_;
   RpcServer rpc_;
   std::map<std::string, skillbus_msgs::wm_commit_t> recent_;  // "client\nrequest" -> result
+  std::map<std::string, int64_t> last_request_;  // client -> the highest request id answered (kept past recent_)
   std::deque<std::string> recent_order_;
   std::vector<skillbus_msgs::wm_change_t> pending_changes_;
   std::vector<skillbus_msgs::wm_commit_t> pending_results_;
