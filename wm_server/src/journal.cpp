@@ -1,21 +1,29 @@
 #include "skillbus/wm/journal.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
 #include "skillbus/bus.hpp"
-#include "skillbus/wm/model.hpp"
+#include "skillbus/log.hpp"
 
 namespace skillbus::wm {
 
+namespace fmt = journal_format;
+
 namespace {
+
+const char* kLog = "wm_journal";
+const char kJournalMagic[] = "SBWMJNL1";   // 8 bytes, no terminator written
+const char kSnapshotMagic[] = "SBWMSNP1";
 
 std::string sys_error(const std::string& what) { return what + ": " + std::strerror(errno); }
 
@@ -33,108 +41,532 @@ void write_all(int fd, const void* data, size_t n, const std::string& path) {
 void put_u32(uint8_t* b, uint32_t v) {
   for (int i = 0; i < 4; ++i) b[i] = uint8_t(v >> (8 * i));
 }
-
+void put_i64(uint8_t* b, int64_t v) {
+  for (int i = 0; i < 8; ++i) b[i] = uint8_t(uint64_t(v) >> (8 * i));
+}
 uint32_t get_u32(const uint8_t* b) { return b[0] | (b[1] << 8) | (b[2] << 16) | (uint32_t(b[3]) << 24); }
+int64_t get_i64(const uint8_t* b) {
+  uint64_t v = 0;
+  for (int i = 7; i >= 0; --i) v = (v << 8) | b[i];
+  return static_cast<int64_t>(v);
+}
 
 uint32_t crc(const uint8_t* d, size_t n) { return static_cast<uint32_t>(crc32(0L, d, static_cast<uInt>(n))); }
 
-void sync_dir(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
+bool exists(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0) return true;
+  if (errno == ENOENT) return false;
+  throw WmError(sys_error("cannot look at " + path));
 }
 
-}  // namespace
-
-Journal::Journal(std::string dir) : dir_(std::move(dir)) {
-  if (::mkdir(dir_.c_str(), 0755) != 0 && errno != EEXIST) throw WmError(sys_error("cannot create data directory " + dir_));
-}
-
-Journal::~Journal() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
-void Journal::open_journal(bool truncate) {
-  if (fd_ >= 0) ::close(fd_);
-  const std::string path = dir_ + "/journal.bin";
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | (truncate ? O_TRUNC : 0), 0644);
-  if (fd_ < 0) throw WmError(sys_error("cannot open " + path));
-  if (truncate) {
-    ::fdatasync(fd_);
-    sync_dir(dir_);
-  }
-}
-
-Journal::Recovered Journal::recover() {
-  Recovered out;
-  {
-    std::ifstream f(dir_ + "/snapshot.bin", std::ios::binary);
-    if (f) {
-      const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-      skillbus_msgs::wm_snapshot_t snap;
-      if (!decode_msg(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), snap))
-        throw WmError("snapshot " + dir_ + "/snapshot.bin is corrupt; refusing to start without it");
-      out.snapshot = std::move(snap);
-    }
-  }
-  const std::string path = dir_ + "/journal.bin";
+std::string read_all(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
-  std::string bytes;
-  if (f) bytes.assign((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  const auto* b = reinterpret_cast<const uint8_t*>(bytes.data());
-  size_t pos = 0;
-  while (pos < bytes.size()) {
-    if (bytes.size() - pos < 8) break;
-    const uint32_t len = get_u32(b + pos), sum = get_u32(b + pos + 4);
-    if (len > bytes.size() - pos - 8 || crc(b + pos + 8, len) != sum) break;
-    skillbus_msgs::wm_txn_t txn;
-    if (!decode_msg(b + pos + 8, len, txn)) break;
-    out.txns.push_back(std::move(txn));
-    pos += 8 + len;
-  }
-  if (pos < bytes.size()) {
-    out.note = "cut off a torn journal record at byte " + std::to_string(pos) + " (" +
-               std::to_string(bytes.size() - pos) + " bytes, never acknowledged)";
-    if (::truncate(path.c_str(), static_cast<off_t>(pos)) != 0) throw WmError(sys_error("cannot truncate " + path));
-  }
-  records_ = static_cast<long>(out.txns.size());
-  open_journal(false);
-  return out;
+  if (!f) throw WmError(sys_error("cannot read " + path));
+  std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (f.bad()) throw WmError("cannot read " + path);
+  return bytes;
 }
 
-void Journal::append(const skillbus_msgs::wm_txn_t& txn) {
-  if (fd_ < 0) open_journal(false);
-  const Bytes body = encode_msg(txn);
-  Bytes rec(8 + body.size());
-  put_u32(rec.data(), static_cast<uint32_t>(body.size()));
-  put_u32(rec.data() + 4, crc(body.data(), body.size()));
-  std::copy(body.begin(), body.end(), rec.begin() + 8);
-  write_all(fd_, rec.data(), rec.size(), dir_ + "/journal.bin");  // one write: O_APPEND keeps it whole
-  if (::fdatasync(fd_) != 0) throw WmError(sys_error("cannot sync " + dir_ + "/journal.bin"));
-  ++records_;
+void sync_dir(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw WmError(sys_error("cannot open directory " + dir + " to sync it"));
+  const int r = ::fsync(fd);
+  const int e = errno;
+  ::close(fd);
+  errno = e;
+  if (r != 0) throw WmError(sys_error("cannot sync directory " + dir));
 }
 
-void Journal::write_snapshot(const skillbus_msgs::wm_snapshot_t& snapshot) {
-  const std::string tmp = dir_ + "/snapshot.bin.tmp", path = dir_ + "/snapshot.bin";
-  const Bytes bytes = encode_msg(snapshot);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+void sync_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw WmError(sys_error("cannot open " + path + " to sync it"));
+  const int r = ::fsync(fd);
+  const int e = errno;
+  ::close(fd);
+  errno = e;
+  if (r != 0) throw WmError(sys_error("cannot sync " + path));
+}
+
+// Writes `name` in `dir` so that it is either the old file or the whole new one, on disk
+// on return: beside, synced, renamed, the directory synced.
+void replace_file_durably(const std::string& dir, const std::string& name, const std::string& bytes) {
+  const std::string tmp = dir + "/" + name + ".tmp", path = dir + "/" + name;
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
   try {
     write_all(fd, bytes.data(), bytes.size(), tmp);
     if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
   } catch (...) {
     ::close(fd);
+    ::unlink(tmp.c_str());
     throw;
   }
   ::close(fd);
-  if (::rename(tmp.c_str(), path.c_str()) != 0) throw WmError(sys_error("cannot rename " + tmp));
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string e = sys_error("cannot rename " + tmp + " to " + path);
+    ::unlink(tmp.c_str());
+    throw WmError(e);
+  }
+  sync_dir(dir);
+}
+
+std::string journal_header(int64_t base_version) {
+  uint8_t h[fmt::kHeaderSize];
+  std::memcpy(h, kJournalMagic, 8);
+  put_i64(h + 8, base_version);
+  put_u32(h + 16, crc(h, 16));
+  return std::string(reinterpret_cast<const char*>(h), sizeof h);
+}
+
+// A record's frame: valid when its own CRC matches and the length is possible.
+struct Frame {
+  uint32_t len = 0, body_crc = 0;
+};
+bool frame_at(const uint8_t* b, size_t avail, Frame& f) {
+  if (avail < fmt::kFrameSize) return false;
+  f.len = get_u32(b);
+  f.body_crc = get_u32(b + 4);
+  return crc(b, 8) == get_u32(b + 8) && f.len > 0 && f.len <= fmt::kMaxBody;
+}
+
+// A whole, intact record at pos: a valid frame, inside the file, its body's CRC right.
+bool intact_at(const uint8_t* b, size_t size, size_t pos, Frame& f) {
+  if (pos >= size || !frame_at(b + pos, size - pos, f)) return false;
+  if (size - pos < fmt::kRecordOverhead + uint64_t(f.len)) return false;
+  return crc(b + pos + fmt::kFrameSize, f.len) == f.body_crc;
+}
+
+size_t find_intact(const uint8_t* b, size_t size, size_t from, Frame& f) {
+  for (size_t p = from; p + fmt::kRecordOverhead < size; ++p)
+    if (intact_at(b, size, p, f)) return p;
+  return std::string::npos;
+}
+
+// The closing frame at the very end of the file belongs to a record starting at pos.
+bool closing_frame_at_end(const uint8_t* b, size_t size, size_t pos) {
+  if (size - pos < fmt::kRecordOverhead) return false;
+  Frame f;
+  return frame_at(b + size - fmt::kFrameSize, fmt::kFrameSize, f) &&
+         size - pos == fmt::kRecordOverhead + uint64_t(f.len);
+}
+
+bool all_zero(const uint8_t* b, size_t n) {
+  for (size_t i = 0; i < n; ++i)
+    if (b[i] != 0) return false;
+  return true;
+}
+
+std::string plural(long n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+// The intact records somewhere after the damage: counted for the report.
+void count_after(JournalScan& s, const uint8_t* b, size_t size, size_t from) {
+  Frame f;
+  size_t p = from;
+  while ((p = find_intact(b, size, p, f)) != std::string::npos) {
+    skillbus_msgs::wm_txn_t t;
+    if (decode_msg(b + p + fmt::kFrameSize, f.len, t)) {
+      if (s.intact_after == 0) s.after_first_version = t.expected_version + 1;
+      s.after_last_version = t.expected_version + 1;
+    }
+    ++s.intact_after;
+    p += fmt::kRecordOverhead + f.len;
+  }
+}
+
+JournalScan scan_bytes(const std::string& bytes) {
+  using End = JournalScan::End;
+  JournalScan s;
+  const auto* b = reinterpret_cast<const uint8_t*>(bytes.data());
+  const size_t size = bytes.size();
+  s.size = size;
+  if (size < fmt::kHeaderSize || std::memcmp(b, kJournalMagic, 8) != 0 || crc(b, 16) != get_u32(b + 16)) {
+    s.end = End::Corrupt;
+    if (size == 0)
+      s.why = "the file is empty: it has no journal header";
+    else if (size < 8 || std::memcmp(b, kJournalMagic, 8) != 0)
+      s.why = "the file does not start with a journal header (SBWMJNL1): not a journal of this format";
+    else if (size < fmt::kHeaderSize)
+      s.why = "its header is cut short";
+    else
+      s.why = "its header (the version it goes on from) fails its checksum";
+    count_after(s, b, size, std::min(size, fmt::kHeaderSize));
+    return s;
+  }
+  s.header_ok = true;
+  s.base_version = get_i64(b + 8);
+  size_t pos = fmt::kHeaderSize;
+  auto fail = [&](End end, const std::string& why) {
+    s.end = end;
+    s.why = "record " + std::to_string(s.txns.size()) + " " + why;
+  };
+  while (pos < size) {
+    const size_t rem = size - pos;
+    Frame f, g;
+    if (frame_at(b + pos, rem, f)) {
+      if (rem < fmt::kRecordOverhead + uint64_t(f.len)) {
+        fail(End::Torn, "runs past the end of the file (a " + std::to_string(f.len) + "-byte body, " +
+                            std::to_string(rem) + " bytes there)");
+        break;
+      }
+      const uint8_t* body = b + pos + fmt::kFrameSize;
+      if (crc(body, f.len) != f.body_crc) {
+        const bool closed = std::memcmp(b + pos, body + f.len, fmt::kFrameSize) == 0;
+        if (closed)
+          fail(End::Corrupt, "fails its checksum although it was written completely (its closing frame is there)");
+        else if (find_intact(b, size, pos + 1, g) != std::string::npos)
+          fail(End::Corrupt, "fails its checksum, and intact records follow it");
+        else
+          fail(End::Torn, "was not completely written (its body fails its checksum, its closing frame is missing)");
+        break;
+      }
+      skillbus_msgs::wm_txn_t t;
+      if (!decode_msg(body, f.len, t)) {
+        fail(End::Corrupt, "passes its checksum but does not decode as a transaction");
+        break;
+      }
+      const int64_t want = s.base_version + static_cast<int64_t>(s.txns.size());
+      if (t.expected_version != want) {
+        fail(End::Corrupt, "applies to version " + std::to_string(t.expected_version) + " where version " +
+                               std::to_string(want) + " was expected");
+        break;
+      }
+      s.offsets.push_back(pos);
+      s.txns.push_back(std::move(t));
+      pos += fmt::kRecordOverhead + f.len;
+      continue;
+    }
+    if (all_zero(b + pos, rem))
+      fail(End::Torn, "is " + plural(static_cast<long>(rem), "zero byte", "zero bytes") +
+                          " to the end of the file (space extended but never written)");
+    else if (find_intact(b, size, pos + 1, g) != std::string::npos)
+      fail(End::Corrupt, "has a damaged frame (length or checksum field), and intact records follow it");
+    else if (closing_frame_at_end(b, size, pos))
+      fail(End::Corrupt, "has a damaged frame (length or checksum field) although it was written completely "
+                         "(its closing frame ends the file)");
+    else
+      fail(End::Torn, "is " + plural(static_cast<long>(rem), "byte", "bytes") + " that are no complete record");
+    break;
+  }
+  s.good_end = pos;
+  if (s.end == End::Corrupt) count_after(s, b, size, pos + 1);
+  return s;
+}
+
+std::string versions(int64_t first, int64_t last) {
+  return first == last ? "version " + std::to_string(first)
+                       : "versions " + std::to_string(first) + "-" + std::to_string(last);
+}
+
+// One line: the file, the offset, the records before it (intact) and from it on (lost).
+std::string describe_corruption(const std::string& path, const std::string& dir, const JournalScan& s) {
+  const long k = static_cast<long>(s.txns.size());
+  std::string m = path + " is corrupt at byte " + std::to_string(s.good_end) + ": " + s.why + "; ";
+  if (!s.header_ok)
+    m += "no record can be placed without it";
+  else if (k == 0)
+    m += "no record before it is intact (the world stays at version " + std::to_string(s.base_version) + ")";
+  else
+    m += "the " + plural(k, "record", "records") + " before it (" +
+         versions(s.base_version + 1, s.base_version + k) + ") are intact";
+  m += "; affected: ";
+  if (s.header_ok) m += "record " + std::to_string(k) + " (version " + std::to_string(s.base_version + k + 1) + ") and ";
+  m += "the " + std::to_string(s.size - s.good_end) + " bytes from byte " + std::to_string(s.good_end) + " on";
+  if (s.intact_after > 0)
+    m += ", holding " + plural(s.intact_after, "intact record", "intact records") + " after the damage (" +
+         versions(s.after_first_version, s.after_last_version) + ") that cannot be applied without it";
+  m += "; nothing was changed: to go on with the intact records only, run `skillbus wm repair --data " + dir +
+       "` (it keeps the original as journal.bin.corrupt)";
+  return m;
+}
+
+skillbus_msgs::wm_snapshot_t read_snapshot(const std::string& path) {
+  const std::string bytes = read_all(path);
+  const auto* b = reinterpret_cast<const uint8_t*>(bytes.data());
+  const std::string keep = "; nothing was changed: restore it from a backup (the journal holds only the commits after it)";
+  if (bytes.size() < 8 || std::memcmp(b, kSnapshotMagic, 8) != 0)
+    throw DataError(path + " is not a snapshot of this format (it does not start with SBWMSNP1)" + keep);
+  if (bytes.size() < fmt::kSnapshotHeaderSize) throw DataError(path + " is corrupt: its header is cut short" + keep);
+  const uint32_t len = get_u32(b + 8);
+  if (bytes.size() - fmt::kSnapshotHeaderSize != len)
+    throw DataError(path + " is corrupt: it has " + std::to_string(bytes.size()) + " bytes where its header says " +
+                    std::to_string(fmt::kSnapshotHeaderSize + uint64_t(len)) + keep);
+  if (crc(b + fmt::kSnapshotHeaderSize, len) != get_u32(b + 12))
+    throw DataError(path + " is corrupt: its checksum does not match its " + std::to_string(len) + " bytes" + keep);
+  skillbus_msgs::wm_snapshot_t snap;
+  if (!decode_msg(b + fmt::kSnapshotHeaderSize, len, snap))
+    throw DataError(path + " is corrupt: it passes its checksum but does not decode as a snapshot" + keep);
+  return snap;
+}
+
+// The lock of a data directory: one process uses it at a time (a server, or a repair).
+int lock_dir(const std::string& dir) {
+  const std::string path = dir + "/lock";
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw WmError(sys_error("cannot open " + path));
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    char pid[32] = {0};
+    [[maybe_unused]] const ssize_t n = ::pread(fd, pid, sizeof pid - 1, 0);
+    ::close(fd);
+    errno = e;
+    if (e == EWOULDBLOCK)
+      throw WmError(dir + " is in use by another process (pid " + std::string(pid[0] ? pid : "?") + " holds " +
+                    path + ")");
+    throw WmError(sys_error("cannot lock " + path));
+  }
+  const std::string pid = std::to_string(::getpid());
+  if (::ftruncate(fd, 0) == 0) {
+    [[maybe_unused]] const ssize_t n = ::pwrite(fd, pid.data(), pid.size(), 0);
+  }
+  return fd;
+}
+
+void make_dir(const std::string& dir) {
+  if (::mkdir(dir.c_str(), 0755) == 0) {
+    // Its name in the parent must be durable too, or a power loss takes the whole directory.
+    const std::string parent = std::filesystem::path(dir).lexically_normal().parent_path().string();
+    sync_dir(parent.empty() ? "." : parent);
+  } else if (errno != EEXIST) {
+    throw WmError(sys_error("cannot create data directory " + dir));
+  }
+}
+
+}  // namespace
+
+JournalScan scan_journal(const std::string& path) { return scan_bytes(read_all(path)); }
+
+Journal::Journal(std::string dir) : dir_(std::move(dir)) {
+  make_dir(dir_);
+  lock_fd_ = lock_dir(dir_);
+}
+
+Journal::~Journal() {
+  if (fd_ >= 0) ::close(fd_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+void Journal::start_journal(int64_t base_version) {
+  const std::string tmp = dir_ + "/journal.bin.tmp", path = dir_ + "/journal.bin";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
+  const std::string header = journal_header(base_version);
+  try {
+    write_all(fd, header.data(), header.size(), tmp);
+    if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
+    if (::rename(tmp.c_str(), path.c_str()) != 0) throw WmError(sys_error("cannot rename " + tmp + " to " + path));
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;  // the old journal goes on
+  }
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = fd;
+  size_ = header.size();
+  try {
+    sync_dir(dir_);
+  } catch (const WmError& e) {
+    // The new journal has its name, but perhaps not on disk: records appended to it could
+    // vanish with the name. No more commits until a restart settles it.
+    broken_ = std::string("the journal cannot be used: ") + e.what() + "; restart the server";
+    throw WmError(broken_);
+  }
+}
+
+Journal::Recovered Journal::recover() {
+  Recovered out;
+  const std::string jpath = dir_ + "/journal.bin", spath = dir_ + "/snapshot.bin";
+  const bool has_snapshot = exists(spath), has_journal = exists(jpath);
+  if (!has_snapshot && !has_journal) {
+    start_journal(0);  // a new data directory
+    records_ = 0;
+    return out;
+  }
+  if (has_snapshot) out.snapshot = read_snapshot(spath);
+  const int64_t snap_version = has_snapshot ? out.snapshot->world.version : 0;
+  const std::string v = std::to_string(snap_version);
+  if (!has_journal)
+    throw DataError(jpath + " is missing, but " + spath + " (version " + v + ") is there: the commits after version " +
+                    v + " would be lost; nothing was changed: restore journal.bin, or run `skillbus wm repair --data " +
+                    dir_ + "` to go on from the snapshot without them");
+  JournalScan s = scan_journal(jpath);
+  if (s.end == JournalScan::End::Corrupt) throw DataError(describe_corruption(jpath, dir_, s));
+  const std::string b = std::to_string(s.base_version);
+  if (!has_snapshot && s.base_version != 0)
+    throw DataError(spath + " is missing, but " + jpath + " goes on from the snapshot at version " + b +
+                    ": the world up to version " + b + " is gone; nothing was changed: restore snapshot.bin, "
+                    "or move " + dir_ + " aside to start anew");
+  if (has_snapshot && s.base_version > snap_version)
+    throw DataError(jpath + " goes on from version " + b + ", but " + spath + " is at version " + v +
+                    ", older: the commits after version " + v + " up to version " + b +
+                    " are in neither file; nothing was changed: restore the snapshot of version " + b);
+  // From here on the files are consistent; what the server will rely on is made durable
+  // (a process that died before may have left it in the page cache only).
+  for (const auto& tmp : {jpath + ".tmp", spath + ".tmp"})
+    if (exists(tmp) && ::unlink(tmp.c_str()) != 0) throw WmError(sys_error("cannot remove " + tmp));
+  if (s.end == JournalScan::End::Torn) {
+    const int fd = ::open(jpath.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0 || ::ftruncate(fd, static_cast<off_t>(s.good_end)) != 0 || ::fsync(fd) != 0) {
+      const std::string e = sys_error("cannot cut the torn record off " + jpath);
+      if (fd >= 0) ::close(fd);
+      throw WmError(e);
+    }
+    ::close(fd);
+    const int64_t last = s.base_version + static_cast<int64_t>(s.txns.size());
+    out.note = "cut off a torn record at byte " + std::to_string(s.good_end) + " of " + jpath + " (" +
+               plural(static_cast<long>(s.size - s.good_end), "byte", "bytes") + " after the last complete record" +
+               (s.txns.empty() ? "" : ", which made version " + std::to_string(last)) + "): " + s.why +
+               "; a write that was never acknowledged";
+    SB_WARN(kLog, out.note);
+  }
+  sync_file(jpath);
+  if (has_snapshot) sync_file(spath);
   sync_dir(dir_);
-  // Records up to the snapshot's version are in it now. A crash before this truncation
-  // leaves them in the journal too; recovery skips records older than the snapshot.
-  open_journal(true);
+  for (auto& t : s.txns)
+    if (t.expected_version >= snap_version) out.txns.push_back(std::move(t));
+  records_ = static_cast<long>(out.txns.size());
+  fd_ = ::open(jpath.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd_ < 0) throw WmError(sys_error("cannot open " + jpath));
+  size_ = s.good_end;
+  return out;
+}
+
+void Journal::append(const skillbus_msgs::wm_txn_t& txn) {
+  const std::string path = dir_ + "/journal.bin";
+  if (!broken_.empty()) throw WmError(broken_);
+  if (fd_ < 0) throw WmError("the journal of " + dir_ + " is not open: recover() first");
+  const Bytes body = encode_msg(txn);
+  if (body.size() > fmt::kMaxBody) throw WmError("a transaction of " + std::to_string(body.size()) + " bytes is too big");
+  Bytes rec(fmt::kRecordOverhead + body.size());
+  put_u32(rec.data(), static_cast<uint32_t>(body.size()));
+  put_u32(rec.data() + 4, crc(body.data(), body.size()));
+  put_u32(rec.data() + 8, crc(rec.data(), 8));
+  std::copy(body.begin(), body.end(), rec.begin() + fmt::kFrameSize);
+  std::copy(rec.begin(), rec.begin() + fmt::kFrameSize, rec.end() - fmt::kFrameSize);
+  try {
+    write_all(fd_, rec.data(), rec.size(), path);  // one write: O_APPEND keeps it whole
+  } catch (const WmError& e) {
+    // Take back what part of the record got written, or the next record would follow garbage.
+    if (::ftruncate(fd_, static_cast<off_t>(size_)) != 0)
+      broken_ = std::string("the journal cannot be used: ") + e.what() + ", and " +
+                sys_error("cannot cut the partial record off") + "; restart the server";
+    throw;
+  }
+  if (::fdatasync(fd_) != 0) {
+    // After a failed sync the kernel may have dropped the pages: nothing written since
+    // the last good sync can be trusted to be on disk, and a second sync proves nothing.
+    broken_ = sys_error("cannot sync " + path) + "; no commit can be made durable until the server restarts";
+    throw WmError(broken_);
+  }
+  size_ += rec.size();
+  ++records_;
+}
+
+void Journal::write_snapshot(const skillbus_msgs::wm_snapshot_t& snapshot) {
+  if (!broken_.empty()) throw WmError(broken_);
+  const Bytes body = encode_msg(snapshot);
+  if (body.size() > UINT32_MAX) throw WmError("a snapshot of " + std::to_string(body.size()) + " bytes is too big");
+  std::string bytes(fmt::kSnapshotHeaderSize, '\0');
+  auto* h = reinterpret_cast<uint8_t*>(bytes.data());
+  std::memcpy(h, kSnapshotMagic, 8);
+  put_u32(h + 8, static_cast<uint32_t>(body.size()));
+  put_u32(h + 12, crc(body.data(), body.size()));
+  bytes.append(reinterpret_cast<const char*>(body.data()), body.size());
+  // The snapshot first: until the new journal replaces the old one, the old journal has
+  // every commit (recovery skips those the snapshot has).
+  replace_file_durably(dir_, "snapshot.bin", bytes);
+  start_journal(snapshot.world.version);
   records_ = 0;
+}
+
+RepairResult repair_data_dir(const std::string& dir) {
+  const std::string jpath = dir + "/journal.bin", spath = dir + "/snapshot.bin";
+  try {
+    struct stat st;
+    if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return {1, dir + " is not a directory"};
+    const int lock = lock_dir(dir);
+    struct Unlock {
+      int fd;
+      ~Unlock() { ::close(fd); }
+    } unlock{lock};
+    const bool has_snapshot = exists(spath), has_journal = exists(jpath);
+    int64_t snap_version = 0;
+    if (has_snapshot) {
+      try {
+        snap_version = read_snapshot(spath).world.version;
+      } catch (const DataError& e) {
+        return {1, std::string("cannot repair: ") + e.what()};
+      }
+    }
+    const std::string v = std::to_string(snap_version);
+    if (!has_journal) {
+      if (!has_snapshot) return {0, "nothing to repair: " + dir + " has no journal and no snapshot (a new data directory)"};
+      replace_file_durably(dir, "journal.bin", journal_header(snap_version));
+      return {0, jpath + " was missing next to " + spath + " (version " + v +
+                     "): wrote an empty journal going on from version " + v + "; the commits after version " + v +
+                     ", if there were any, are lost"};
+    }
+    const std::string bytes = read_all(jpath);
+    const JournalScan s = scan_bytes(bytes);
+    const std::string b = std::to_string(s.base_version);
+    if (s.header_ok && !has_snapshot && s.base_version != 0)
+      return {1, "cannot repair: " + spath + " is missing and " + jpath + " goes on from the snapshot at version " + b +
+                     ": restore snapshot.bin from a backup, or move " + dir + " aside to start anew"};
+    if (s.header_ok && has_snapshot && s.base_version > snap_version)
+      return {1, "cannot repair: " + jpath + " goes on from version " + b + " but " + spath + " is at version " + v +
+                     ": restore the snapshot of version " + b};
+    const long k = static_cast<long>(s.txns.size());
+    if (s.end != JournalScan::End::Corrupt) {
+      std::string m = "nothing to repair: " + jpath + " is intact (" + plural(k, "record", "records") + " after version " +
+                      b + ")";
+      if (s.end == JournalScan::End::Torn)
+        m += "; its torn last record at byte " + std::to_string(s.good_end) +
+             " (never acknowledged) is cut off when the server starts";
+      return {0, m};
+    }
+    const std::string kept = s.header_ok ? bytes.substr(0, s.good_end) : journal_header(snap_version);
+    std::string aside = jpath + ".corrupt";
+    for (int n = 2; exists(aside); ++n) aside = jpath + ".corrupt." + std::to_string(n);
+    // The original keeps its bytes and gets a second name; then the good prefix replaces
+    // it as journal.bin. A crash in between leaves journal.bin as it was.
+    const std::string tmp = jpath + ".repair.tmp";
+    {
+      const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+      if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
+      try {
+        write_all(fd, kept.data(), kept.size(), tmp);
+        if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
+      } catch (...) {
+        ::close(fd);
+        ::unlink(tmp.c_str());
+        throw;
+      }
+      ::close(fd);
+    }
+    if (::link(jpath.c_str(), aside.c_str()) != 0) {
+      const std::string e = sys_error("cannot keep " + jpath + " as " + aside);
+      ::unlink(tmp.c_str());
+      throw WmError(e);
+    }
+    sync_dir(dir);
+    if (::rename(tmp.c_str(), jpath.c_str()) != 0) throw WmError(sys_error("cannot rename " + tmp + " to " + jpath));
+    sync_dir(dir);
+    const int64_t base = s.header_ok ? s.base_version : snap_version;
+    std::string m = jpath + " was corrupt at byte " + std::to_string(s.good_end) + ": " + s.why + "; kept " +
+                    (k == 0 ? std::string("no record") : "the " + plural(k, "intact record", "intact records") +
+                                                             " before it (" + versions(base + 1, base + k) + ")") +
+                    " in a new journal.bin going on from version " + std::to_string(base) + "; dropped the " +
+                    std::to_string(s.size - s.good_end) + " bytes from byte " + std::to_string(s.good_end) + " on";
+    if (s.intact_after > 0)
+      m += " (with " + plural(s.intact_after, "intact record", "intact records") + " after the damage, " +
+           versions(s.after_first_version, s.after_last_version) + ")";
+    m += "; the original is kept unchanged as " + aside;
+    return {0, m};
+  } catch (const WmError& e) {
+    return {1, std::string("cannot repair: ") + e.what()};
+  }
 }
 
 }  // namespace skillbus::wm

@@ -4,6 +4,7 @@
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
+#include "skillbus/wm/journal.hpp"
 #include "skillbus/wm/server.hpp"
 
 using namespace skillbus;
@@ -29,7 +30,16 @@ int main(int argc, char** argv) {
   app.add_option("--snapshot-every", o.snapshot_every, "commits between snapshots");
   app.add_option("--crash-after-commits", o.crash_after_commits,
                  "tests: die after this many durable commits, before replying (-1: never)");
+  bool repair = false;
+  app.add_flag("--repair", repair,
+               "check the --data directory and exit; a damaged journal is replaced by its intact records before "
+               "the damage (the original kept as journal.bin.corrupt); see docs/world_model.md, Durability");
   apps::parse_or_exit(app, argc, argv);
+  if (repair) {  // no bus, no server: the files only
+    const wm::RepairResult r = wm::repair_data_dir(o.data_dir);
+    std::fprintf(r.exit_code == 0 ? stdout : stderr, "wm_server: %s\n", r.message.c_str());
+    return r.exit_code;
+  }
   if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   o.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
   if (o.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");

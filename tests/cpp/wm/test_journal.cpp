@@ -1,15 +1,21 @@
+// The journal: records recovered in order; a torn tail (what a crash during an
+// unacknowledged write leaves) cut off; corruption anywhere else refused with the file,
+// offset and records named, the files left byte for byte as they were; missing files;
+// the repair that keeps the intact prefix.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "skillbus/wm/journal.hpp"
 #include "skillbus/wm/model.hpp"
 
 using namespace skillbus::wm;
 namespace fs = std::filesystem;
+namespace jf = skillbus::wm::journal_format;
 
 namespace {
 
@@ -18,6 +24,8 @@ struct TempDir {
                                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
   TempDir() { fs::remove_all(path); }
   ~TempDir() { fs::remove_all(path); }
+  std::string journal() const { return (path / "journal.bin").string(); }
+  std::string snapshot() const { return (path / "snapshot.bin").string(); }
 };
 
 skillbus_msgs::wm_txn_t txn(int64_t version, const std::string& label) {
@@ -34,72 +42,417 @@ skillbus_msgs::wm_txn_t txn(int64_t version, const std::string& label) {
   return t;
 }
 
+std::string read_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f << bytes;
+}
+
+// A data directory whose journal holds n records after version `base` (a snapshot at
+// `base` when base > 0), labels r<version>.
+void make_dir(const TempDir& d, int n, int64_t base = 0) {
+  Journal j(d.path.string());
+  j.recover();
+  if (base > 0) {
+    skillbus_msgs::wm_snapshot_t s{};
+    s.world.version = base;
+    j.write_snapshot(s);
+  }
+  for (int i = 0; i < n; ++i) j.append(txn(base + i, "r" + std::to_string(base + i)));
+}
+
+size_t recovered_count(const TempDir& d) {
+  Journal j(d.path.string());
+  return j.recover().txns.size();
+}
+
+// recover() throws DataError; returns its message.
+std::string refusal(const TempDir& d) {
+  Journal j(d.path.string());
+  try {
+    j.recover();
+  } catch (const DataError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "recover() accepted a damaged data directory";
+  return "";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
 }  // namespace
 
 TEST(Journal, RecoversEveryAppendedRecordInOrder) {
   TempDir d;
-  {
-    Journal j(d.path);
-    j.recover();
-    for (int i = 0; i < 50; ++i) j.append(txn(i, "c" + std::to_string(i)));
-  }
-  Journal j(d.path);
+  make_dir(d, 50);
+  Journal j(d.path.string());
   auto rec = j.recover();
   ASSERT_EQ(rec.txns.size(), 50u);
-  EXPECT_EQ(rec.txns[49].ops[0].element.label, "c49");
+  EXPECT_EQ(rec.txns[49].ops[0].element.label, "r49");
   EXPECT_TRUE(rec.note.empty());
+  const JournalScan s = scan_journal(d.journal());
+  EXPECT_EQ(s.offsets.front(), jf::kHeaderSize);
+  EXPECT_EQ(s.good_end, s.size);
+  EXPECT_EQ(s.end, JournalScan::End::Clean);
+}
+
+TEST(Journal, ANewDataDirectoryGetsAnEmptyJournalAtVersion0) {
+  TempDir d;
+  {
+    Journal j(d.path.string());
+    auto rec = j.recover();
+    EXPECT_FALSE(rec.snapshot.has_value());
+    EXPECT_TRUE(rec.txns.empty());
+  }
+  EXPECT_TRUE(fs::exists(d.journal()));
+  EXPECT_EQ(scan_journal(d.journal()).base_version, 0);
+  EXPECT_EQ(recovered_count(d), 0u);
 }
 
 TEST(Journal, ATornLastRecordIsCutOffAndTheRestKept) {
   TempDir d;
+  make_dir(d, 3);
+  const auto size = fs::file_size(d.journal());
+  fs::resize_file(d.journal(), size - 5);  // a crash in the middle of the last write
   {
-    Journal j(d.path);
-    j.recover();
-    for (int i = 0; i < 3; ++i) j.append(txn(i, "x"));
-  }
-  const auto size = fs::file_size(d.path / "journal.bin");
-  fs::resize_file(d.path / "journal.bin", size - 5);  // a crash in the middle of the last write
-  {
-    Journal j(d.path);
+    Journal j(d.path.string());
     auto rec = j.recover();
     EXPECT_EQ(rec.txns.size(), 2u);
-    EXPECT_NE(rec.note.find("torn"), std::string::npos);
+    EXPECT_TRUE(contains(rec.note, "torn")) << rec.note;
+    EXPECT_TRUE(contains(rec.note, "at byte " + std::to_string(scan_journal(d.journal()).good_end))) << rec.note;
     j.append(txn(2, "again"));  // appends after the cut, not after the garbage
   }
-  Journal j(d.path);
+  Journal j(d.path.string());
   auto rec = j.recover();
   ASSERT_EQ(rec.txns.size(), 3u);
   EXPECT_EQ(rec.txns[2].ops[0].element.label, "again");
 }
 
-TEST(Journal, ACorruptedRecordEndsTheJournal) {
+// Every length a crash can leave (the file's prefix at any byte: a power loss keeps a
+// prefix of what was written after the last sync) recovers the records complete in it,
+// never refuses; zeros where the unsynced record should be are a torn tail too.
+TEST(Journal, EveryPrefixOfTheFileRecoversItsCompleteRecordsAndNeverRefuses) {
+  TempDir d;
+  make_dir(d, 4);
+  const std::string full = read_bytes(d.journal());
+  const JournalScan s = scan_journal(d.journal());
+  for (size_t len = jf::kHeaderSize; len <= full.size(); ++len) {
+    size_t complete = 0;
+    for (size_t i = 0; i < s.offsets.size(); ++i) {
+      const size_t end = i + 1 < s.offsets.size() ? s.offsets[i + 1] : full.size();
+      if (end <= len) complete = i + 1;
+    }
+    for (bool zeros : {false, true}) {
+      if (zeros && complete == s.offsets.size()) continue;
+      std::string bytes = full.substr(0, len);
+      if (zeros) std::fill(bytes.begin() + static_cast<long>(s.offsets[complete]), bytes.end(), '\0');
+      write_bytes(d.journal(), bytes);
+      SCOPED_TRACE("length " + std::to_string(len) + (zeros ? " (zeros)" : ""));
+      Journal j(d.path.string());
+      Journal::Recovered rec;
+      ASSERT_NO_THROW(rec = j.recover());
+      EXPECT_EQ(rec.txns.size(), complete);
+      EXPECT_EQ(fs::file_size(d.journal()), complete == s.offsets.size() ? full.size() : s.offsets[complete]);
+    }
+  }
+}
+
+TEST(Journal, ABitFlipInTheMiddleRefusesToStartNamingTheOffsetAndChangesNothing) {
+  TempDir d;
+  make_dir(d, 300, 1);
+  JournalScan s = scan_journal(d.journal());
+  std::string bytes = read_bytes(d.journal());
+  bytes[s.offsets[150] + jf::kFrameSize + 20] ^= 0x04;  // inside record 150's body
+  write_bytes(d.journal(), bytes);
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, d.journal() + " is corrupt at byte " + std::to_string(s.offsets[150]) + ": record 150 "))
+      << why;
+  EXPECT_TRUE(contains(why, "the 150 records before it (versions 2-151) are intact")) << why;
+  EXPECT_TRUE(contains(why, "149 intact records after the damage (versions 153-301)")) << why;
+  EXPECT_TRUE(contains(why, "skillbus wm repair --data " + d.path.string())) << why;
+  EXPECT_EQ(why.find('\n'), std::string::npos);
+  EXPECT_EQ(read_bytes(d.journal()), bytes);  // the evidence is kept
+}
+
+TEST(Journal, ABitFlipInRecord0RefusesToStart) {
+  TempDir d;
+  make_dir(d, 300, 1);
+  std::string bytes = read_bytes(d.journal());
+  bytes[jf::kHeaderSize + jf::kFrameSize + 3] ^= 0x80;
+  write_bytes(d.journal(), bytes);
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, "at byte " + std::to_string(jf::kHeaderSize) + ": record 0 ")) << why;
+  EXPECT_TRUE(contains(why, "no record before it is intact (the world stays at version 1)")) << why;
+  EXPECT_TRUE(contains(why, "299 intact records after the damage")) << why;
+  EXPECT_EQ(read_bytes(d.journal()), bytes);
+}
+
+TEST(Journal, ABitFlipInTheLastRecordIsCorruptionNotATornWrite) {
+  TempDir d;
+  make_dir(d, 300, 1);
+  const JournalScan s = scan_journal(d.journal());
+  std::string bytes = read_bytes(d.journal());
+  bytes[bytes.size() - jf::kFrameSize - 3] ^= 0x01;  // the last record's body, by its end
+  write_bytes(d.journal(), bytes);
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, "at byte " + std::to_string(s.offsets[299]) + ": record 299 ")) << why;
+  EXPECT_TRUE(contains(why, "written completely")) << why;
+  EXPECT_EQ(read_bytes(d.journal()), bytes);
+}
+
+// One bit flipped anywhere in record 0, a middle record or the last record (or the
+// header): the start is refused, or (a flip in a closing frame, which only locates a
+// record whose opening frame is damaged) every record comes back intact. Never fewer.
+TEST(Journal, NoSingleBitFlipLosesARecordSilently) {
+  TempDir d;
+  make_dir(d, 5, 3);
+  const std::string good = read_bytes(d.journal());
+  const JournalScan s = scan_journal(d.journal());
+  std::vector<size_t> positions;
+  for (size_t i = 0; i < jf::kHeaderSize; ++i) positions.push_back(i);
+  for (size_t r : {size_t(0), size_t(2), size_t(4)}) {
+    const size_t end = r + 1 < s.offsets.size() ? s.offsets[r + 1] : good.size();
+    for (size_t i = s.offsets[r]; i < end; ++i) positions.push_back(i);
+  }
+  int refused = 0, intact = 0;
+  for (size_t pos : positions)
+    for (int bit : {0, 3, 7}) {
+      std::string bytes = good;
+      bytes[pos] ^= static_cast<char>(1 << bit);
+      write_bytes(d.journal(), bytes);
+      SCOPED_TRACE("byte " + std::to_string(pos) + " bit " + std::to_string(bit));
+      Journal j(d.path.string());
+      try {
+        EXPECT_EQ(j.recover().txns.size(), 5u);
+        ++intact;
+      } catch (const DataError& e) {
+        ++refused;
+        EXPECT_EQ(read_bytes(d.journal()), bytes);
+      }
+    }
+  EXPECT_GT(refused, 0);
+  EXPECT_EQ(intact, 3 * 3 * static_cast<int>(jf::kFrameSize));  // the closing frames of the three records
+}
+
+TEST(Journal, AHugeLengthFieldIsCorruptionInTheMiddleAndAtTheEnd) {
+  for (bool last : {false, true}) {
+    TempDir d;
+    make_dir(d, 300, 1);
+    const JournalScan s = scan_journal(d.journal());
+    const size_t at = s.offsets[last ? 299 : 150];
+    std::string bytes = read_bytes(d.journal());
+    bytes[at + 3] = '\x7f';  // length 0x7f......: past the end of the file, and its frame's CRC fails
+    write_bytes(d.journal(), bytes);
+    const std::string why = refusal(d);
+    SCOPED_TRACE(why);
+    EXPECT_TRUE(contains(why, "at byte " + std::to_string(at) + ": record " + (last ? "299" : "150"))) << why;
+    EXPECT_TRUE(contains(why, "damaged frame")) << why;
+    EXPECT_EQ(read_bytes(d.journal()), bytes);
+  }
+}
+
+TEST(Journal, ADamagedHeaderIsCorruptionAtByte0) {
+  TempDir d;
+  make_dir(d, 10, 1);
+  std::string bytes = read_bytes(d.journal());
+  bytes[9] ^= 0x01;  // the base version
+  write_bytes(d.journal(), bytes);
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, "is corrupt at byte 0: its header")) << why;
+  EXPECT_TRUE(contains(why, "10 intact records after the damage")) << why;
+}
+
+TEST(Journal, ARecordOutOfVersionOrderIsCorruption) {
   TempDir d;
   {
-    Journal j(d.path);
+    Journal j(d.path.string());
     j.recover();
-    for (int i = 0; i < 3; ++i) j.append(txn(i, "x"));
+    j.append(txn(0, "a"));
+    j.append(txn(5, "b"));  // not the version after the first
   }
-  std::fstream f(d.path / "journal.bin", std::ios::in | std::ios::out | std::ios::binary);
-  f.seekp(-3, std::ios::end);
-  f.put('\x7f');  // a flipped byte in the last record: its CRC fails
-  f.close();
-  Journal j(d.path);
-  EXPECT_EQ(j.recover().txns.size(), 2u);
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, "record 1 applies to version 5 where version 1 was expected")) << why;
+}
+
+TEST(Journal, AMissingJournalNextToASnapshotIsAnError) {
+  TempDir d;
+  make_dir(d, 300, 1);
+  fs::remove(d.journal());
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, d.journal() + " is missing, but " + d.snapshot() + " (version 1) is there")) << why;
+  EXPECT_FALSE(fs::exists(d.journal()));
+}
+
+TEST(Journal, AMissingSnapshotThatTheJournalGoesOnFromIsAnError) {
+  TempDir d;
+  make_dir(d, 300, 1);
+  fs::remove(d.snapshot());
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, d.snapshot() + " is missing, but " + d.journal() +
+                                " goes on from the snapshot at version 1")) << why;
+}
+
+TEST(Journal, ACorruptSnapshotIsAnError) {
+  TempDir d;
+  make_dir(d, 3, 1);
+  std::string bytes = read_bytes(d.snapshot());
+  bytes[bytes.size() - 2] ^= 0x20;
+  write_bytes(d.snapshot(), bytes);
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, d.snapshot() + " is corrupt: its checksum does not match")) << why;
+  EXPECT_EQ(read_bytes(d.snapshot()), bytes);
+}
+
+TEST(Journal, ASnapshotOlderThanTheJournalIsAnError) {
+  TempDir d;
+  make_dir(d, 3, 1);
+  const std::string old_snapshot = read_bytes(d.snapshot());
+  {
+    Journal j(d.path.string());
+    j.recover();
+    skillbus_msgs::wm_snapshot_t s{};
+    s.world.version = 4;
+    j.write_snapshot(s);
+  }
+  write_bytes(d.snapshot(), old_snapshot);  // version 1, the journal goes on from 4
+  const std::string why = refusal(d);
+  EXPECT_TRUE(contains(why, "goes on from version 4, but " + d.snapshot() + " is at version 1")) << why;
 }
 
 TEST(Journal, ASnapshotStartsAFreshJournal) {
   TempDir d;
-  Journal j(d.path);
-  j.recover();
-  j.append(txn(0, "a"));
-  skillbus_msgs::wm_snapshot_t s{};
-  s.world.version = 1;
-  j.write_snapshot(s);
-  j.append(txn(1, "b"));
-  Journal k(d.path);
+  {
+    Journal j(d.path.string());
+    j.recover();
+    j.append(txn(0, "a"));
+    skillbus_msgs::wm_snapshot_t s{};
+    s.world.version = 1;
+    j.write_snapshot(s);
+    EXPECT_EQ(j.records_since_snapshot(), 0);
+    j.append(txn(1, "b"));
+  }
+  Journal k(d.path.string());
   auto rec = k.recover();
   ASSERT_TRUE(rec.snapshot.has_value());
   EXPECT_EQ(rec.snapshot->world.version, 1);
   ASSERT_EQ(rec.txns.size(), 1u);
   EXPECT_EQ(rec.txns[0].ops[0].element.label, "b");
+  EXPECT_EQ(scan_journal(d.journal()).base_version, 1);
+}
+
+// A crash after the new snapshot is in place and before the new journal replaced the old
+// one: the old journal's records are in the snapshot, and are skipped.
+TEST(Journal, ACrashBetweenTheSnapshotAndTheNewJournalLosesNothing) {
+  TempDir d;
+  make_dir(d, 10);
+  const std::string old_journal = read_bytes(d.journal());
+  {
+    Journal j(d.path.string());
+    j.recover();
+    skillbus_msgs::wm_snapshot_t s{};
+    s.world.version = 10;
+    j.write_snapshot(s);
+  }
+  write_bytes(d.journal(), old_journal);
+  {
+    Journal j(d.path.string());
+    auto rec = j.recover();
+    EXPECT_EQ(rec.snapshot->world.version, 10);
+    EXPECT_TRUE(rec.txns.empty());
+    j.append(txn(10, "after"));  // goes on in the old journal: still in order
+  }
+  Journal j(d.path.string());
+  auto rec = j.recover();
+  ASSERT_EQ(rec.txns.size(), 1u);
+  EXPECT_EQ(rec.txns[0].ops[0].element.label, "after");
+}
+
+TEST(Journal, OneProcessAtATimeUsesADataDirectory) {
+  TempDir d;
+  Journal j(d.path.string());
+  try {
+    Journal k(d.path.string());
+    FAIL() << "a second journal opened a locked directory";
+  } catch (const WmError& e) {
+    EXPECT_TRUE(contains(e.what(), d.path.string() + " is in use by another process (pid " +
+                                       std::to_string(::getpid()))) << e.what();
+  }
+  EXPECT_EQ(repair_data_dir(d.path.string()).exit_code, 1);
+}
+
+TEST(JournalRepair, KeepsTheIntactPrefixAndTheOriginalAside) {
+  TempDir d;
+  make_dir(d, 300, 1);
+  const JournalScan s = scan_journal(d.journal());
+  std::string bytes = read_bytes(d.journal());
+  bytes[s.offsets[150] + 5] ^= 0x40;  // record 150's frame
+  write_bytes(d.journal(), bytes);
+  const RepairResult r = repair_data_dir(d.path.string());
+  EXPECT_EQ(r.exit_code, 0) << r.message;
+  EXPECT_TRUE(contains(r.message, "was corrupt at byte " + std::to_string(s.offsets[150]))) << r.message;
+  EXPECT_TRUE(contains(r.message, "kept the 150 intact records before it (versions 2-151)")) << r.message;
+  EXPECT_TRUE(contains(r.message, "kept unchanged as " + d.journal() + ".corrupt")) << r.message;
+  EXPECT_EQ(read_bytes(d.journal() + ".corrupt"), bytes);
+  EXPECT_EQ(read_bytes(d.journal()), bytes.substr(0, s.offsets[150]));
+  Journal j(d.path.string());
+  auto rec = j.recover();
+  ASSERT_EQ(rec.txns.size(), 150u);
+  EXPECT_EQ(rec.txns[149].ops[0].element.label, "r150");
+}
+
+TEST(JournalRepair, ASecondRepairKeepsTheFirstOriginal) {
+  TempDir d;
+  for (int round = 0; round < 2; ++round) {
+    make_dir(d, 5);  // (round 2: the repaired journal, records 0-4 again)
+    std::string bytes = read_bytes(d.journal());
+    bytes[jf::kHeaderSize + 1] ^= 0x01;  // record 0's frame
+    write_bytes(d.journal(), bytes);
+    EXPECT_EQ(repair_data_dir(d.path.string()).exit_code, 0);
+  }
+  EXPECT_TRUE(fs::exists(d.journal() + ".corrupt"));
+  EXPECT_TRUE(fs::exists(d.journal() + ".corrupt.2"));
+  EXPECT_EQ(recovered_count(d), 0u);
+}
+
+TEST(JournalRepair, NothingToRepairInAnIntactOrTornJournal) {
+  TempDir d;
+  make_dir(d, 3);
+  RepairResult r = repair_data_dir(d.path.string());
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.message, "nothing to repair")) << r.message;
+  fs::resize_file(d.journal(), fs::file_size(d.journal()) - 2);
+  const std::string torn = read_bytes(d.journal());
+  r = repair_data_dir(d.path.string());
+  EXPECT_TRUE(contains(r.message, "torn last record")) << r.message;
+  EXPECT_EQ(read_bytes(d.journal()), torn);
+  EXPECT_FALSE(fs::exists(d.journal() + ".corrupt"));
+}
+
+TEST(JournalRepair, AMissingJournalGoesOnFromTheSnapshotAMissingSnapshotCannotBeRepaired) {
+  {
+    TempDir d;
+    make_dir(d, 3, 7);
+    fs::remove(d.journal());
+    const RepairResult r = repair_data_dir(d.path.string());
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_TRUE(contains(r.message, "wrote an empty journal going on from version 7")) << r.message;
+    Journal j(d.path.string());
+    auto rec = j.recover();
+    EXPECT_EQ(rec.snapshot->world.version, 7);
+    EXPECT_TRUE(rec.txns.empty());
+  }
+  {
+    TempDir d;
+    make_dir(d, 3, 7);
+    fs::remove(d.snapshot());
+    const std::string journal = read_bytes(d.journal());
+    const RepairResult r = repair_data_dir(d.path.string());
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_TRUE(contains(r.message, "cannot repair: " + d.snapshot() + " is missing")) << r.message;
+    EXPECT_EQ(read_bytes(d.journal()), journal);
+  }
 }
