@@ -105,3 +105,35 @@ have = {e.id for e in w.get_elements()}
 print(json.dumps({"errors": errors, "missing": [i for i in added if i not in have], "replicas": len(times),
                   "replica_s": times}))
 '''
+
+
+REUSE = r'''
+from skillbus.bus import open_bus
+from skillbus.msgs import wm_commit_t, wm_op_t, wm_txn_t
+from skillbus.rpc import RpcClient, RpcRemoteError
+from skillbus.world import Element
+from skillbus.world.convert import op
+rpc = RpcClient(open_bus(), "WM", "reuser")
+def commit(request_id, label):
+    t = wm_txn_t()
+    t.client_id, t.request_id, t.expected_version = "reuser", request_id, -1
+    t.ops = [op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", label))]
+    t.num_ops = 1
+    try:
+        return "ok " + ",".join(rpc.call("commit", t, wm_commit_t, timeout=5.0).ids)
+    except RpcRemoteError as e:
+        return "refused " + str(e)
+print(commit(1, "a"))
+print(commit(1, "b"))   # the same id for other operations
+print(commit(1, "a"))   # a true retry
+'''
+
+
+def test_a_request_id_used_again_for_other_operations_is_refused_never_answered_from_the_past(sandbox, tmp_path):
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm"])
+    p = sandbox.start("reuser", [sys.executable, "-c", REUSE])
+    assert sandbox.wait(p, 60) == 0, p.stderr()
+    first, other, retry = p.stdout().strip().splitlines()
+    assert first.startswith("ok skiros:Cube-"), first
+    assert other.startswith("refused ") and "was answered before for other operations" in other, other
+    assert retry == first, retry  # the retry gets its own answer, once

@@ -1,9 +1,11 @@
 #include "skillbus/wm/server.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
 
+#include "skillbus/digest.hpp"
 #include "skillbus/wm/convert.hpp"
 #include "skillbus/wm/scene.hpp"
 #include "skillbus/wm/transforms.hpp"
@@ -33,6 +35,23 @@ ParticipantConfig participant_config(const ServerOptions& o) {
 }
 
 std::string txn_key(const std::string& client, int64_t request) { return client + "\n" + std::to_string(request); }
+
+// What a transaction asks for: its operations, by their encoding.
+Digest ops_digest(const wm_txn_t& txn) {
+  Sha256 h;
+  for (const auto& o : txn.ops) {
+    std::vector<uint8_t> buf(static_cast<size_t>(o.getEncodedSize()));
+    o.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    h.update(buf.data(), buf.size());
+  }
+  return h.finish();
+}
+
+void set_digest(wm_commit_t& c, const Digest& d) { std::copy(d.begin(), d.end(), c.request_digest); }
+
+bool known_digest(const wm_commit_t& c) {
+  return std::any_of(std::begin(c.request_digest), std::end(c.request_digest), [](uint8_t b) { return b != 0; });
+}
 
 }  // namespace
 
@@ -119,6 +138,7 @@ void WorldModelServer::recover() {
     wm_commit_t c{};
     c.client_id = txn.client_id;
     c.request_id = txn.request_id;
+    set_digest(c, ops_digest(txn));
     c.version = r.version;
     c.ids = r.ids;
     c.num_ids = static_cast<int32_t>(c.ids.size());
@@ -153,13 +173,29 @@ void WorldModelServer::snapshot() {
 }
 
 wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
+  const Digest asked = ops_digest(txn);
   if (!txn.client_id.empty()) {
     auto it = recent_.find(txn_key(txn.client_id, txn.request_id));
-    if (it != recent_.end()) return it->second;  // a retry of a committed transaction: once only
+    if (it != recent_.end()) {
+      const wm_commit_t& was = it->second;
+      if (!known_digest(was) || std::equal(asked.begin(), asked.end(), was.request_digest))
+        return was;  // a retry of a committed transaction: once only
+      ++rejected_;  // the id was used before for other operations: never answer it with that result
+      wm_commit_t refused{};
+      refused.client_id = txn.client_id;
+      refused.request_id = txn.request_id;
+      refused.version = store_.version();
+      refused.error = "not applied: request " + std::to_string(txn.request_id) + " of " + txn.client_id +
+                      " was answered before for other operations (a client that reuses its request ids, e.g. "
+                      "after a restart, must go on from wm.last_request)";
+      set_digest(refused, asked);
+      return refused;
+    }
   }
   wm_commit_t c{};
   c.client_id = txn.client_id;
   c.request_id = txn.request_id;
+  set_digest(c, asked);
   TxnResult r;
   try {
     std::vector<Op> ops;

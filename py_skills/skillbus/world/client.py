@@ -57,6 +57,7 @@ class WorldModelInterface:
             # first writes are never mistaken for retries of its previous run's.
             q = wm_commit_t()
             q.client_id = self._txn_client_id
+            q.request_digest = bytes(32)  # (LCM's Python encodes a fixed byte array as long as it is)
             self._txn_ids = self._call("last_request", q, wm_commit_t).request_id
 
     # -- replica ----------------------------------------------------------
