@@ -11,6 +11,7 @@
 
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
+#include "skillbus_msgs/wm_change_t.hpp"
 #include "skillbus/wm/ontology.hpp"
 #include "skillbus/wm/rdf.hpp"
 #include "skillbus/wm/store.hpp"
@@ -44,6 +45,8 @@ class WorldReplica {
   bool ready_ = false;
   bool stale_ = false;
   bool wall_clock_ = false;
+  bool collecting_ = false;                        // a resync is reading pages
+  std::vector<skillbus_msgs::wm_change_t> collected_;  // the changes that arrived meanwhile
 };
 
 }  // namespace skillbus::skills

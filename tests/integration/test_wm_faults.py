@@ -137,3 +137,37 @@ def test_a_request_id_used_again_for_other_operations_is_refused_never_answered_
     assert first.startswith("ok skiros:Cube-"), first
     assert other.startswith("refused ") and "was answered before for other operations" in other, other
     assert retry == first, retry  # the retry gets its own answer, once
+
+
+CHURN = r'''
+import sys, time
+from skillbus.bus import open_bus
+from skillbus.msgs import wm_op_t
+from skillbus.world import Element, WorldModelInterface
+from skillbus.world.convert import op
+w = WorldModelInterface(open_bus(), "churn")
+for b in range(50):  # 10,000 elements
+    w.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cylinder", f"filler{b}-{i}")) for i in range(200)])
+print("writing", file=sys.stderr, flush=True)
+while True:  # an element that sorts before the cubes comes and goes at 50 Hz: offsets shift under a reader
+    e = w.add_element(Element("skiros:Arm", "spare"))
+    time.sleep(0.01)
+    w.remove_element(e)
+    time.sleep(0.01)
+'''
+
+
+def test_the_managers_world_copy_forms_while_the_world_churns(sandbox, tmp_path):
+    from test_skills import LIBS, cli, mgr_binary
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm", "--scene",
+                         REPO / "deploy" / "scenes" / "demo.ttl"])
+    churn = sandbox.start("churn", [sys.executable, "-c", CHURN])
+    wait_until(lambda: "writing" in churn.stderr(), 60, "the churning writer", diagnostic=churn.stderr)
+    mgr = sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
+                                   "--library", "safety_skills", "--world-model"], env={"PYTHONPATH": str(LIBS)})
+    proc.wait_for("registered", 60)
+    for cube in ("skiros:Cube-2", "skiros:Cube-3", "skiros:Cube-4"):
+        rc, out, _ = cli(sandbox, "run", "Inspect", "-p", f"Object={cube}", "--timeout", "30")
+        assert rc == 0 and f"{cube} is " in out, out
+    assert "no world model" not in mgr.stderr(), mgr.stderr()[-2000:]
