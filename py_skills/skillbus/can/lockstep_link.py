@@ -103,12 +103,17 @@ class LockstepCanLink:
 
     # -- frames ------------------------------------------------------------------------------
     def _read(self) -> None:
+        failing = False
         while not self._stop:
             try:
                 msg = self.real.recv(0.1)
-            except can.CanError as e:
-                log.warning("CAN receive failed: %s", e)
+            except can.CanError as e:  # (a lost frame then ends the session, naming the bus)
+                if not failing:
+                    log.warning("CAN receive failed: %s", e)
+                failing = True
+                time.sleep(0.1)
                 continue
+            failing = False
             if msg is None or msg.is_error_frame:
                 continue
             if msg.arbitration_id in self.out_of_band:
