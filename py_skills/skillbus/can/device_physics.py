@@ -8,7 +8,7 @@ import json
 
 import canopen
 
-from skillbus.can.device import EDS, GripperDevice
+from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock
 from skillbus.can.fingers import SimFingers
 
 
@@ -37,7 +37,7 @@ def run(args) -> int:
     p.subscribe(state_channel(), on_state)
     dev.boot()
     print(json.dumps({"node": args.node_id, "channel": args.channel, "physics": True}), flush=True)
-    p.on_frame = lambda frame, t: dev.step(args.period_ms / 1000.0)
+    p.on_frame = lambda frame, t: step_on_the_wall_clock(dev, args.period_ms / 1000.0)
     try:
         p.run()
     except KeyboardInterrupt:

@@ -1,6 +1,8 @@
 """The simulated gripper standalone (``skillbus gripper-device``): its own finger model
 (FingerModel, an object of --object-width between the fingers) stepped on a wall-clock
-timer every --period-ms; for tests of the driver without the physics server."""
+timer every --period-ms; for tests of the driver without the physics server. While the
+bus is gone (the virtual bus's hub restarting) it goes on stepping and sends nothing,
+as a device whose cable is cut."""
 
 from __future__ import annotations
 
@@ -9,7 +11,7 @@ import time
 
 import canopen
 
-from skillbus.can.device import EDS, GripperDevice
+from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock
 
 
 def run(args) -> int:
@@ -23,7 +25,7 @@ def run(args) -> int:
     try:
         while True:  # standalone: the finger model on a wall-clock timer
             next_t += period
-            dev.step(period)
+            step_on_the_wall_clock(dev, period)
             time.sleep(max(0.0, next_t - time.monotonic()))
     except KeyboardInterrupt:
         pass
