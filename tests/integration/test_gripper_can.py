@@ -50,7 +50,7 @@ def rig(request, sandbox, tmp_path):
     else:
         path = start_hub(sandbox, tmp_path / "grip.sock")
         interface, channel, host = "skillbus_vcan", str(path), False
-    networks = []
+    networks, drivers = [], []
 
     def make(object_width=None, force_limit=200):
         args = [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", channel, "--node-id", "5",
@@ -63,10 +63,13 @@ def rig(request, sandbox, tmp_path):
         networks.append(net)
         driver = GripperDriver(net, 5, force_limit=force_limit)
         driver.start(timeout=10)
+        drivers.append(driver)
         return driver, device, net
 
     make.interface = interface
     yield make
+    for d in drivers:
+        d.close()
     for n in networks:
         n.disconnect()
 
@@ -109,11 +112,10 @@ def test_heartbeat_loss_is_a_fault_within_three_periods(rig, sandbox):
     driver, device, _ = rig()
     sandbox.kill(device)
 
-    def lost() -> bool:
-        driver.poll()
-        return any(f.startswith("device lost") for f in driver.status().faults)
+    def lost() -> bool:  # the driver's own supervision names it: nobody calls poll()
+        return any(f.startswith("gripper node 5: heartbeat lost at ") for f in driver.status().faults)
 
-    wait_until(lost, 3 * 0.1 + 0.25, "the fault 'device lost' within 3 heartbeat periods (+ the one in flight)",
+    wait_until(lost, 3 * 0.1 + 0.25, "the fault 'heartbeat lost' within 3 heartbeat periods (+ the one in flight)",
                interval=0.01, diagnostic=lambda: f"its status: {driver.status()}")
 
 
@@ -159,8 +161,8 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
                              "--node-id", "5", "--object-width", "40000"])
     net = canopen.Network()
     net.connect(interface="skillbus_vcan", channel=str(path))
+    driver = GripperDriver(net, 5, force_limit=200)
     try:
-        driver = GripperDriver(net, 5, force_limit=200)
         driver.start(timeout=10)
         driver.command(0)
         wait_status(driver, lambda s: s.gripped)
@@ -168,6 +170,7 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
             driver.node.sdo.upload(0x5555, 0)  # a missing object: the device aborts
         net.send_message(0x123, b"\x01\x02")  # a COB-ID nobody owns
     finally:
+        driver.close()
         net.disconnect()
     time.sleep(0.3)
     sandbox.kill(recorder, 2)  # SIGINT: the recorder closes its file

@@ -3,9 +3,22 @@
 RPDO1 (controlword, target position) out, TPDO1 (statusword, position, grip state) in.
 
 Non-blocking after start(): command() sends a set-point, status() returns the latest
-state; nothing waits inside a skill's tick. poll() supervises the heartbeat (none for 3
-periods: fault "device lost"); EMCY frames become faults with code and text; malformed
-frames are counted and logged, never raised into a skill.
+state; nothing waits inside a skill's tick. EMCY frames become faults with code and
+text; malformed frames are counted and logged, never raised into a skill.
+
+Supervision (on the wall clock a thread of the driver's own, every heartbeat period / 5;
+under lockstep advance() each frame, in sim time):
+* no heartbeat for 3 periods: the fault "gripper node N: heartbeat lost at <time> (none
+  for M ms)", until a heartbeat comes again;
+* the bus gone (the virtual bus's hub, ``bus.fault``; a receive thread that died): the
+  fault "CAN hub gone: <socket path>" instead (heartbeats cannot come then; their
+  supervision starts afresh when the bus is back);
+* the node's boot-up (COB-ID 0x700 + node, data 0x00) after start-up, or a heartbeat
+  that says PRE-OPERATIONAL long after the NMT start (a boot-up missed while the bus was
+  gone): the node was restarted. On the wall clock the thread configures it by SDO again,
+  starts it and enables it (faults from before the restart are dropped); the status
+  shows state "rebooted" meanwhile. Under lockstep that is a fault (configuration by SDO
+  happens only before the run; a participant that dies ends the session anyway).
 
     driver = GripperDriver(network, node_id=5)
     driver.start()                    # boot-up, SDO configuration, NMT start, enable operation
@@ -27,6 +40,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import can
 import canopen
 
 from skillbus import tick_context
@@ -35,6 +49,7 @@ from skillbus.can.eds import EDS
 from skillbus.waiting import WaitTimeout, wait_until
 
 log = logging.getLogger("gripper-driver")
+REBOOTED = "rebooted"  # the status's state from a node's boot-up until it is enabled again
 
 
 class GripperError(RuntimeError):
@@ -80,6 +95,14 @@ class GripperDriver:
         self._status = GripperStatus()
         self._lock = threading.Lock()
         self._last_heartbeat: float | None = None
+        self._hb_fault: str | None = None    # while the heartbeat is lost
+        self._bus_fault: str | None = None   # while the bus is gone
+        self._started = False                # start-up done: a boot-up now means a restart
+        self._operational_at: float | None = None  # when the NMT start went out
+        self.restarts = self._restarts_handled = 0  # restarts of the node seen after start-up
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._supervisor: threading.Thread | None = None
         self._cw = 0
         self.malformed = 0
         self.node.tpdo.read(from_od=True)
@@ -108,7 +131,31 @@ class GripperDriver:
             s.updates += 1
 
     def _on_heartbeat(self, state: int) -> None:
-        self._last_heartbeat = self.clock()
+        now = self.clock()
+        self._last_heartbeat = now
+        if not self._started:
+            return  # the boot-up and heartbeats of the start-up
+        period = self.heartbeat_ms / 1000.0
+        if state == 0:
+            why = "boot-up"
+        elif (state == c.NMT_STATE_CODES["PRE-OPERATIONAL"] and self._operational_at is not None
+              and now - self._operational_at > 3 * period and self.restarts == self._restarts_handled):
+            why = "heartbeat PRE-OPERATIONAL"  # restarted while we could not hear its boot-up
+        else:
+            return
+        with self._lock:
+            self.restarts += 1
+            self._operational_at = None
+            self._hb_fault = None
+            if self.lockstep:
+                self._status.faults.append(
+                    f"gripper node {self.node.id}: restarted ({why} at {self._time_label()}); not re-initialised "
+                    f"under lockstep (its configuration by SDO is done only before the run)")
+            else:
+                self._status.faults.clear()  # a restarted node has none of its old faults
+                self._status.state = REBOOTED
+        log.warning("gripper node %d: %s at %s: it was restarted", self.node.id, why, self._time_label())
+        self._wake.set()
 
     def _on_emcy(self, emcy) -> None:
         if emcy.code == 0:
@@ -126,8 +173,56 @@ class GripperDriver:
             raise GripperError(f"gripper node {self.node.id}: no heartbeat within {timeout} s ({e})") from None
         self._last_heartbeat = self.clock()
         self.configure()
-        self.node.nmt.state = "OPERATIONAL"
+        self._nmt_start()
         self.enable(timeout)
+        self._started = True
+        self.reinit_timeout = timeout
+        self._supervisor = threading.Thread(target=self._supervise, name=f"gripper-{self.node.id}-supervisor",
+                                            daemon=True)
+        self._supervisor.start()
+
+    def close(self) -> None:
+        """Ends the wall-clock supervision (the network is the caller's to disconnect)."""
+        self._stop.set()
+        self._wake.set()
+        if self._supervisor is not None and self._supervisor is not threading.current_thread():
+            self._supervisor.join(timeout=10)
+
+    def _nmt_start(self) -> None:
+        self.node.nmt.state = "OPERATIONAL"
+        self._operational_at = self.clock()
+
+    def _supervise(self) -> None:
+        """Wall clock: heartbeat and bus supervision, and re-initialisation of a node that
+        was restarted (SDO and the enable sequence wait: here, never in a tick)."""
+        period = min(0.02, max(0.005, self.heartbeat_ms / 5000.0))
+        while not self._stop.is_set():
+            self._wake.wait(period)
+            self._wake.clear()
+            if self._stop.is_set():
+                return
+            try:
+                if self.restarts != self._restarts_handled:
+                    self._restarts_handled = self.restarts
+                    self._reinit()
+                self.poll()
+            except Exception:  # the supervision must go on
+                log.exception("gripper node %d: supervision failed", self.node.id)
+
+    def _reinit(self) -> None:
+        t0 = time.monotonic()
+        try:
+            self.configure()
+            self._nmt_start()
+            self.enable(self.reinit_timeout)
+        except (GripperError, can.CanError, OSError) as e:
+            msg = f"gripper node {self.node.id}: not enabled again after its restart: {e}"
+            with self._lock:
+                self._status.faults.append(msg)
+            log.error("%s", msg)
+            return
+        log.warning("gripper node %d enabled again after its boot-up (configured and enabled in %.0f ms)",
+                    self.node.id, (time.monotonic() - t0) * 1000)
 
     def configure(self) -> None:
         """Configuration by SDO (start-up only; under lockstep, before the run)."""
@@ -160,7 +255,7 @@ class GripperDriver:
             self._last_heartbeat = now  # supervision starts with the run
         if self._startup is not None:
             if not self._startup_started:
-                self.node.nmt.state = "OPERATIONAL"
+                self._nmt_start()
                 self._startup_started, self._startup_deadline = True, now + self._startup_timeout
                 self._send(self._startup[0][0], self._status.position_um)
             elif self._status.state == self._startup[0][1]:
@@ -169,6 +264,7 @@ class GripperDriver:
                     self._send(self._startup[0][0], self._status.position_um)
                 else:
                     self._startup = None
+                    self._started = True
                     log.info("gripper node %d enabled", self.node.id)
             elif now > self._startup_deadline:
                 msg = (f"start-up failed: state {self._status.state!r}, not {self._startup[0][1]!r}, "
@@ -205,7 +301,10 @@ class GripperDriver:
         rpdo = self.node.rpdo[1]
         rpdo["Controlword"].raw = cw
         rpdo["Target position"].raw = int(target)
-        rpdo.transmit()
+        try:
+            rpdo.transmit()
+        except (can.CanError, OSError) as e:  # the bus is gone: say which, as a GripperError
+            raise GripperError(f"gripper node {self.node.id}: {e}") from None
         self._cw = cw
 
     def command(self, width_um: int) -> None:
@@ -229,24 +328,61 @@ class GripperDriver:
         self._send(0, self._status.position_um)
         self._send(c.CW_FAULT_RESET, self._status.position_um)
         with self._lock:
-            self._status.faults = [f for f in self._status.faults if f.startswith("device lost")]
+            self._status.faults.clear()  # the device's; a lost heartbeat or bus stays until it is back
+
+    def _time_label(self) -> str:
+        """Now, for a fault's text: the wall clock's time of day, or under lockstep sim time."""
+        if self.lockstep:
+            return f"sim time {self.clock():.3f} s"
+        t = time.time()
+        return time.strftime("%H:%M:%S", time.localtime(t)) + f".{int(t * 1000) % 1000:03d}"
+
+    def _bus_fault_now(self) -> str | None:
+        """What is wrong with the bus itself, or None (the virtual bus's `fault`; a receive
+        thread that died)."""
+        bus = self.network.bus
+        fault = getattr(getattr(bus, "real", bus), "fault", None)  # (under a LockstepCanLink: its bus)
+        if fault:
+            return fault
+        exc = getattr(getattr(self.network, "notifier", None), "exception", None)
+        return f"CAN receive failed: {exc}" if exc is not None else None
 
     def poll(self) -> None:
-        """Heartbeat supervision: no heartbeat for 3 periods is the fault 'device lost'."""
-        if self._last_heartbeat is None:
-            return
-        silent = self.clock() - self._last_heartbeat
-        if silent > 3 * self.heartbeat_ms / 1000.0:
-            with self._lock:
-                msg = f"device lost: no heartbeat from node {self.node.id} for {silent * 1000:.0f} ms"
-                if not any(f.startswith("device lost") for f in self._status.faults):
-                    self._status.faults.append(msg)
-                    log.error("%s", msg)
+        """Supervision (the wall-clock thread calls it; under lockstep advance() does): the
+        bus (wall clock only), then the heartbeat: none for 3 periods is the fault
+        'gripper node N: heartbeat lost at <time>' until one comes again."""
+        now = self.clock()
+        bus_fault = None if self.lockstep else self._bus_fault_now()
+        with self._lock:
+            if bus_fault != self._bus_fault:
+                self._bus_fault = bus_fault
+                if bus_fault:
+                    self._hb_fault = None  # the cause is named, not its consequence
+                    log.error("gripper node %d: %s", self.node.id, bus_fault)
+                else:
+                    self._last_heartbeat = now  # its heartbeat can come again from now on
+                    log.warning("gripper node %d: the CAN bus is back", self.node.id)
+            if bus_fault or self._last_heartbeat is None:
+                return
+            silent = now - self._last_heartbeat
+            lost = silent > 3 * self.heartbeat_ms / 1000.0
+            if lost and self._hb_fault is None:
+                self._hb_fault = (f"gripper node {self.node.id}: heartbeat lost at {self._time_label()} "
+                                  f"(none for {silent * 1000:.0f} ms)")
+                log.error("%s", self._hb_fault)
+            elif not lost and self._hb_fault is not None:
+                log.warning("gripper node %d: heartbeat back (%s)", self.node.id, self._hb_fault)
+                self._hb_fault = None
+
+    def _faults(self) -> list[str]:
+        """The device's faults, then the bus's or the heartbeat's (last: the one a skill names)."""
+        link = self._bus_fault or self._hb_fault
+        return list(self._status.faults) + ([link] if link else [])
 
     def _copy(self) -> GripperStatus:
         with self._lock:
             s = self._status
-            out = GripperStatus(s.state, s.statusword, s.position_um, s.grip, s.target_reached, list(s.faults),
+            out = GripperStatus(s.state, s.statusword, s.position_um, s.grip, s.target_reached, self._faults(),
                                 s.updates)
             kind, mark = self._fresh_after
             out.fresh = kind != "updates" or s.updates >= mark

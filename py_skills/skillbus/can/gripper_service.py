@@ -2,7 +2,8 @@
 (``skillbus skills-process --gripper gripper0:5``) and used by the gripper skills.
 
 Wall clock: the driver starts at once (waits for the device, configures it by SDO,
-enables it). Lockstep: it is configured by SDO before the process joins the run, its CAN
+enables it), and its own thread then supervises the heartbeat and the bus and enables
+a restarted device again. Lockstep: it is configured by SDO before the process joins the run, its CAN
 traffic goes through a LockstepCanLink, and the start-up sequence and heartbeat
 supervision advance with the process's frames, in sim time.
 """
@@ -87,6 +88,8 @@ def driver() -> GripperDriver:
 
 def shutdown() -> None:
     global _driver, _link
+    if _driver is not None:
+        _driver.close()
     if _link is not None:
         _link.shutdown()
     elif _driver is not None:

@@ -46,7 +46,10 @@ class GripperPrimitive(PrimitiveBase):
         if s.state != c.OPERATION_ENABLED:
             return self.step(f"{cmd}: waiting for the gripper (state {s.state})")
         if not self.sent:
-            self.gripper.command(OPEN_UM if cmd in ("open", "release") else CLOSED_UM)
+            try:
+                self.gripper.command(OPEN_UM if cmd in ("open", "release") else CLOSED_UM)
+            except GripperError as e:  # the bus is gone (the supervision names it a moment later)
+                return self.fail(f"{cmd}: gripper fault: {e}", -3)
             self.sent = True
             return self.step(f"{cmd}: sent")
         width = f"{s.position_um / 1000:.1f} mm"
@@ -77,7 +80,10 @@ class GripperPrimitive(PrimitiveBase):
         s = self.gripper.status()
         if s.gripped:
             return self.fail(f"preempted: {cmd}: the fingers keep their grip", -1)
-        self.gripper.stop()
+        try:
+            self.gripper.stop()
+        except GripperError as e:
+            return self.fail(f"preempted: {cmd}: the fingers could not be stopped: {e}", -1)
         return self.fail(f"preempted: {cmd} stopped the fingers at {s.position_um / 1000:.1f} mm", -1)
 
     def _contained(self, obj, parent, done: str, without_wm: str):
