@@ -13,6 +13,7 @@ frame n + 1). On the wall clock both go straight over the bus.
 from __future__ import annotations
 
 import logging
+import time
 from typing import Any
 
 from skillbus.bus import Bus
@@ -44,8 +45,26 @@ class Arm:
             bus.subscribe(arm_state_channel(), lambda ch, d: self._on_state(d))
             bus.subscribe(reply_channel(), lambda ch, d: self._on_reply(d))
 
+    STALE_S = 0.5  # wall clock: a driver publishes its state every frame (10-20 ms)
+
     def _on_state(self, data: bytes) -> None:
         self._raw = data
+        if self.participant is None:
+            self._heard = time.monotonic()  # liveness only (wall clock), never behaviour under lockstep
+
+    def silence(self) -> str:
+        """On the wall clock: why the arm's driver looks gone ("" while its state keeps
+        coming). Under lockstep a driver that dies ends the session, so it is always ""."""
+        if self.participant is not None:
+            return ""
+        heard = getattr(self, "_heard", None)
+        if heard is None:
+            return f"no robot arm state on {arm_state_channel()} yet (is the physics server or the arm's driver running?)"
+        quiet = time.monotonic() - heard
+        if quiet > self.STALE_S:
+            return (f"the robot arm's driver went silent: no state on {arm_state_channel()} for {quiet:.1f} s "
+                    "(is the physics server or the arm's driver running?)")
+        return ""
 
     @property
     def state(self) -> robot_arm_state_t | None:

@@ -189,6 +189,9 @@ class _ArmMotion(PrimitiveBase):
             self.what = what
             self.arm.execute(plan, self.cmd)
             return self.step(f"moving to {what}")
+        gone = self.arm.silence()
+        if gone:  # name the fault now, not as a move that never arrives
+            return self.fail(f"{self.label}: {gone}", -4)
         done, error = self.arm.finished(self.cmd)
         if error:
             return self.fail(f"{self.label}: the robot rejected the trajectory: {error}", -2)
