@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import subprocess
 import sys
 
 from skillbus.bus import open_bus
@@ -12,7 +13,7 @@ from skillbus.world.element import Element
 
 
 def add_parser(sub) -> None:
-    wm = sub.add_parser("wm", help="the world model: get, query, load, save, tree")
+    wm = sub.add_parser("wm", help="the world model: get, query, load, save, tree, repair")
     wm.add_argument("--url", default=None, help="bus URL (default: $SKILLBUS_BUS_URL or the udpm default)")
     wm.add_argument("--timeout", type=float, default=5.0)
     wsub = wm.add_subparsers(dest="wm_command", required=True)
@@ -30,6 +31,10 @@ def add_parser(sub) -> None:
     t = wsub.add_parser("tree", help="the containment tree with poses")
     t.add_argument("--json", action="store_true",
                    help="print the roots as a JSON list, each element with its position and children")
+    r = wsub.add_parser("repair", help="check a server's data directory (no server may be using it); a damaged "
+                                       "journal is replaced by its intact records before the damage, the original "
+                                       "kept as journal.bin.corrupt")
+    r.add_argument("--data", required=True, metavar="DIR", help="the data directory (wm_server --data)")
 
 
 def element_dict(e: Element) -> dict:
@@ -87,7 +92,26 @@ def print_tree(wmi: WorldModelInterface) -> None:
         show(root, 0)
 
 
+def repair(data: str) -> int:
+    """`skillbus wm repair --data DIR`: runs `wm_server --repair --data DIR` (the journal's
+    one reader is the server's) and prints what it found and did: 0 when repaired or
+    nothing was wrong, 1 when it cannot repair (the message says what a person can do)."""
+    from skillbus import paths
+    try:
+        r = subprocess.run([str(paths.binary("wm_server")), "--repair", "--data", data], capture_output=True, text=True)
+    except OSError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    for line in r.stdout.splitlines():
+        print(line.removeprefix("wm_server: "))
+    for line in r.stderr.splitlines():
+        print(f"error: {line.removeprefix('wm_server: ')}", file=sys.stderr)
+    return r.returncode
+
+
 def main(args: argparse.Namespace) -> int:
+    if args.wm_command == "repair":  # the files only: no server may be running on them
+        return repair(args.data)
     try:
         wmi = WorldModelInterface(open_bus(args.url), "cli", timeout=args.timeout)
         c = args.wm_command
