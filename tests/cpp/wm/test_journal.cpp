@@ -3,8 +3,10 @@
 // offset and records named, the files left byte for byte as they were; missing files;
 // the repair that keeps the intact prefix.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -369,6 +371,34 @@ TEST(Journal, ACrashBetweenTheSnapshotAndTheNewJournalLosesNothing) {
   auto rec = j.recover();
   ASSERT_EQ(rec.txns.size(), 1u);
   EXPECT_EQ(rec.txns[0].ops[0].element.label, "after");
+}
+
+// A write that fails half-way (the file size limit: the first bytes go in, then EFBIG)
+// is cut off again: the next record follows the last good one, not the fragment.
+TEST(Journal, AFailedWriteIsCutOffBeforeTheNextRecord) {
+  TempDir d;
+  make_dir(d, 3);
+  {
+    Journal j(d.path.string());
+    j.recover();
+    const auto size = fs::file_size(d.journal());
+    rlimit old{};
+    ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
+    auto* previous = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit small = old;
+    small.rlim_cur = size + 30;
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+    EXPECT_THROW(j.append(txn(3, "does not fit")), WmError);
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &old), 0);
+    std::signal(SIGXFSZ, previous);
+    EXPECT_EQ(fs::file_size(d.journal()), size);
+    j.append(txn(3, "fits"));
+  }
+  Journal j(d.path.string());
+  auto rec = j.recover();
+  ASSERT_EQ(rec.txns.size(), 4u);
+  EXPECT_EQ(rec.txns[3].ops[0].element.label, "fits");
+  EXPECT_TRUE(rec.note.empty()) << rec.note;
 }
 
 TEST(Journal, OneProcessAtATimeUsesADataDirectory) {
