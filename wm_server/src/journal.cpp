@@ -327,7 +327,9 @@ int lock_dir(const std::string& dir) {
 void make_dir(const std::string& dir) {
   if (::mkdir(dir.c_str(), 0755) == 0) {
     // Its name in the parent must be durable too, or a power loss takes the whole directory.
-    const std::string parent = std::filesystem::path(dir).lexically_normal().parent_path().string();
+    std::filesystem::path path = std::filesystem::path(dir).lexically_normal();
+    if (!path.has_filename()) path = path.parent_path();  // "a/b/" names b too
+    const std::string parent = path.parent_path().string();
     sync_dir(parent.empty() ? "." : parent);
   } else if (errno != EEXIST) {
     throw WmError(sys_error("cannot create data directory " + dir));
