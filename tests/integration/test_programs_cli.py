@@ -16,7 +16,7 @@ from skillbus import paths
 # Every program and the options scripts and tests use (their names must not change).
 PROGRAMS = {
     "wm_server": ["--url", "--data", "--ontology", "--scene", "--name", "--wall-clock", "--period-ms",
-                  "--snapshot-every", "--crash-after-commits"],
+                  "--snapshot-every", "--crash-after-commits", "--repair"],
     "skill_mgr": ["--url", "--name", "--wall-clock", "--period-ms", "--tick-hz", "--tick-timeout-ms", "--ontology",
                   "--start", "--robot", "--end-session-after-task", "--liveness-ms"],
     "sim_server": ["--url", "--scene", "--script", "--record-script", "--name", "--participants", "--wall-clock",
