@@ -90,19 +90,24 @@ void sync_file(const std::string& path) {
 
 // Writes `name` in `dir` so that it is either the old file or the whole new one, on disk
 // on return: beside, synced, renamed, the directory synced.
-void replace_file_durably(const std::string& dir, const std::string& name, const std::string& bytes) {
-  const std::string tmp = dir + "/" + name + ".tmp", path = dir + "/" + name;
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
+// Writes `bytes` as a new file at `path`, on disk on return; on failure no file is left.
+void write_file_synced(const std::string& path, const std::string& bytes) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw WmError(sys_error("cannot create " + path));
   try {
-    write_all(fd, bytes.data(), bytes.size(), tmp);
-    if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
+    write_all(fd, bytes.data(), bytes.size(), path);
+    if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + path));
   } catch (...) {
     ::close(fd);
-    ::unlink(tmp.c_str());
+    ::unlink(path.c_str());
     throw;
   }
   ::close(fd);
+}
+
+void replace_file_durably(const std::string& dir, const std::string& name, const std::string& bytes) {
+  const std::string tmp = dir + "/" + name + ".tmp", path = dir + "/" + name;
+  write_file_synced(tmp, bytes);
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string e = sys_error("cannot rename " + tmp + " to " + path);
     ::unlink(tmp.c_str());
@@ -534,19 +539,7 @@ RepairResult repair_data_dir(const std::string& dir) {
     // The original keeps its bytes and gets a second name; then the good prefix replaces
     // it as journal.bin. A crash in between leaves journal.bin as it was.
     const std::string tmp = jpath + ".repair.tmp";
-    {
-      const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-      if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
-      try {
-        write_all(fd, kept.data(), kept.size(), tmp);
-        if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
-      } catch (...) {
-        ::close(fd);
-        ::unlink(tmp.c_str());
-        throw;
-      }
-      ::close(fd);
-    }
+    write_file_synced(tmp, kept);
     if (::link(jpath.c_str(), aside.c_str()) != 0) {
       const std::string e = sys_error("cannot keep " + jpath + " as " + aside);
       ::unlink(tmp.c_str());
