@@ -33,22 +33,32 @@ double Physics::Impl::tracking_error() const {
   return err;
 }
 
-void Physics::fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const {
-  const Impl& m = *impl_;
-  const auto& r = m.world.robot;
-  const size_t n = m.layout.arm_dofs.size();
+namespace {
+
+// Names, positions, velocities and applied efforts of the robot's `dofs`, in that order:
+// the robot's joint state in both the robot's and the simulator's message.
+template <class Robot, class Efforts, class Msg>
+void fill_joints(const Robot& r, const Efforts& applied, const std::vector<size_t>& dofs, Msg& out) {
+  const size_t n = dofs.size();
   out.num_joints = static_cast<int32_t>(n);
   out.joint_names.resize(n);
   out.position.resize(n);
   out.velocity.resize(n);
   out.effort.resize(n);
   for (size_t k = 0; k < n; ++k) {
-    const size_t i = m.layout.arm_dofs[k];
+    const size_t i = dofs[k];
     out.joint_names[k] = r->getDof(i)->getJoint()->getName();
     out.position[k] = r->getPosition(i);
     out.velocity[k] = r->getVelocity(i);
-    out.effort[k] = m.applied[static_cast<Eigen::Index>(i)];
+    out.effort[k] = applied[static_cast<Eigen::Index>(i)];
   }
+}
+
+}  // namespace
+
+void Physics::fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const {
+  const Impl& m = *impl_;
+  fill_joints(m.world.robot, m.applied, m.layout.arm_dofs, out);
   m.tool_pose(out.tool_pose);
   out.arm_command_id = m.arm.command_id();
   out.arm_moving = m.arm.moving();
@@ -68,18 +78,9 @@ void Physics::fill_objects(skillbus_msgs::robot_objects_t& out) const {
 void Physics::fill_state(skillbus_msgs::sim_state_t& out) const {
   const Impl& m = *impl_;
   const auto& r = m.world.robot;
-  const size_t n = r->getNumDofs();
-  out.num_joints = static_cast<int32_t>(n);
-  out.joint_names.resize(n);
-  out.position.resize(n);
-  out.velocity.resize(n);
-  out.effort.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    out.joint_names[i] = r->getDof(i)->getJoint()->getName();
-    out.position[i] = r->getPosition(i);
-    out.velocity[i] = r->getVelocity(i);
-    out.effort[i] = m.applied[i];
-  }
+  std::vector<size_t> all(r->getNumDofs());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  fill_joints(r, m.applied, all, out);
   m.tool_pose(out.tool_pose);
   out.finger_width = r->getPosition(m.layout.left_dof) + r->getPosition(m.layout.right_dof);
   out.finger_force = -0.5 * (m.applied[m.layout.left_dof] + m.applied[m.layout.right_dof]);

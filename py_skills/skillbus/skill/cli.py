@@ -246,9 +246,15 @@ def run(args) -> int:
     if args.detach and (args.watch or args.timeout > 0):
         print("error: --detach returns at once: it takes neither --watch nor --timeout", file=sys.stderr)
         return 2
+    return _with_manager(_run, args)
+
+
+def _with_manager(command, args) -> int:
+    """Runs `command(args, intr)` with signals held as flags; a manager that does not
+    answer is one line (exit 1, or the signal's code if one came meanwhile)."""
     with Interrupts() as intr:
         try:
-            return _run(args, intr)
+            return command(args, intr)
         except NoManager as e:
             print(f"error: {e}", file=sys.stderr)
             return intr.exit_code if intr.signum else 1
@@ -377,12 +383,7 @@ def main(args: argparse.Namespace) -> int:
     if args.command == "run":
         return run(args)
     if args.command in ("skills", "stop", "pause", "resume", "step"):
-        with Interrupts() as intr:
-            try:
-                return _command(args, intr)
-            except NoManager as e:
-                print(f"error: {e}", file=sys.stderr)
-                return intr.exit_code if intr.signum else 1
+        return _with_manager(_command, args)
     return 2
 
 
