@@ -145,7 +145,7 @@ RunResult LockstepParticipant::run_lockstep() {
     while (!have_clock_ && !stop_seen_) {
       if (steady::now() - last_event > cfg_.clock_timeout) {
         fail("lockstep: no clock after frame " + std::to_string(last_acked_) + " within " +
-             std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) + " s (master gone?)");
+             std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) + " s (master " + master_ + " gone?)");
         return r;
       }
       bus_.handle(milliseconds(50));

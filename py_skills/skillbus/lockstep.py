@@ -359,7 +359,7 @@ class LockstepParticipant:
             while self._next_clock is None and not self._stop_seen:
                 if time.monotonic() - last_event > self.clock_timeout:
                     return self._fail(r, f"lockstep: no clock after frame {self._last_acked} within "
-                                         f"{self.clock_timeout:.1f} s (master gone?)")
+                                         f"{self.clock_timeout:.1f} s (master {self._master} gone?)")
                 self.bus.handle(0.05)
             if self._next_clock is None:
                 break  # stopped

@@ -11,6 +11,7 @@
 namespace skillbus::sim {
 
 void Physics::Impl::build() {
+  steps_since_build = 0;
   world = build_world(scene, [&](dart::dynamics::Skeleton& robot) {
     layout = set_up_robot(robot, scene);
     std::vector<double> arm_positions;
@@ -62,6 +63,7 @@ void Physics::Impl::step() {
   world.sim->step();
   physics_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ++total_steps;
+  ++steps_since_build;
   arm.finish_step(total_steps);
 }
 

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "skillbus/scene/scene.hpp"
 #include "skillbus/sim/arm_controller.hpp"
@@ -23,6 +25,7 @@ struct Physics::Impl {
   int steps_per_frame = 10;
   int64_t step_ns = 1'000'000;
   int64_t total_steps = 0;   // since start (never reset): the time base of trajectories
+  int64_t steps_since_build = 0;  // no step yet: no contacts to read supports from
   double physics_seconds = 0;
 
   void build();    // the world and the controllers from the scene (again on reset)
@@ -31,6 +34,7 @@ struct Physics::Impl {
   // For the state messages (state.cpp):
   void tool_pose(double* out) const;  // the tool centre point (world): x y z qx qy qz qw
   double tracking_error() const;      // rad, max |reference - position| over the arm joints
+  std::vector<std::string> supports() const;  // per object: what it rests on (state.cpp)
 };
 
 }  // namespace skillbus::sim

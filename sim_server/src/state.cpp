@@ -11,6 +11,9 @@
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/simulation/World.hpp>
 #include <map>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "physics_impl.hpp"
 
@@ -65,13 +68,79 @@ void Physics::fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const {
   out.arm_tracking_error = m.tracking_error();
 }
 
+// What each object rests on, from the last step's contacts (a perfect camera's reading
+// of the scene, as a perception pipeline would segment objects above support surfaces):
+// the gripper's label when both fingers touch it; else the fixture it touches at the most
+// contact points (ties: the first name), which names the world model's Location by its
+// label; an object that touches only other objects rests on what they rest on; "" when
+// it touches nothing it could rest on (falling), or only the floor (no world model label).
+// Before the first step of a (re)built world: the scene's `on` of each object.
+std::vector<std::string> Physics::Impl::supports() const {
+  const auto& objects = world.objects;
+  const auto& r = world.robot;
+  const BodyNode* fingers[2] = {r->getJoint(scene.robot.left_finger_joint)->getChildBodyNode(),
+                                r->getJoint(scene.robot.right_finger_joint)->getChildBodyNode()};
+  std::map<const dart::dynamics::Skeleton*, size_t> index;
+  for (size_t k = 0; k < objects.size(); ++k) index[objects[k].get()] = k;
+  std::set<std::string> fixtures;
+  for (const auto& f : scene.fixtures) fixtures.insert(f.name);
+  if (steps_since_build == 0) {  // no step, no contacts yet: what the scene says each starts on
+    std::vector<std::string> out;
+    for (const auto& o : scene.objects) out.push_back(o.on);
+    return out;
+  }
+  std::vector<int> finger_bits(objects.size(), 0);
+  std::vector<std::map<std::string, int>> fixture_points(objects.size());
+  std::vector<std::set<size_t>> touching(objects.size());
+  auto body = [](const dart::collision::CollisionObject* o) {
+    return o->getShapeFrame()->asShapeNode()->getBodyNodePtr().get();
+  };
+  auto note = [&](const BodyNode* object, const BodyNode* other) {
+    const auto it = index.find(object->getSkeleton().get());
+    if (it == index.end()) return;
+    const size_t k = it->second;
+    if (other == fingers[0]) finger_bits[k] |= 1;
+    else if (other == fingers[1]) finger_bits[k] |= 2;
+    else if (const auto o = index.find(other->getSkeleton().get()); o != index.end()) touching[k].insert(o->second);
+    else if (fixtures.count(other->getSkeleton()->getName())) fixture_points[k][other->getSkeleton()->getName()] += 1;
+  };
+  for (const auto& c : world.sim->getLastCollisionResult().getContacts()) {
+    const BodyNode* a = body(c.collisionObject1);
+    const BodyNode* b = body(c.collisionObject2);
+    note(a, b);
+    note(b, a);
+  }
+  std::vector<std::string> out(objects.size());
+  for (size_t k = 0; k < objects.size(); ++k) {
+    if (finger_bits[k] == 3) {
+      out[k] = scene.robot.gripper;
+      continue;
+    }
+    int best = 0;
+    for (const auto& [name, points] : fixture_points[k])
+      if (points > best) best = points, out[k] = name;
+  }
+  // Stacks: an object on objects rests where they rest (a few passes reach a stack's top).
+  for (int pass = 0; pass < 3; ++pass)
+    for (size_t k = 0; k < objects.size(); ++k)
+      if (out[k].empty() && finger_bits[k] == 0)
+        for (size_t o : touching[k])
+          if (!out[o].empty() && out[o] != scene.robot.gripper) {
+            out[k] = out[o];
+            break;
+          }
+  return out;
+}
+
 void Physics::fill_objects(skillbus_msgs::robot_objects_t& out) const {
   const auto& objects = impl_->world.objects;
+  const std::vector<std::string> support = impl_->supports();
   out.num_objects = static_cast<int32_t>(objects.size());
   out.objects.resize(objects.size());
   for (size_t k = 0; k < objects.size(); ++k) {
     out.objects[k].name = objects[k]->getName();
     from_iso(objects[k]->getRootBodyNode()->getWorldTransform(), out.objects[k].pose);
+    out.objects[k].support = support[k];
   }
 }
 

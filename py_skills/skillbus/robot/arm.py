@@ -155,3 +155,16 @@ def arm() -> Arm:
         return interfaces.get("arm", hint="--arm")
     except interfaces.InterfaceError as e:
         raise ArmError(str(e)) from None
+
+
+def tool_pose() -> tuple[tuple[float, float, float], tuple[float, float, float, float]] | None:
+    """The tool's world pose from the arm state (the robot's own joints, not a camera), or
+    None in a process without an arm or before the first state."""
+    try:
+        state = arm().state
+    except ArmError:
+        return None
+    if state is None:
+        return None
+    t = tuple(state.tool_pose)
+    return (t[0], t[1], t[2]), (t[3], t[4], t[5], t[6])

@@ -114,7 +114,7 @@ class GripperPrimitive(PrimitiveBase):
         keeps the world pose the world model has for it (where it was grasped), which is
         stale after a carry but never a phantom made of another container's numbers."""
         gripper = self.params["Gripper"].value.id
-        tool = self._tool_pose()
+        tool = arm_service.tool_pose()
         if tool is None:
             return poses.reparent_ops(self.wmi, oid, parent)
         ops = [poses.world_pose_op(self.wmi, gripper, *tool)]
@@ -126,14 +126,3 @@ class GripperPrimitive(PrimitiveBase):
             world = poses.world_pose(self.wmi, oid)
         return ops + poses.reparent_ops(self.wmi, oid, parent, world)
 
-    @staticmethod
-    def _tool_pose():
-        """The tool's world pose from the arm state, or None (no arm, no state yet)."""
-        try:
-            state = arm_service.arm().state
-        except arm_service.ArmError:
-            return None
-        if state is None:
-            return None
-        t = tuple(state.tool_pose)
-        return (t[0], t[1], t[2]), (t[3], t[4], t[5], t[6])

@@ -22,7 +22,8 @@ from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBas
 from skillbus.msgs import wm_op_t
 from skillbus.world.convert import op
 from skillbus.quat import qmul, yaw_of
-from skillbus.world.poses import reparent, set_world_pose, world_pose
+from skillbus.world.poses import (parent_of, reparent, reparent_ops, set_world_pose, world_pose,
+                                  world_pose_op)
 
 DOWN = (0.0, 1.0, 0.0, 0.0)  # tool z pointing down: half a turn about y
 MOVE_TIMEOUT_S = 20.0
@@ -83,6 +84,15 @@ class Place(SkillDescription):
         self.addPostCondition(ConditionRelation("Contains", "skiros:contain", "Location", "Object", True))
 
 
+class TransferProducts(SkillDescription):
+    def createDescription(self):
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Required)
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("From", Element("skiros:Location"), ParamTypes.Required)
+        self.addParam("To", Element("skiros:Location"), ParamTypes.Required)
+        self.addParam("Retries", 1, ParamTypes.Optional, description="retries per object (RetryOnFail); 0: none")
+
+
 class ClearTable(SkillDescription):
     def createDescription(self):
         self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Required)
@@ -95,9 +105,10 @@ class ClearTable(SkillDescription):
 # -- primitives -----------------------------------------------------------------------
 class locate(PrimitiveBase):
     """Every object the robot's camera sees (the process's camera interface) is written
-    into the world model with its pose: known elements (by label) are updated; unknown
-    ones are added as products contained in the Location. Finishes when its replica shows
-    it all."""
+    into the world model with its pose: known elements (by label) are updated, and moved
+    into what the camera sees them rest on (its support, by label: a table, a bin, the
+    gripper) when the world model says otherwise; unknown ones are added as products
+    contained in the Location. Finishes when its replica shows it all."""
 
     def createDescription(self):
         self.setDescription(Locate(), "locate")
@@ -116,10 +127,23 @@ class locate(PrimitiveBase):
             new.addRelation(location, "skiros:contain", "-1")
             eid = self.wmi.add_element(new).id
             set_world_pose(self.wmi, eid, p, q)
-            self.expected[eid] = p
+            self.expected[eid] = (p, None)
         else:  # lockstep: the id comes with the transaction's result, a few frames later
             self.adding[self.wmi.commit_async([op(wm_op_t.ADD_ELEMENT, element=new)])] = (name, p, q)
         self.added.append(name)
+
+    def _move(self, eid: str, support: Element, p: tuple, q: tuple) -> None:
+        """The camera sees `eid` resting on (or held by) another element than the world
+        model says: a restart, a drop or a crash left the world model behind. The
+        containment and the pose change in one write. Held by a gripper: the gripper's pose
+        is the tool's now (the arm state), written with it, so a later release carries the
+        object from where the tool really holds it."""
+        tool = arm_service.tool_pose() if support.type.endswith("Gripper") else None
+        if tool is None:
+            reparent(self.wmi, eid, support.id, (p, q))
+            return
+        self.wmi.write([world_pose_op(self.wmi, support.id, *tool),
+                        *reparent_ops(self.wmi, eid, support.id, (p, q), parent_pose=tool)])
 
     def execute(self):
         location = self.params["Location"].value.id
@@ -132,8 +156,13 @@ class locate(PrimitiveBase):
                 if e is None:
                     self._add(o.name, p, q, location)
                     continue
-                set_world_pose(self.wmi, e.id, p, q)
-                self.expected[e.id] = p
+                support = by_label.get(o.support) if o.support else None
+                if support is not None and support.id != e.id and parent_of(self.wmi, e.id) != support.id:
+                    self._move(e.id, support, p, q)
+                    self.expected[e.id] = (p, support.id)
+                else:
+                    set_world_pose(self.wmi, e.id, p, q)
+                    self.expected[e.id] = (p, None)
             if not self.expected and not self.adding:
                 return self.fail("located nothing (the camera sees no objects)", -1)
             return self.step(f"writing {len(self.expected) + len(self.adding)} object pose(s)")
@@ -149,16 +178,18 @@ class locate(PrimitiveBase):
             except Exception:
                 continue  # the change has not reached the replica yet
             reparent(self.wmi, eid, location, (p, q))  # the containment and the pose in it, in one write
-            self.expected[eid] = p
+            self.expected[eid] = (p, location)
             del self.adding[rid]
         if self.adding:
             return self.step(f"adding {', '.join(n for n, _, _ in self.adding.values())} to the world model")
-        for eid, p in self.expected.items():
+        # Done when the replica shows every pose and every containment written: the skill
+        # after this one (TransferProducts) decides from the containments.
+        for eid, (p, parent) in self.expected.items():
             try:
                 got, _ = world_pose(self.wmi, eid)
             except Exception:  # not in the replica yet
                 return self.step(f"waiting for the world model to show {eid}")
-            if max(abs(a - b) for a, b in zip(got, p)) > 1e-4:
+            if max(abs(a - b) for a, b in zip(got, p)) > 1e-4 or (parent and parent_of(self.wmi, eid) != parent):
                 return self.step(f"waiting for the world model to show {eid}")
         extra = f"; new: {', '.join(self.added)}" if self.added else ""
         return self.success(f"located {len(self.expected)} object(s){extra}")
@@ -266,26 +297,53 @@ class place(SkillBase):
         )
 
 
+class transfer_products(SkillBase):
+    """Every product the world model has in From into To, each Pick-and-Place retried on
+    failure (RetryOnFail(Retries)); a product the Gripper already holds (a task cut short
+    by a fault left it there) is placed in To first. The products are read when this skill
+    starts, so a Locate just before it decides them."""
+
+    def createDescription(self):
+        self.setDescription(TransferProducts(), "transfer_products")
+
+    def expand(self, skill):
+        gripper = self.params["Gripper"].value
+        source = self.params["From"].value
+        retries = int(self.params["Retries"].value)
+
+        def contents(eid: str) -> list[str]:
+            return [r["dst"] for r in self.wmi.get_relations(eid, "skiros:contain", "")] if self.wmi else []
+
+        def retried(node):
+            return self.skill(RetryOnFail(retries))(node) if retries > 0 else node
+
+        steps = []
+        for oid in contents(gripper.id):
+            obj = self.wmi.get_element(oid)
+            steps.append(retried(self.skill("Place", "", remap={"Location": "To"}, specify={"Object": obj})))
+        for oid in contents(source.id):
+            obj = self.wmi.get_element(oid)
+            steps.append(retried(self.skill(SerialStar())(
+                self.skill("Pick", "", specify={"Object": obj}),
+                self.skill("Place", "", remap={"Location": "To"}, specify={"Object": obj}),
+            )))
+        skill.setProcessor(SerialStar())
+        skill(*steps)
+
+
 class clear_table(SkillBase):
-    """Locate, then every product on the table into the bin, each Pick-and-Place retried
-    on failure (RetryOnFail(Retries), once by default), then Locate again for the final
-    poses."""
+    """Locate (which also tells the world model what rests where, so a world model left
+    behind by a fault agrees with what is seen), then every product on the table into the
+    bin (TransferProducts, which decides the products after that Locate, and first places
+    one still in the gripper), then Locate again for the final poses."""
 
     def createDescription(self):
         self.setDescription(ClearTable(), "clear_table")
 
     def expand(self, skill):
-        table = self.params["Table"].value
-        retries = int(self.params["Retries"].value)
-        products = [r["dst"] for r in self.wmi.get_relations(table.id, "skiros:contain", "")] if self.wmi else []
-        steps = [self.skill("Locate", "", remap={"Location": "Table"})]
-        for oid in products:
-            obj = self.wmi.get_element(oid)
-            pick_and_place = self.skill(SerialStar())(
-                self.skill("Pick", "", specify={"Object": obj}),
-                self.skill("Place", "", remap={"Location": "Bin"}, specify={"Object": obj}),
-            )
-            steps.append(self.skill(RetryOnFail(retries))(pick_and_place) if retries > 0 else pick_and_place)
-        steps.append(self.skill("Locate", "", remap={"Location": "Bin"}))
         skill.setProcessor(SerialStar())
-        skill(*steps)
+        skill(
+            self.skill("Locate", "", remap={"Location": "Table"}),
+            self.skill("TransferProducts", "", remap={"From": "Table", "To": "Bin"}),
+            self.skill("Locate", "", remap={"Location": "Bin"}),
+        )
