@@ -32,7 +32,7 @@ NAMED = {
     "wm": r"participant\(s\) wm|world model",
     "skill_mgr": r"participant\(s\) skill_mgr|skill manager",
     "skills": r"participant\(s\) skills|skill process skills",
-    "sim": r"master sim|physics|arm .*(silent|gone|no state)",
+    "sim": r"master sim|physics|arm's driver went silent",
     "motion": r"motion",
     "gripper": r"participant\(s\) gripper|gripper node 5",
     "can_hub": r"CAN hub",

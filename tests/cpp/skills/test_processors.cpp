@@ -237,3 +237,45 @@ TEST(Processors, FactoryNamesWhatItDoesNotKnow) {
     EXPECT_NE(std::string(e.what()).find("unknown processor 'Parallel'"), std::string::npos);
   }
 }
+
+// A leaf that fails with a message of its own each time: the cause first, then consequences.
+class FailingLeaf : public Node {
+ public:
+  explicit FailingLeaf(std::vector<std::string> whys) : Node("leaf"), whys_(std::move(whys)) {}
+
+ protected:
+  State step() override {
+    set_result(whys_[std::min(n_++, whys_.size() - 1)]);
+    return State::Failure;
+  }
+
+ private:
+  std::vector<std::string> whys_;
+  size_t n_ = 0;
+};
+
+TEST(Processors, RetryOnFailThatGivesUpNamesTheFirstFailureBesideTheLast) {
+  Children kids;
+  kids.push_back(std::make_unique<FailingLeaf>(std::vector<std::string>{"process killed", "nothing gripped"}));
+  CompoundNode retry("Retry", "", make_processor("RetryOnFail(1)"), std::move(kids));
+  State s = State::Running;
+  for (int i = 0; i < 5 && s == State::Running; ++i) s = retry.tick();
+  ASSERT_EQ(s, State::Failure);
+  const std::string why = retry.message();
+  EXPECT_NE(why.find("gave up after 2 attempts"), std::string::npos) << why;
+  EXPECT_NE(why.find("nothing gripped"), std::string::npos) << why;
+  EXPECT_NE(why.find("the first: "), std::string::npos) << why;
+  EXPECT_NE(why.find("process killed"), std::string::npos) << why;
+}
+
+TEST(Processors, RetryOnFailFailingTheSameWayEachTimeSaysItOnce) {
+  Children kids;
+  kids.push_back(std::make_unique<FailingLeaf>(std::vector<std::string>{"unreachable"}));
+  CompoundNode retry("Retry", "", make_processor("RetryOnFail(2)"), std::move(kids));
+  State s = State::Running;
+  for (int i = 0; i < 5 && s == State::Running; ++i) s = retry.tick();
+  ASSERT_EQ(s, State::Failure);
+  const std::string why = retry.message();
+  EXPECT_NE(why.find("gave up after 3 attempts"), std::string::npos) << why;
+  EXPECT_EQ(why.find("the first: "), std::string::npos) << why;
+}
