@@ -30,12 +30,13 @@ std::string rpc_reply_channel(const std::string& area) { return channel("SB_" + 
 
 // ---------------------------------------------------------------- server
 
-RpcServer::RpcServer(Bus& bus, const std::string& area, size_t memory)
+RpcServer::RpcServer(Bus& bus, const std::string& area, size_t memory, size_t memory_bytes)
     : bus_(bus),
       area_(area),
       req_channel_(rpc_request_channel(area)),
       rep_channel_(rpc_reply_channel(area)),
       memory_(memory),
+      memory_bytes_(memory_bytes),
       bad_("rpc-server " + area) {
   sub_ = bus_.subscribe(req_channel_, [this](const std::string& ch, const uint8_t* d, size_t n) { on_request(ch, d, n); });
 }
@@ -89,10 +90,15 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
 }
 
 void RpcServer::remember(const std::string& key, Bytes reply) {
+  remembered_bytes_ += reply.size();
   answered_[key] = std::move(reply);
   order_.push_back(key);
-  while (order_.size() > memory_) {
-    answered_.erase(order_.front());
+  // Bounded by count and by bytes: pages of a large world would otherwise keep megabytes
+  // of replies that a retry within a call's timeout is the only use for.
+  while (order_.size() > memory_ || (remembered_bytes_ > memory_bytes_ && order_.size() > 1)) {
+    auto it = answered_.find(order_.front());
+    remembered_bytes_ -= it->second.size();
+    answered_.erase(it);
     order_.pop_front();
   }
 }

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -14,6 +15,7 @@
 
 #include "skillbus/bus.hpp"
 #include "skillbus/log.hpp"
+#include "skillbus/wm/convert.hpp"
 
 namespace skillbus::wm {
 
@@ -108,6 +110,17 @@ void write_file_synced(const std::string& path, const std::string& bytes) {
 void replace_file_durably(const std::string& dir, const std::string& name, const std::string& bytes) {
   const std::string tmp = dir + "/" + name + ".tmp", path = dir + "/" + name;
   write_file_synced(tmp, bytes);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string e = sys_error("cannot rename " + tmp + " to " + path);
+    ::unlink(tmp.c_str());
+    throw WmError(e);
+  }
+  sync_dir(dir);
+}
+
+// Renames DIR/name.tmp (written and synced) to DIR/name and syncs the directory.
+void rename_into_place(const std::string& dir, const std::string& name) {
+  const std::string tmp = dir + "/" + name + ".tmp", path = dir + "/" + name;
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string e = sys_error("cannot rename " + tmp + " to " + path);
     ::unlink(tmp.c_str());
@@ -287,23 +300,101 @@ std::string describe_corruption(const std::string& path, const std::string& dir,
   return m;
 }
 
-skillbus_msgs::wm_snapshot_t read_snapshot(const std::string& path) {
-  const std::string bytes = read_all(path);
-  const auto* b = reinterpret_cast<const uint8_t*>(bytes.data());
-  const std::string keep = "; nothing was changed: restore it from a backup (the journal holds only the commits after it)";
-  if (bytes.size() < 8 || std::memcmp(b, kSnapshotMagic, 8) != 0)
-    throw DataError(path + " is not a snapshot of this format (it does not start with SBWMSNP1)" + keep);
-  if (bytes.size() < fmt::kSnapshotHeaderSize) throw DataError(path + " is corrupt: its header is cut short" + keep);
-  const uint32_t len = get_u32(b + 8);
-  if (bytes.size() - fmt::kSnapshotHeaderSize != len)
-    throw DataError(path + " is corrupt: it has " + std::to_string(bytes.size()) + " bytes where its header says " +
-                    std::to_string(fmt::kSnapshotHeaderSize + uint64_t(len)) + keep);
-  if (crc(b + fmt::kSnapshotHeaderSize, len) != get_u32(b + 12))
-    throw DataError(path + " is corrupt: its checksum does not match its " + std::to_string(len) + " bytes" + keep);
-  skillbus_msgs::wm_snapshot_t snap;
-  if (!decode_msg(b + fmt::kSnapshotHeaderSize, len, snap))
-    throw DataError(path + " is corrupt: it passes its checksum but does not decode as a snapshot" + keep);
-  return snap;
+const char* const kRestore = "; nothing was changed: restore it from a backup (the journal holds only the commits after it)";
+
+void put_be32(uint8_t* b, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[i] = uint8_t(v >> (24 - 8 * i));
+}
+void put_be64(uint8_t* b, uint64_t v) {
+  for (int i = 0; i < 8; ++i) b[i] = uint8_t(v >> (56 - 8 * i));
+}
+uint32_t get_be32(const uint8_t* b) { return uint32_t(b[0]) << 24 | uint32_t(b[1]) << 16 | uint32_t(b[2]) << 8 | b[3]; }
+uint64_t get_be64(const uint8_t* b) { return uint64_t(get_be32(b)) << 32 | get_be32(b + 4); }
+
+// Writes a snapshot file's body in pieces through a buffer, with its CRC and length
+// kept as it goes: the bytes are exactly those of encode_msg(wm_snapshot_t) (LCM's
+// encoding: the fingerprint, then each field in order; a nested message without its
+// own fingerprint), so the file format is the same as when the message was encoded
+// whole, without holding a second copy of a large world as messages and bytes.
+class BodyWriter {
+ public:
+  BodyWriter(int fd, std::string path) : fd_(fd), path_(std::move(path)) { buf_.reserve(kChunk); }
+  void bytes(const void* p, size_t n) {
+    const auto* b = static_cast<const uint8_t*>(p);
+    crc_ = static_cast<uint32_t>(crc32(crc_, b, static_cast<uInt>(n)));
+    len_ += n;
+    buf_.insert(buf_.end(), b, b + n);
+    if (buf_.size() >= kChunk) flush();
+  }
+  void be32(uint32_t v) {
+    uint8_t b[4];
+    put_be32(b, v);
+    bytes(b, 4);
+  }
+  void be64(uint64_t v) {
+    uint8_t b[8];
+    put_be64(b, v);
+    bytes(b, 8);
+  }
+  template <class M>
+  void nested(const M& m) {  // a message inside another: no fingerprint of its own
+    const int n = m._getEncodedSizeNoHash();
+    tmp_.resize(static_cast<size_t>(n));
+    if (m._encodeNoHash(tmp_.data(), 0, n) != n) throw WmError("cannot encode a snapshot's " + std::string(M::getTypeName()));
+    bytes(tmp_.data(), tmp_.size());
+  }
+  void flush() {
+    write_all(fd_, buf_.data(), buf_.size(), path_);
+    buf_.clear();
+  }
+  uint64_t length() const { return len_; }
+  uint32_t crc() const { return crc_; }
+
+ private:
+  static constexpr size_t kChunk = 1 << 20;
+  int fd_;
+  std::string path_;
+  std::vector<uint8_t> buf_, tmp_;
+  uint32_t crc_ = static_cast<uint32_t>(crc32(0L, Z_NULL, 0));
+  uint64_t len_ = 0;
+};
+
+// snapshot.bin.tmp with the body `body` writes, synced; renamed to snapshot.bin and the
+// directory synced by the caller. On failure no file is left.
+void write_snapshot_tmp(const std::string& tmp, const std::function<void(BodyWriter&)>& body) {
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
+  try {
+    uint8_t h[fmt::kSnapshotHeaderSize] = {0};
+    write_all(fd, h, sizeof h, tmp);  // its length and CRC are known at the end
+    BodyWriter w(fd, tmp);
+    body(w);
+    w.flush();
+    if (w.length() > UINT32_MAX) throw WmError("a snapshot of " + std::to_string(w.length()) + " bytes is too big");
+    std::memcpy(h, kSnapshotMagic, 8);
+    put_u32(h + 8, static_cast<uint32_t>(w.length()));
+    put_u32(h + 12, w.crc());
+    if (::pwrite(fd, h, sizeof h, 0) != static_cast<ssize_t>(sizeof h)) throw WmError(sys_error("cannot write " + tmp));
+    if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  ::close(fd);
+}
+
+void snapshot_body(BodyWriter& w, const SnapshotData& d) {
+  w.be64(static_cast<uint64_t>(skillbus_msgs::wm_snapshot_t::getHash()));
+  w.be64(static_cast<uint64_t>(d.world.version));  // wm_elements_t world
+  w.be64(static_cast<uint64_t>(d.world.next_id));
+  w.be64(static_cast<uint64_t>(d.world.elements.size()));  // total
+  w.be32(static_cast<uint32_t>(d.world.elements.size()));
+  for (const auto& e : d.world.elements) w.nested(to_msg(*e));
+  w.be32(static_cast<uint32_t>(d.world.relations.size()));
+  for (const auto& r : d.world.relations) w.nested(to_msg(*r));
+  w.be32(static_cast<uint32_t>(d.recent.size()));  // num_recent
+  for (const auto& c : d.recent) w.nested(c);
 }
 
 // The lock of a data directory: one process uses it at a time (a server, or a repair).
@@ -345,12 +436,139 @@ void make_dir(const std::string& dir) {
 
 JournalScan scan_journal(const std::string& path) { return scan_bytes(read_all(path)); }
 
+// ---------------------------------------------------------------- snapshot files
+
+SnapshotFile::SnapshotFile(const std::string& path) : path_(path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw WmError(sys_error("cannot read " + path));
+  struct stat st;
+  if (::fstat(fd, &st) != 0) {
+    const std::string e = sys_error("cannot read " + path);
+    ::close(fd);
+    throw WmError(e);
+  }
+  map_size_ = static_cast<size_t>(st.st_size);
+  if (map_size_ > 0) {
+    map_ = ::mmap(nullptr, map_size_, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (map_ == MAP_FAILED) {
+      map_ = nullptr;
+      const std::string e = sys_error("cannot read " + path);
+      ::close(fd);
+      throw WmError(e);
+    }
+    ::madvise(map_, map_size_, MADV_SEQUENTIAL);
+  }
+  ::close(fd);
+  const auto* b = static_cast<const uint8_t*>(map_);
+  const size_t n = map_size_;
+  try {
+    if (n < 8 || std::memcmp(b, kSnapshotMagic, 8) != 0)
+      throw DataError(path + " is not a snapshot of this format (it does not start with SBWMSNP1)" + kRestore);
+    if (n < fmt::kSnapshotHeaderSize) throw DataError(path + " is corrupt: its header is cut short" + kRestore);
+    const uint32_t len = get_u32(b + 8);
+    if (n - fmt::kSnapshotHeaderSize != len)
+      throw DataError(path + " is corrupt: it has " + std::to_string(n) + " bytes where its header says " +
+                      std::to_string(fmt::kSnapshotHeaderSize + uint64_t(len)) + kRestore);
+    if (crc(b + fmt::kSnapshotHeaderSize, len) != get_u32(b + 12))
+      throw DataError(path + " is corrupt: its checksum does not match its " + std::to_string(len) + " bytes" + kRestore);
+    body_ = b + fmt::kSnapshotHeaderSize;
+    size_ = len;
+    // The fingerprint and the world's fixed fields; the elements are decoded on demand.
+    if (size_ < 8 + 8 + 8 + 8 + 4 ||
+        get_be64(body_) != static_cast<uint64_t>(skillbus_msgs::wm_snapshot_t::getHash()))
+      undecodable("its fingerprint");
+    version_ = static_cast<int64_t>(get_be64(body_ + 8));
+    next_id_ = static_cast<int64_t>(get_be64(body_ + 16));
+    num_elements_ = static_cast<int32_t>(get_be32(body_ + 32));
+    if (num_elements_ < 0) undecodable("its count of elements");
+    elements_at_ = 36;
+  } catch (...) {
+    if (map_) ::munmap(map_, map_size_);
+    throw;
+  }
+}
+
+SnapshotFile::~SnapshotFile() {
+  if (map_) ::munmap(map_, map_size_);
+}
+
+void SnapshotFile::undecodable(const std::string& what) const {
+  throw DataError(path_ + " is corrupt: it passes its checksum but does not decode as a snapshot (" + what + ")" +
+                  kRestore);
+}
+
+namespace {
+
+// Decodes `count` messages of type M from body[pos...], calling fn on each; returns the
+// offset after them. LCM's decoder may throw on a bad string length: that is undecodable.
+template <class M, class F>
+size_t decode_run(const uint8_t* body, size_t size, size_t pos, int32_t count, F&& fn, const char* what,
+                  const std::function<void(const std::string&)>& fail) {
+  M m;
+  for (int32_t i = 0; i < count; ++i) {
+    int n = -1;
+    try {
+      n = m._decodeNoHash(body, static_cast<int>(pos), static_cast<int>(size - pos));
+    } catch (const std::exception&) {
+      n = -1;
+    }
+    if (n < 0) fail(std::string(what) + " " + std::to_string(i));
+    pos += static_cast<size_t>(n);
+    fn(m);
+  }
+  return pos;
+}
+
+}  // namespace
+
+void SnapshotFile::for_each_element(const std::function<void(skillbus_msgs::wm_element_t&)>& fn) const {
+  auto fail = [this](const std::string& w) { undecodable(w); };
+  const size_t end = decode_run<skillbus_msgs::wm_element_t>(body_, size_, elements_at_, num_elements_, fn, "element",
+                                                              fail);
+  auto* self = const_cast<SnapshotFile*>(this);  // where the relations start: known now
+  if (end + 4 > size_) undecodable("its count of relations");
+  self->relations_at_ = end + 4;
+  self->num_relations_ = static_cast<int32_t>(get_be32(body_ + end));
+}
+
+void SnapshotFile::for_each_relation(const std::function<void(skillbus_msgs::wm_relation_t&)>& fn) const {
+  if (relations_at_ == 0) for_each_element([](skillbus_msgs::wm_element_t&) {});
+  auto fail = [this](const std::string& w) { undecodable(w); };
+  const size_t end = decode_run<skillbus_msgs::wm_relation_t>(body_, size_, relations_at_, num_relations_, fn,
+                                                               "relation", fail);
+  auto* self = const_cast<SnapshotFile*>(this);
+  if (end + 4 > size_) undecodable("its count of remembered commits");
+  self->recent_at_ = end + 4;
+  self->num_recent_ = static_cast<int32_t>(get_be32(body_ + end));
+}
+
+std::vector<skillbus_msgs::wm_commit_t> SnapshotFile::recent() const {
+  if (recent_at_ == 0) for_each_relation([](skillbus_msgs::wm_relation_t&) {});
+  std::vector<skillbus_msgs::wm_commit_t> out;
+  auto fail = [this](const std::string& w) { undecodable(w); };
+  const size_t end = decode_run<skillbus_msgs::wm_commit_t>(
+      body_, size_, recent_at_, num_recent_, [&](skillbus_msgs::wm_commit_t& c) { out.push_back(c); },
+      "remembered commit", fail);
+  if (end != size_) undecodable("bytes after its end");
+  return out;
+}
+
+skillbus_msgs::wm_snapshot_t SnapshotFile::decode_all() const {
+  skillbus_msgs::wm_snapshot_t snap;
+  if (!decode_msg(body_, size_, snap)) undecodable("the whole message");
+  return snap;
+}
+
+// ---------------------------------------------------------------- the journal
+
 Journal::Journal(std::string dir) : dir_(std::move(dir)) {
   make_dir(dir_);
   lock_fd_ = lock_dir(dir_);
 }
 
 Journal::~Journal() {
+  wait_for_snapshot();
+  if (worker_.joinable()) worker_.join();
   if (fd_ >= 0) ::close(fd_);
   if (lock_fd_ >= 0) ::close(lock_fd_);
 }
@@ -369,9 +587,12 @@ void Journal::start_journal(int64_t base_version) {
     ::unlink(tmp.c_str());
     throw;  // the old journal goes on
   }
+  std::lock_guard<std::mutex> lock(mu_);
   if (fd_ >= 0) ::close(fd_);
   fd_ = fd;
   size_ = header.size();
+  records_ = 0;
+  attempt_at_ = 0;
   try {
     sync_dir(dir_);
   } catch (const WmError& e) {
@@ -391,8 +612,8 @@ Journal::Recovered Journal::recover() {
     records_ = 0;
     return out;
   }
-  if (has_snapshot) out.snapshot = read_snapshot(spath);
-  const int64_t snap_version = has_snapshot ? out.snapshot->world.version : 0;
+  if (has_snapshot) out.snapshot = std::make_shared<SnapshotFile>(spath);
+  const int64_t snap_version = has_snapshot ? out.snapshot->version() : 0;
   const std::string v = std::to_string(snap_version);
   if (!has_journal)
     throw DataError(jpath + " is missing, but " + spath + " (version " + v + ") is there: the commits after version " +
@@ -442,6 +663,7 @@ Journal::Recovered Journal::recover() {
 
 void Journal::append(const skillbus_msgs::wm_txn_t& txn) {
   const std::string path = dir_ + "/journal.bin";
+  std::lock_guard<std::mutex> lock(mu_);  // the background snapshot's switch to a new journal
   if (!broken_.empty()) throw WmError(broken_);
   if (fd_ < 0) throw WmError("the journal of " + dir_ + " is not open: recover() first");
   const Bytes body = encode_msg(txn);
@@ -472,20 +694,167 @@ void Journal::append(const skillbus_msgs::wm_txn_t& txn) {
 }
 
 void Journal::write_snapshot(const skillbus_msgs::wm_snapshot_t& snapshot) {
-  if (!broken_.empty()) throw WmError(broken_);
+  wait_for_snapshot();
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!broken_.empty()) throw WmError(broken_);
+  }
   const Bytes body = encode_msg(snapshot);
-  if (body.size() > UINT32_MAX) throw WmError("a snapshot of " + std::to_string(body.size()) + " bytes is too big");
-  std::string bytes(fmt::kSnapshotHeaderSize, '\0');
-  auto* h = reinterpret_cast<uint8_t*>(bytes.data());
-  std::memcpy(h, kSnapshotMagic, 8);
-  put_u32(h + 8, static_cast<uint32_t>(body.size()));
-  put_u32(h + 12, crc(body.data(), body.size()));
-  bytes.append(reinterpret_cast<const char*>(body.data()), body.size());
   // The snapshot first: until the new journal replaces the old one, the old journal has
   // every commit (recovery skips those the snapshot has).
-  replace_file_durably(dir_, "snapshot.bin", bytes);
+  write_snapshot_tmp(dir_ + "/snapshot.bin.tmp", [&](BodyWriter& w) { w.bytes(body.data(), body.size()); });
+  rename_into_place(dir_, "snapshot.bin");
   start_journal(snapshot.world.version);
-  records_ = 0;
+}
+
+void Journal::write_snapshot(const SnapshotData& snapshot) {
+  wait_for_snapshot();
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!broken_.empty()) throw WmError(broken_);
+  }
+  write_snapshot_file(snapshot);
+  start_journal(snapshot.world.version);
+  std::lock_guard<std::mutex> lock(mu_);
+  ++snapshots_;
+}
+
+void Journal::write_snapshot_file(const SnapshotData& snapshot) const {
+  write_snapshot_tmp(dir_ + "/snapshot.bin.tmp", [&](BodyWriter& w) {
+    snapshot_body(w, snapshot);
+    if (test_hook) {
+      w.flush();
+      test_hook("written");
+    }
+  });
+  rename_into_place(dir_, "snapshot.bin");
+  if (test_hook) test_hook("renamed");
+}
+
+bool Journal::start_snapshot(SnapshotData snapshot) {
+  std::unique_lock<std::mutex> lock(mu_);
+  if (running_ || !broken_.empty()) return false;
+  if (worker_.joinable()) worker_.join();  // the last one has ended (running_ is false)
+  running_ = true;
+  // The records up to the snapshot's version end where the journal ends now: the new
+  // journal gets a copy of what follows.
+  const uint64_t tail_from = size_;
+  const long records_before = records_;
+  worker_ = std::thread([this, s = std::move(snapshot), tail_from, records_before]() mutable {
+    background(std::move(s), tail_from, records_before);
+  });
+  return true;
+}
+
+void Journal::background(SnapshotData snapshot, uint64_t tail_from, long records_before) {
+  const int64_t version = snapshot.world.version;
+  std::string error;
+  try {
+    write_snapshot_file(snapshot);
+    snapshot = SnapshotData{};  // the image's elements go now, not when the next snapshot starts
+    rotate_journal(version, tail_from, records_before);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    running_ = false;
+    if (error.empty())
+      ++snapshots_;
+    else
+      attempt_at_ = records_;
+  }
+  if (!error.empty())
+    SB_ERROR(kLog, "the snapshot at version " << version << " could not be written in the background: " << error
+                                              << "; the last snapshot and the journal after it stay in use");
+  done_cv_.notify_all();
+}
+
+void Journal::rotate_journal(int64_t base_version, uint64_t tail_from, long records_before) {
+  const std::string tmp = dir_ + "/journal.bin.tmp", path = dir_ + "/journal.bin";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
+  // Only this thread renames the journal, so journal.bin is the file appended to.
+  const int in = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  bool switched = false;
+  try {
+    if (in < 0) throw WmError(sys_error("cannot read " + path));
+    const std::string header = journal_header(base_version);
+    write_all(fd, header.data(), header.size(), tmp);
+    uint64_t copied = tail_from;
+    std::vector<uint8_t> buf(1 << 20);
+    auto copy_to = [&](uint64_t end) {  // the complete records [copied, end) of the old journal
+      while (copied < end) {
+        const size_t n = static_cast<size_t>(std::min<uint64_t>(buf.size(), end - copied));
+        const ssize_t r = ::pread(in, buf.data(), n, static_cast<off_t>(copied));
+        if (r <= 0) throw WmError(sys_error("cannot read " + path));
+        write_all(fd, buf.data(), static_cast<size_t>(r), tmp);
+        copied += static_cast<uint64_t>(r);
+      }
+    };
+    uint64_t end;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      end = size_;
+    }
+    copy_to(end);  // while commits go on
+    if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
+    if (test_hook) test_hook("journal");
+    std::lock_guard<std::mutex> lock(mu_);  // no append from here to the directory's sync
+    if (!broken_.empty()) throw WmError(broken_);
+    if (size_ > copied) {  // the records appended meanwhile
+      copy_to(size_);
+      if (::fsync(fd) != 0) throw WmError(sys_error("cannot sync " + tmp));
+    }
+    if (::rename(tmp.c_str(), path.c_str()) != 0) throw WmError(sys_error("cannot rename " + tmp + " to " + path));
+    switched = true;
+    ::close(fd_);
+    fd_ = fd;
+    size_ = header.size() + (size_ - tail_from);
+    records_ -= records_before;
+    attempt_at_ = 0;
+    try {
+      sync_dir(dir_);
+    } catch (const WmError& e) {
+      // The new journal has its name, but perhaps not on disk: records appended to it
+      // could vanish with the name. No more commits until a restart settles it.
+      broken_ = std::string("the journal cannot be used: ") + e.what() + "; restart the server";
+      throw WmError(broken_);
+    }
+  } catch (...) {
+    if (in >= 0) ::close(in);
+    if (!switched) {
+      ::close(fd);
+      ::unlink(tmp.c_str());  // the old journal goes on
+    }
+    throw;
+  }
+  ::close(in);
+}
+
+bool Journal::snapshot_running() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return running_;
+}
+
+void Journal::wait_for_snapshot() {
+  std::unique_lock<std::mutex> lock(mu_);
+  done_cv_.wait(lock, [this] { return !running_; });
+}
+
+long Journal::records_since_snapshot() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return records_;
+}
+
+bool Journal::snapshot_due(long every) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return !running_ && records_ - attempt_at_ >= every;
+}
+
+long Journal::snapshots_written() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return snapshots_;
 }
 
 RepairResult repair_data_dir(const std::string& dir) {
@@ -502,7 +871,7 @@ RepairResult repair_data_dir(const std::string& dir) {
     int64_t snap_version = 0;
     if (has_snapshot) {
       try {
-        snap_version = read_snapshot(spath).world.version;
+        snap_version = SnapshotFile(spath).version();
       } catch (const DataError& e) {
         return {1, std::string("cannot repair: ") + e.what()};
       }

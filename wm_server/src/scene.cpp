@@ -94,7 +94,8 @@ Scene read_scene(const std::string& turtle, Ontology& ontology, Prefixes& px, co
 std::string write_scene(const WorldStore& store, const Prefixes& px) {
   std::vector<Triple> out;
   std::map<std::string, std::vector<const Relation*>> by_subject;
-  for (const auto& r : store.all_relations()) by_subject[r.subject].push_back(&r);
+  const std::vector<Relation> relations = store.all_relations();
+  for (const auto& r : relations) by_subject[r.subject].push_back(&r);
   for (const auto& [id, e] : store.elements()) {
     const Term s = iri(px.expand(id));
     out.push_back({s, iri(kRdfType), iri(px.expand(e.type))});

@@ -61,25 +61,23 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
       store_(ontology_),
       journal_(opt_.data_dir),
       participant_(bus, participant_config(opt_)),
-      rpc_(bus, "WM") {
+      rpc_(bus, "WM", 4096, opt_.rpc_memory_bytes) {
   for (const auto& f : opt_.ontology_files) ontology_.load_turtle(read_file(f), prefixes_, f);
   recover();
 
   rpc_.add_method<wm_query_t, wm_elements_t>("get", [this](const wm_query_t& q) { return on_get(q); });
-  rpc_.add_method<wm_query_t, wm_elements_t>("query", [this](const wm_query_t& q) { return on_query(q); });
+  rpc_.add_method<wm_query_t, wm_elements_t>("query", [this](const wm_query_t& q) {
+    return on_query(q, "query", Relations::Touching);
+  });
   // Pages keep each reply small: one lost UDP fragment loses a whole LCM message, and a
-  // multi-megabyte reply overruns a default socket buffer.
+  // multi-megabyte reply overruns a default socket buffer. A snapshot page is a query
+  // for everything.
   rpc_.add_method<wm_query_t, wm_elements_t>("snapshot", [this](const wm_query_t& q) {
-    if (q.offset < 0 || q.limit < 0) throw WmError("snapshot: offset and limit must not be negative");
-    std::vector<const Element*> page;
-    const auto& all = store_.elements();
-    int32_t i = 0;
-    for (auto it = q.after.empty() ? all.begin() : all.upper_bound(q.after); it != all.end(); ++it) {
-      if (i++ < q.offset) continue;
-      if (q.limit > 0 && static_cast<int32_t>(page.size()) >= q.limit) break;
-      page.push_back(&it->second);
-    }
-    return elements_reply(page);
+    wm_query_t all{};
+    all.after = q.after;
+    all.offset = q.offset;
+    all.limit = q.limit;
+    return on_query(all, "snapshot", Relations::BySubject);
   });
   // A client whose request ids must not repeat across its restarts (a lockstep
   // participant names its transactions by its name and a counter, the same every run)
@@ -118,12 +116,15 @@ void WorldModelServer::recover() {
   Journal::Recovered rec = journal_.recover();
   std::string report;
   if (rec.snapshot) {
-    std::vector<Element> elements;
-    std::vector<Relation> relations;
-    for (const auto& e : rec.snapshot->world.elements) elements.push_back(from_msg(e));
-    for (const auto& r : rec.snapshot->world.relations) relations.push_back(from_msg(r));
-    store_.reset(std::move(elements), std::move(relations), rec.snapshot->world.version, rec.snapshot->world.next_id);
-    for (const auto& c : rec.snapshot->recent) remember(c);
+    // Element by element from the mapped file into the store: a large world is never
+    // held a second time as messages.
+    const SnapshotFile& snap = *rec.snapshot;
+    store_.clear();
+    snap.for_each_element([this](wm_element_t& m) { store_.insert_element(from_msg(m)); });
+    snap.for_each_relation([this](wm_relation_t& m) { store_.insert_relation(from_msg(m)); });
+    store_.set_version(snap.version(), snap.next_id());
+    for (const auto& c : snap.recent()) remember(c);
+    rec.snapshot.reset();  // unmaps the file
     report += "snapshot at version " + std::to_string(store_.version());
   } else if (!opt_.scene_file.empty() && rec.txns.empty()) {
     load_scene_text(read_file(opt_.scene_file), opt_.scene_file, &report);
@@ -162,14 +163,17 @@ void WorldModelServer::remember(const wm_commit_t& c) {
   }
 }
 
-void WorldModelServer::snapshot() {
-  wm_snapshot_t s{};
-  std::vector<const Element*> all;
-  for (const auto& [id, e] : store_.elements()) all.push_back(&e);
-  s.world = elements_reply(all);
+void WorldModelServer::snapshot(bool in_background) {
+  // An image of the world is pointers to its immutable elements: a few milliseconds for
+  // 100,000 of them; the encoding and the writing happen in the journal's thread.
+  SnapshotData s;
+  s.world = store_.image();
+  s.recent.reserve(recent_order_.size());
   for (const auto& key : recent_order_) s.recent.push_back(recent_.at(key));
-  s.num_recent = static_cast<int32_t>(s.recent.size());
-  journal_.write_snapshot(s);
+  if (in_background)
+    journal_.start_snapshot(std::move(s));
+  else
+    journal_.write_snapshot(s);
 }
 
 wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
@@ -227,7 +231,7 @@ wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
   for (const auto& op : r.effect) change.ops.push_back(to_msg(op));
   change.num_ops = static_cast<int32_t>(change.ops.size());
   pending_changes_.push_back(std::move(change));
-  if (journal_.records_since_snapshot() >= opt_.snapshot_every) snapshot();
+  if (journal_.snapshot_due(opt_.snapshot_every)) snapshot(true);
   if (opt_.wall_clock) on_frame(participant_.frame(), 0);  // publish the change now
   return c;
 }
@@ -250,21 +254,39 @@ void WorldModelServer::on_frame(int64_t, int64_t) {
   pending_changes_.clear();
 }
 
-wm_elements_t WorldModelServer::elements_reply(const std::vector<const Element*>& found, bool ids_only) const {
+wm_elements_t WorldModelServer::elements_reply(const std::vector<const Element*>& found, bool ids_only,
+                                               const char* method, Relations relations) const {
   wm_elements_t out{};
   out.version = store_.version();
   out.next_id = store_.next_id();
   out.total = static_cast<int64_t>(store_.elements().size());
-  std::set<std::string> ids;
+  // A reply is bounded, counted as it is built (a reply of every element of a large
+  // world is never built to be refused): a larger one would be lost to a dropped UDP
+  // fragment, or overrun the receiver's socket buffer, and never arrive.
+  size_t bytes = 64;
   for (const Element* e : found) {
     out.elements.push_back(ids_only ? to_msg(Element{e->id, e->type, e->label, {}}) : to_msg(*e));
-    ids.insert(e->id);
+    bytes += static_cast<size_t>(out.elements.back()._getEncodedSizeNoHash());
+    if (bytes > opt_.max_reply_bytes) too_large(method, out.elements.size(), found.size());
   }
   out.num_elements = static_cast<int32_t>(out.elements.size());
   if (ids_only) return out;
-  for (const auto& r : store_.relations_touching(ids)) out.relations.push_back(to_msg(r));
+  const auto rels = relations == Relations::Touching ? store_.relations_touching(found) : store_.relations_from(found);
+  for (const auto& r : rels) {
+    out.relations.push_back(to_msg(r));
+    bytes += static_cast<size_t>(out.relations.back()._getEncodedSizeNoHash());
+    if (bytes > opt_.max_reply_bytes) too_large(method, found.size(), found.size());
+  }
   out.num_relations = static_cast<int32_t>(out.relations.size());
   return out;
+}
+
+void WorldModelServer::too_large(const char* method, size_t fitted, size_t found) const {
+  throw WmError(std::string(method) + ": the reply of " + std::to_string(found) + " elements would be larger than " +
+                std::to_string(opt_.max_reply_bytes) + " bytes, the most a reply carries (" + std::to_string(fitted) +
+                " fit); ask for it in pages: wm_query_t.limit (elements a page) and .after (the last id of the "
+                "previous page), or ids_only; skillbus.world.client.query_all and WorldModelInterface page by "
+                "themselves");
 }
 
 wm_elements_t WorldModelServer::on_get(const wm_query_t& q) const {
@@ -274,10 +296,11 @@ wm_elements_t WorldModelServer::on_get(const wm_query_t& q) const {
     if (!e) throw WmError("unknown element id '" + id + "'");
     found.push_back(e);
   }
-  return elements_reply(found);
+  return elements_reply(found, false, "get", Relations::Touching);
 }
 
-wm_elements_t WorldModelServer::on_query(const wm_query_t& m) const {
+wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method, Relations relations) const {
+  if (m.offset < 0 || m.limit < 0) throw WmError(std::string(method) + ": offset and limit must not be negative");
   Query q;
   q.ids = m.ids;
   q.type = m.type;
@@ -286,7 +309,11 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m) const {
   if (!q.type.empty() && !ontology_.is_class(q.type)) throw WmError("unknown type '" + q.type + "' in query");
   q.properties = properties_from_msg(m.properties, "the query");
   for (const auto& r : m.relations) q.relations.push_back(from_msg(r));
-  return elements_reply(store_.query(q), m.ids_only);
+  Page page;
+  page.after = m.after;
+  page.offset = m.offset;
+  page.limit = m.limit;
+  return elements_reply(store_.query(q, page), m.ids_only, method, relations);
 }
 
 void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {
@@ -302,7 +329,7 @@ void WorldModelServer::load_scene_text(const std::string& text, const std::strin
   prefixes_ = px;
   store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
   for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
-  snapshot();  // a scene load is made durable as a snapshot
+  snapshot(false);  // a scene load is made durable as a snapshot before the reply
 }
 
 wm_scene_t WorldModelServer::on_load_scene(const wm_scene_t& req) {

@@ -27,6 +27,13 @@ int64_t id_number(const std::string& id) {
 
 }  // namespace
 
+bool ElementsView::operator==(const ElementsView& o) const {
+  if (m_->size() != o.m_->size()) return false;
+  for (auto a = m_->begin(), b = o.m_->begin(); a != m_->end(); ++a, ++b)
+    if (a->first != b->first || !(*a->second == *b->second)) return false;
+  return true;
+}
+
 void WorldStore::check_element(const Element& e) const {
   if (e.id.empty() || e.id.find_first_of(" \t\n<>\"") != std::string::npos)
     throw WmError("bad element id '" + e.id + "' (want prefix:Name, no spaces)");
@@ -49,28 +56,55 @@ void WorldStore::index(const Element& e) {
 }
 
 void WorldStore::unindex(const Element& e) {
-  by_type_[e.type].erase(e.id);
-  by_label_[e.label].erase(e.id);
+  for (auto* index : {&by_type_, &by_label_}) {
+    auto it = index->find(index == &by_type_ ? e.type : e.label);
+    if (it == index->end()) continue;
+    it->second.erase(e.id);
+    if (it->second.empty()) index->erase(it);  // no empty sets left behind by churn
+  }
 }
 
-void WorldStore::put(Element e) {
-  auto it = elements_.find(e.id);
-  if (it != elements_.end()) unindex(it->second);
-  index(e);
-  const std::string id = e.id;
-  elements_[id] = std::move(e);
+void WorldStore::put(ElementPtr e) {
+  auto it = elements_.find(e->id);
+  if (it == elements_.end()) {
+    index(*e);
+    const std::string id = e->id;
+    elements_.emplace(id, std::move(e));
+    return;
+  }
+  unindex(*it->second);  // before the old element (whose id the index views) is released
+  index(*e);
+  it->second = std::move(e);
 }
 
 void WorldStore::erase(const std::string& id) {
   auto it = elements_.find(id);
   if (it == elements_.end()) return;
-  unindex(it->second);
+  unindex(*it->second);
   elements_.erase(it);
 }
 
 void WorldStore::bump_next_id(const std::string& id) {
   const int64_t n = id_number(id);
   if (n >= next_id_) next_id_ = n + 1;
+}
+
+void WorldStore::insert_rel(RelationPtr r) {
+  rel_by_node_[r->subject].insert(r);
+  rel_by_node_[r->object].insert(r);
+  relations_.insert(std::move(r));
+}
+
+void WorldStore::erase_rel(const Relation& r) {
+  for (const std::string* node : {&r.subject, &r.object}) {
+    auto it = rel_by_node_.find(*node);
+    if (it == rel_by_node_.end()) continue;
+    auto found = it->second.find(r);  // (a set erases by an equivalent key only from C++23)
+    if (found != it->second.end()) it->second.erase(found);
+    if (it->second.empty()) rel_by_node_.erase(it);
+  }
+  auto found = relations_.find(r);
+  if (found != relations_.end()) relations_.erase(found);
 }
 
 TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version) {
@@ -81,16 +115,6 @@ TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version
   undo_.clear();
   undo_next_id_ = next_id_;
   TxnResult result;
-  auto insert_rel = [this](const Relation& r) {
-    relations_.insert(r);
-    rel_by_node_[r.subject].insert(r);
-    rel_by_node_[r.object].insert(r);
-  };
-  auto erase_rel = [this](const Relation& r) {
-    relations_.erase(r);
-    rel_by_node_[r.subject].erase(r);
-    rel_by_node_[r.object].erase(r);
-  };
   try {
     for (size_t i = 0; i < ops.size(); ++i) {
       const Op& op = ops[i];
@@ -108,19 +132,20 @@ TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version
             const int64_t before = next_id_;
             bump_next_id(e.id);
             if (next_id_ == before) ++next_id_;  // every add consumes a number, as in SkiROS2
-            put(e);
-            const std::string id = e.id;
+            auto added = std::make_shared<const Element>(std::move(e));
+            put(added);
+            const std::string& id = added->id;
             undo_.push_back([this, id] { erase(id); });
             result.ids.push_back(id);
-            result.effect.push_back(Op{Op::AddElement, std::move(e), {}});
+            result.effect.push_back(Op{Op::AddElement, *added, {}});
             break;
           }
           case Op::UpdateElement: {
             auto it = elements_.find(op.element.id);
             if (it == elements_.end()) throw WmError("no element " + op.element.id + " to update");
             check_element(op.element);
-            Element old = it->second;
-            put(op.element);
+            ElementPtr old = it->second;
+            put(std::make_shared<const Element>(op.element));
             undo_.push_back([this, old] { put(old); });
             result.effect.push_back(Op{Op::UpdateElement, op.element, {}});
             break;
@@ -128,16 +153,16 @@ TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version
           case Op::RemoveElement: {
             auto it = elements_.find(op.element.id);
             if (it == elements_.end()) throw WmError("no element " + op.element.id + " to remove");
-            Element old = it->second;
-            const std::set<Relation> touching = rel_by_node_[old.id];
+            ElementPtr old = it->second;
+            const RelationSet touching = relations_of(old->id);
             for (const auto& r : touching) {
-              erase_rel(r);
-              undo_.push_back([insert_rel, r] { insert_rel(r); });
-              result.effect.push_back(Op{Op::RemoveRelation, {}, r});
+              erase_rel(*r);
+              undo_.push_back([this, r] { insert_rel(r); });
+              result.effect.push_back(Op{Op::RemoveRelation, {}, *r});
             }
-            erase(old.id);
+            erase(old->id);
             undo_.push_back([this, old] { put(old); });
-            result.effect.push_back(Op{Op::RemoveElement, Element{old.id, old.type, old.label, {}}, {}});
+            result.effect.push_back(Op{Op::RemoveElement, Element{old->id, old->type, old->label, {}}, {}});
             break;
           }
           case Op::AddRelation: {
@@ -147,17 +172,18 @@ TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version
             if (!ontology_.is_relation(r.predicate))
               throw WmError("relation " + rel_text(r) + ": unknown relation type " + r.predicate);
             if (relations_.count(r)) break;  // already there: nothing changes
-            insert_rel(r);
-            undo_.push_back([erase_rel, r] { erase_rel(r); });
+            insert_rel(std::make_shared<const Relation>(r));
+            undo_.push_back([this, r] { erase_rel(r); });
             result.effect.push_back(Op{Op::AddRelation, {}, r});
             break;
           }
           case Op::RemoveRelation: {
-            const Relation& r = op.relation;
-            if (!relations_.count(r)) throw WmError("no relation " + rel_text(r) + " to remove");
-            erase_rel(r);
-            undo_.push_back([insert_rel, r] { insert_rel(r); });
-            result.effect.push_back(Op{Op::RemoveRelation, {}, r});
+            auto found = relations_.find(op.relation);
+            if (found == relations_.end()) throw WmError("no relation " + rel_text(op.relation) + " to remove");
+            RelationPtr r = *found;
+            erase_rel(*r);
+            undo_.push_back([this, r] { insert_rel(r); });
+            result.effect.push_back(Op{Op::RemoveRelation, {}, *r});
             break;
           }
           default:
@@ -186,29 +212,79 @@ void WorldStore::undo_last() {
 
 const Element* WorldStore::get(const std::string& id) const {
   auto it = elements_.find(id);
-  return it == elements_.end() ? nullptr : &it->second;
+  return it == elements_.end() ? nullptr : it->second.get();
 }
 
-std::vector<const Element*> WorldStore::query(const Query& q) const {
-  std::set<std::string> candidates;
+namespace {
+
+// Merges sorted id sets from `after` on, in id order, without duplicates: the candidates
+// of a query by type (one set per subclass) page by page.
+class IdMerge {
+ public:
+  void add(const std::set<std::string_view>& ids, std::string_view after) {
+    auto it = after.empty() ? ids.begin() : ids.upper_bound(after);
+    if (it != ids.end()) heads_.push_back({it, ids.end()});
+  }
+  bool next(std::string_view& out) {
+    size_t best = heads_.size();
+    for (size_t i = 0; i < heads_.size(); ++i)
+      if (best == heads_.size() || *heads_[i].first < *heads_[best].first) best = i;
+    if (best == heads_.size()) return false;
+    out = *heads_[best].first;
+    for (auto& h : heads_)  // an id in several sets (it cannot be, but cheaply safe)
+      while (h.first != h.second && *h.first == out) ++h.first;
+    heads_.erase(std::remove_if(heads_.begin(), heads_.end(), [](const auto& h) { return h.first == h.second; }),
+                 heads_.end());
+    return true;
+  }
+
+ private:
+  using It = std::set<std::string_view>::const_iterator;
+  std::vector<std::pair<It, It>> heads_;
+};
+
+}  // namespace
+
+std::vector<const Element*> WorldStore::query(const Query& q, const Page& page) const {
+  // The candidates in id order, from page.after on: from the ids asked for, the type
+  // index (merged over the subclasses), the label index, or every element.
+  IdMerge merge;
+  std::vector<std::string> ids;
   if (!q.ids.empty()) {
-    for (const auto& id : q.ids)
-      if (elements_.count(id)) candidates.insert(id);
+    ids = q.ids;
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    if (!page.after.empty()) ids.erase(ids.begin(), std::upper_bound(ids.begin(), ids.end(), page.after));
   } else if (!q.type.empty()) {
     const std::set<std::string> one{q.type};
     for (const auto& t : q.exact_type ? one : ontology_.subclasses(q.type)) {
       auto it = by_type_.find(t);
-      if (it != by_type_.end()) candidates.insert(it->second.begin(), it->second.end());
+      if (it != by_type_.end()) merge.add(it->second, page.after);
     }
   } else if (!q.label.empty()) {
     auto it = by_label_.find(q.label);
-    if (it != by_label_.end()) candidates = it->second;
-  } else {
-    for (const auto& kv : elements_) candidates.insert(kv.first);
+    if (it != by_label_.end()) merge.add(it->second, page.after);
   }
+  const bool every = q.ids.empty() && q.type.empty() && q.label.empty();
+  auto all_it = page.after.empty() ? elements_.begin() : elements_.upper_bound(page.after);
+  size_t id_i = 0;
+  auto next = [&]() -> const Element* {
+    if (!q.ids.empty()) {
+      while (id_i < ids.size()) {
+        auto it = elements_.find(ids[id_i++]);
+        if (it != elements_.end()) return it->second.get();
+      }
+      return nullptr;
+    }
+    if (every) return all_it == elements_.end() ? nullptr : (all_it++)->second.get();
+    std::string_view id;
+    return merge.next(id) ? elements_.find(id)->second.get() : nullptr;
+  };
   std::vector<const Element*> out;
-  for (const auto& id : candidates) {
-    const Element& e = elements_.at(id);
+  long skipped = 0;
+  while (const Element* found = next()) {
+    const Element& e = *found;
+    const std::string& id = e.id;
     if (!q.label.empty() && e.label != q.label) continue;
     if (!q.type.empty() && (q.exact_type ? e.type != q.type : !ontology_.is_subclass(e.type, q.type))) continue;
     bool ok = true;
@@ -220,64 +296,103 @@ std::vector<const Element*> WorldStore::query(const Query& q) const {
     }
     for (const auto& pat : q.relations) {
       if (!ok) break;
-      const std::string s = pat.subject.empty() ? id : pat.subject;
-      const std::string o = pat.object.empty() ? id : pat.object;
-      auto rels = rel_by_node_.find(id);
-      bool found = false;
-      if (rels != rel_by_node_.end())
-        for (const auto& r : rels->second)
-          if ((s == "*" || r.subject == s) && (o == "*" || r.object == o) &&
-              (pat.predicate.empty() || pat.predicate == "*" || ontology_.is_subproperty(r.predicate, pat.predicate)))
-            found = true;
-      ok = found;
+      const std::string& s = pat.subject.empty() ? id : pat.subject;
+      const std::string& o = pat.object.empty() ? id : pat.object;
+      bool found_rel = false;
+      for (const auto& r : relations_of(id))
+        if ((s == "*" || r->subject == s) && (o == "*" || r->object == o) &&
+            (pat.predicate.empty() || pat.predicate == "*" || ontology_.is_subproperty(r->predicate, pat.predicate)))
+          found_rel = true;
+      ok = found_rel;
     }
-    if (ok) out.push_back(&e);
+    if (!ok) continue;
+    if (skipped < page.offset) {
+      ++skipped;
+      continue;
+    }
+    out.push_back(&e);
+    if (page.limit > 0 && static_cast<long>(out.size()) >= page.limit) break;
   }
   return out;
 }
 
-std::vector<Relation> WorldStore::relations_touching(const std::set<std::string>& ids) const {
-  std::set<Relation> out;
-  for (const auto& id : ids) {
-    auto it = rel_by_node_.find(id);
-    if (it != rel_by_node_.end()) out.insert(it->second.begin(), it->second.end());
-  }
-  return {out.begin(), out.end()};
+std::vector<Relation> WorldStore::relations_touching(const std::vector<const Element*>& elements) const {
+  std::set<const Relation*> seen;  // a relation between two of them once
+  std::vector<Relation> out;
+  for (const Element* e : elements)
+    for (const auto& r : relations_of(e->id))
+      if (seen.insert(r.get()).second) out.push_back(*r);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
-const std::set<Relation>& WorldStore::relations_of(const std::string& id) const {
-  static const std::set<Relation> none;
+std::vector<Relation> WorldStore::relations_from(const std::vector<const Element*>& subjects) const {
+  std::vector<Relation> out;
+  for (const Element* e : subjects)
+    for (const auto& r : relations_of(e->id))
+      if (r->subject == e->id) out.push_back(*r);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+const WorldStore::RelationSet& WorldStore::relations_of(const std::string& id) const {
+  static const RelationSet none;
   auto it = rel_by_node_.find(id);
   return it == rel_by_node_.end() ? none : it->second;
 }
 
 std::vector<Relation> WorldStore::relations(const std::string& s, const std::string& p, const std::string& o) const {
   std::vector<Relation> out;
-  const std::set<Relation>& pool = !s.empty() ? relations_of(s) : !o.empty() ? relations_of(o) : relations_;
+  const RelationSet& pool = !s.empty() ? relations_of(s) : !o.empty() ? relations_of(o) : relations_;
   for (const auto& r : pool)
-    if ((s.empty() || r.subject == s) && (o.empty() || r.object == o) &&
-        (p.empty() || ontology_.is_subproperty(r.predicate, p)))
-      out.push_back(r);
+    if ((s.empty() || r->subject == s) && (o.empty() || r->object == o) &&
+        (p.empty() || ontology_.is_subproperty(r->predicate, p)))
+      out.push_back(*r);
   return out;
 }
 
-void WorldStore::reset(std::vector<Element> elements, std::vector<Relation> relations, int64_t version,
-                       int64_t next_id) {
+std::vector<Relation> WorldStore::all_relations() const {
+  std::vector<Relation> out;
+  out.reserve(relations_.size());
+  for (const auto& r : relations_) out.push_back(*r);
+  return out;
+}
+
+WorldImage WorldStore::image() const {
+  WorldImage w;
+  w.version = version_;
+  w.next_id = next_id_;
+  w.elements.reserve(elements_.size());
+  for (const auto& [id, e] : elements_) w.elements.push_back(e);
+  w.relations.assign(relations_.begin(), relations_.end());
+  return w;
+}
+
+void WorldStore::clear() {
   elements_.clear();
   by_type_.clear();
   by_label_.clear();
   relations_.clear();
   rel_by_node_.clear();
   undo_.clear();
-  for (auto& e : elements) put(std::move(e));
-  for (const auto& r : relations) {
-    relations_.insert(r);
-    rel_by_node_[r.subject].insert(r);
-    rel_by_node_[r.object].insert(r);
-  }
+}
+
+void WorldStore::insert_element(Element e) { put(std::make_shared<const Element>(std::move(e))); }
+
+void WorldStore::insert_relation(Relation r) { insert_rel(std::make_shared<const Relation>(std::move(r))); }
+
+void WorldStore::set_version(int64_t version, int64_t next_id) {
   version_ = version;
   next_id_ = next_id;
   for (const auto& [id, e] : elements_) bump_next_id(id);
+}
+
+void WorldStore::reset(std::vector<Element> elements, std::vector<Relation> relations, int64_t version,
+                       int64_t next_id) {
+  clear();
+  for (auto& e : elements) insert_element(std::move(e));
+  for (auto& r : relations) insert_relation(std::move(r));
+  set_version(version, next_id);
 }
 
 }  // namespace skillbus::wm

@@ -49,7 +49,7 @@ class RpcServer {
  public:
   using RawMethod = std::function<Bytes(const uint8_t* payload, size_t size)>;
 
-  RpcServer(Bus& bus, const std::string& area, size_t memory = 4096);
+  RpcServer(Bus& bus, const std::string& area, size_t memory = 4096, size_t memory_bytes = 64u << 20);
   ~RpcServer();
 
   void add_raw_method(const std::string& name, RawMethod method);
@@ -76,7 +76,8 @@ class RpcServer {
 
   Bus& bus_;
   std::string area_, req_channel_, rep_channel_;
-  size_t memory_;
+  size_t memory_, memory_bytes_;
+  size_t remembered_bytes_ = 0;
   int sub_ = -1;
   std::map<std::string, RawMethod> methods_;
   std::list<std::string> order_;  // oldest first

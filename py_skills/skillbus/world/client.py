@@ -22,6 +22,9 @@ from skillbus.rpc import RpcClient, RpcError, RpcRemoteError
 from skillbus.waiting import poll_until
 from skillbus.world.convert import element_from_msg, op, property_msg, relation_msg
 from skillbus.world.element import Element
+from skillbus.world.wire import ElementsPage, decode_elements, query_all
+
+__all__ = ["WorldModelError", "WorldModelInterface", "query_all"]
 
 Relation = tuple[str, str, str]
 
@@ -61,7 +64,7 @@ class WorldModelInterface:
             self._txn_ids = self._call("last_request", q, wm_commit_t).request_id
 
     # -- replica ----------------------------------------------------------
-    SNAPSHOT_PAGE = 200  # elements per snapshot reply: small messages survive UDP
+    SNAPSHOT_PAGE = 200  # elements per snapshot reply: small messages survive UDP (the server refuses > 128 KB)
 
     def resync(self) -> None:
         """Replaces the replica with the server's world: pages of the snapshot by id (a
@@ -99,11 +102,11 @@ class WorldModelInterface:
         while True:
             q = wm_query_t()
             q.after, q.limit = after, self.SNAPSHOT_PAGE
-            page = self._call("snapshot", q, wm_elements_t)
+            page = self._call_elements("snapshot", q)
             first = page.version if first is None else first
             last = page.version
-            elements.update((m.id, element_from_msg(m)) for m in page.elements)
-            relations.update((r.subject, r.predicate, r.object) for r in page.relations)
+            elements.update((e.id, e) for e in page.elements)
+            relations.update(page.relations)
             if len(page.elements) < self.SNAPSHOT_PAGE:
                 return elements, relations, first, last
             after = page.elements[-1].id
@@ -220,10 +223,15 @@ class WorldModelInterface:
                                             "" if r["dst"] == "-1" else r["dst"]))
         q.num_relations = len(q.relations)
         q.ids_only = True  # the elements themselves come from the replica
-        found = self._call("query", q, wm_elements_t)
+        found = self.query(q)
         self._fresh()
-        return [self._with_relations(self._elements[m.id]) if m.id in self._elements else element_from_msg(m)
-                for m in found.elements]
+        return [self._with_relations(self._elements[m.id]) if m.id in self._elements else m for m in found]
+
+    def query(self, q: wm_query_t) -> list[Element]:
+        """The elements matching `q` (RPC wm.query), in id order, read in pages, so that a
+        result of any size arrives (the server refuses a reply larger than 128 KB, naming
+        paging). With ``q.ids_only`` they carry id, type and label only."""
+        return query_all(lambda req, timeout: self._call_elements("query", req, timeout), q, timeout=self.timeout)
 
     # -- writes ----------------------------------------------------------------
     def commit(self, ops: list[wm_op_t], expected_version: int = -1) -> wm_commit_t:
@@ -378,6 +386,17 @@ class WorldModelInterface:
             with open(path, "w", encoding="utf-8") as f:
                 f.write(rep.turtle)
         return rep.turtle
+
+    def _call_elements(self, method: str, req: wm_query_t, timeout: float | None = None) -> ElementsPage:
+        """A call whose reply is a wm_elements_t, decoded straight into Elements."""
+        try:
+            data = self.rpc.call_raw(method, req.encode(), timeout=timeout or self.timeout)
+        except RpcRemoteError as e:
+            raise WorldModelError(str(e)) from None
+        try:
+            return decode_elements(data)
+        except ValueError as e:
+            raise RpcError(f"reply of WM.{method} does not decode: {e}") from None
 
     def _call(self, method: str, req: Any, rep_type: type, timeout: float | None = None) -> Any:
         try:

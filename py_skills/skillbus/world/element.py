@@ -33,6 +33,14 @@ class Property:
     def _as_list(v: Any) -> list:
         return list(v) if isinstance(v, (list, tuple)) else [v]
 
+    @classmethod
+    def _from_wire(cls, key: str, values: list) -> "Property":
+        """A property read off the wire (skillbus.world.wire): `values` taken as they are."""
+        p = cls.__new__(cls)
+        p.key, p._values = key, values
+        p._type = type(values[0]) if values else None
+        return p
+
     def dataType(self) -> type | None:
         return self._type
 
@@ -87,6 +95,17 @@ class Element:
         # What the element carried when it was read from the world model (or received as
         # a parameter): an update writes only what changed since (see mark_loaded).
         self._loaded: tuple[str, str, dict[str, Property], frozenset] | None = None
+
+    @classmethod
+    def _from_wire(cls, etype: str, label: str, eid: str, properties: dict[str, "Property"]) -> "Element":
+        """An element read off the wire (skillbus.world.wire), without the checks and
+        copies of building one by hand: a replica of 100,000 elements makes as many."""
+        e = cls.__new__(cls)
+        e._type, e._label, e._id = etype, label, eid
+        e._properties, e._relations, e._loaded = properties, [], None
+        return e
+
+    _property_from_wire = staticmethod(Property._from_wire)
 
     # -- identity ---------------------------------------------------------
     @property

@@ -4,16 +4,23 @@
 // the repair that keeps the intact prefix.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <mutex>
 
+#include "skillbus/wm/convert.hpp"
 #include "skillbus/wm/journal.hpp"
 #include "skillbus/wm/model.hpp"
+#include "wm_test_util.hpp"
 
 using namespace skillbus::wm;
 namespace fs = std::filesystem;
@@ -107,7 +114,7 @@ TEST(Journal, ANewDataDirectoryGetsAnEmptyJournalAtVersion0) {
   {
     Journal j(d.path.string());
     auto rec = j.recover();
-    EXPECT_FALSE(rec.snapshot.has_value());
+    EXPECT_FALSE(rec.snapshot);
     EXPECT_TRUE(rec.txns.empty());
   }
   EXPECT_TRUE(fs::exists(d.journal()));
@@ -339,8 +346,8 @@ TEST(Journal, ASnapshotStartsAFreshJournal) {
   }
   Journal k(d.path.string());
   auto rec = k.recover();
-  ASSERT_TRUE(rec.snapshot.has_value());
-  EXPECT_EQ(rec.snapshot->world.version, 1);
+  ASSERT_TRUE(rec.snapshot);
+  EXPECT_EQ(rec.snapshot->version(), 1);
   ASSERT_EQ(rec.txns.size(), 1u);
   EXPECT_EQ(rec.txns[0].ops[0].element.label, "b");
   EXPECT_EQ(scan_journal(d.journal()).base_version, 1);
@@ -363,7 +370,7 @@ TEST(Journal, ACrashBetweenTheSnapshotAndTheNewJournalLosesNothing) {
   {
     Journal j(d.path.string());
     auto rec = j.recover();
-    EXPECT_EQ(rec.snapshot->world.version, 10);
+    EXPECT_EQ(rec.snapshot->version(), 10);
     EXPECT_TRUE(rec.txns.empty());
     j.append(txn(10, "after"));  // goes on in the old journal: still in order
   }
@@ -472,7 +479,7 @@ TEST(JournalRepair, AMissingJournalGoesOnFromTheSnapshotAMissingSnapshotCannotBe
     EXPECT_TRUE(contains(r.message, "wrote an empty journal going on from version 7")) << r.message;
     Journal j(d.path.string());
     auto rec = j.recover();
-    EXPECT_EQ(rec.snapshot->world.version, 7);
+    EXPECT_EQ(rec.snapshot->version(), 7);
     EXPECT_TRUE(rec.txns.empty());
   }
   {
@@ -484,5 +491,216 @@ TEST(JournalRepair, AMissingJournalGoesOnFromTheSnapshotAMissingSnapshotCannotBe
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_TRUE(contains(r.message, "cannot repair: " + d.snapshot() + " is missing")) << r.message;
     EXPECT_EQ(read_bytes(d.journal()), journal);
+  }
+}
+
+// ---------------------------------------------------------------- background snapshots
+
+namespace {
+
+// A world of n cubes, each on the table (the relations make the snapshot's second part).
+WorldImage world_of(int n, int64_t version) {
+  Ontology& onto = skillbus::wm::test::ontology();
+  WorldStore store(onto);
+  std::vector<Element> elements{Element{"skiros:Table-1", "skiros:Table", "table", {}}};
+  std::vector<Relation> relations;
+  for (int i = 0; i < n; ++i) {
+    const std::string id = "skiros:Cube-" + std::to_string(i + 2);
+    elements.push_back(Element{id, "skiros:Cube", "c" + std::to_string(i),
+                               {{"skiros:PositionX", {0.01 * i}}, {"skiros:Size", {0.05}}}});
+    relations.push_back(Relation{"skiros:Table-1", "skiros:contain", id});
+  }
+  store.reset(elements, relations, version, 1);
+  return store.image();
+}
+
+// Holds the snapshot thread at one step until released.
+struct Gate {
+  std::mutex mu;
+  std::condition_variable cv;
+  std::string at;       // the step it waits at
+  bool reached = false, open = false;
+  std::function<void(const char*)> hook() {
+    return [this](const char* step) {
+      if (at != step) return;
+      std::unique_lock<std::mutex> lock(mu);
+      reached = true;
+      cv.notify_all();
+      cv.wait(lock, [this] { return open; });
+    };
+  }
+  void wait_reached() {
+    std::unique_lock<std::mutex> lock(mu);
+    ASSERT_TRUE(cv.wait_for(lock, std::chrono::seconds(20), [this] { return reached; })) << "never reached " << at;
+  }
+  void release() {
+    std::lock_guard<std::mutex> lock(mu);
+    open = true;
+    cv.notify_all();
+  }
+};
+
+}  // namespace
+
+// The file a background snapshot writes piece by piece is byte for byte the encoding of
+// the whole message (the format the server always wrote), and reads back the same.
+TEST(Snapshot, WrittenInPiecesItIsTheEncodingOfTheWholeMessage) {
+  TempDir d;
+  fs::create_directories(d.path);
+  const std::string a = (d.path / "pieces").string(), b = (d.path / "whole").string();
+  SnapshotData data;
+  data.world = world_of(300, 7);
+  skillbus_msgs::wm_commit_t c{};
+  c.client_id = "c";
+  c.request_id = 3;
+  c.version = 7;
+  data.recent.push_back(c);
+  skillbus_msgs::wm_snapshot_t whole{};
+  whole.world.version = 7;
+  whole.world.next_id = data.world.next_id;
+  whole.world.total = 301;
+  for (const auto& e : data.world.elements) whole.world.elements.push_back(to_msg(*e));
+  whole.world.num_elements = 301;
+  for (const auto& r : data.world.relations) whole.world.relations.push_back(to_msg(*r));
+  whole.world.num_relations = 300;
+  whole.recent = data.recent;
+  whole.num_recent = 1;
+  {
+    Journal j(a);
+    j.recover();
+    j.write_snapshot(data);
+    Journal k(b);
+    k.recover();
+    k.write_snapshot(whole);
+  }
+  EXPECT_EQ(read_bytes(a + "/snapshot.bin"), read_bytes(b + "/snapshot.bin"));
+  SnapshotFile f(a + "/snapshot.bin");
+  EXPECT_EQ(f.version(), 7);
+  std::vector<std::string> ids;
+  f.for_each_element([&](skillbus_msgs::wm_element_t& m) { ids.push_back(m.id); });
+  long relations = 0;
+  f.for_each_relation([&](skillbus_msgs::wm_relation_t&) { ++relations; });
+  ASSERT_EQ(ids.size(), 301u);
+  EXPECT_EQ(ids.front(), "skiros:Cube-10");  // id order
+  EXPECT_EQ(relations, 300);
+  ASSERT_EQ(f.recent().size(), 1u);
+  EXPECT_EQ(f.recent()[0].request_id, 3);
+}
+
+// While the snapshot is being written (held at each of its steps), appends go on and
+// return at once; the records appended meanwhile, also those appended after the new
+// journal was written and before it replaced the old one, are all in the new journal.
+TEST(Snapshot, InTheBackgroundItDoesNotHoldCommitsBackAndLosesNone) {
+  for (const char* step : {"written", "renamed", "journal"}) {
+    SCOPED_TRACE(step);
+    TempDir d;
+    int64_t v = 0;
+    {
+      Journal j(d.path.string());
+      j.recover();
+      for (; v < 50; ++v) j.append(txn(v, "r" + std::to_string(v)));
+      Gate gate;
+      gate.at = step;
+      j.test_hook = gate.hook();
+      ASSERT_TRUE(j.start_snapshot(SnapshotData{world_of(2000, v), {}}));
+      gate.wait_reached();
+      EXPECT_TRUE(j.snapshot_running());
+      EXPECT_FALSE(j.start_snapshot(SnapshotData{world_of(1, v), {}}));  // one at a time
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int i = 0; i < 30; ++i, ++v) j.append(txn(v, "r" + std::to_string(v)));
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      EXPECT_TRUE(j.snapshot_running());  // all 30 went in while the snapshot was held
+      EXPECT_LT(ms / 30, 50.0);
+      gate.release();
+      j.wait_for_snapshot();
+      EXPECT_FALSE(j.snapshot_running());
+      EXPECT_EQ(j.snapshots_written(), 1);
+      EXPECT_EQ(j.records_since_snapshot(), 30);
+      for (int i = 0; i < 5; ++i, ++v) j.append(txn(v, "r" + std::to_string(v)));  // into the new journal
+    }
+    const JournalScan s = scan_journal(d.journal());
+    EXPECT_EQ(s.base_version, 50);
+    EXPECT_EQ(s.txns.size(), 35u);
+    Journal k(d.path.string());
+    auto rec = k.recover();
+    ASSERT_TRUE(rec.snapshot);
+    EXPECT_EQ(rec.snapshot->version(), 50);
+    EXPECT_EQ(rec.snapshot->total(), 2001);
+    ASSERT_EQ(rec.txns.size(), 35u);
+    EXPECT_EQ(rec.txns.front().ops[0].element.label, "r50");
+    EXPECT_EQ(rec.txns.back().ops[0].element.label, "r84");
+  }
+}
+
+// A process killed (SIGKILL) while its snapshot is written in the background, at each of
+// the snapshot's steps and at random moments, with appends going on: every append that
+// returned is recovered, in order, and the data directory always starts.
+TEST(Snapshot, AKillDuringABackgroundSnapshotLosesNoAcknowledgedRecord) {
+  std::vector<std::string> steps{"written", "renamed", "journal"};
+  for (int i = 0; i < 6; ++i) steps.push_back("random");
+  unsigned seed = static_cast<unsigned>(::getpid());
+  for (const auto& step : steps) {
+    SCOPED_TRACE(step);
+    TempDir d;
+    int acks[2], at[2];
+    ASSERT_EQ(::pipe(acks), 0);
+    ASSERT_EQ(::pipe(at), 0);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {  // appends until killed; a snapshot every 40 records, in the background
+      ::close(acks[0]);
+      ::close(at[0]);
+      Journal j(d.path.string());
+      j.recover();
+      if (step != "random")
+        j.test_hook = [&](const char* s) {
+          if (step != s) return;
+          const char c = 'x';
+          [[maybe_unused]] ssize_t n = ::write(at[1], &c, 1);
+          for (;;) ::pause();  // held here: the kill comes while appends go on
+        };
+      for (int64_t v = 0;; ++v) {
+        j.append(txn(v, "r" + std::to_string(v)));
+        const int64_t done = v + 1;
+        if (::write(acks[1], &done, sizeof done) != sizeof done) std::_Exit(3);
+        if (done % 40 == 0 && j.snapshot_due(40)) j.start_snapshot(SnapshotData{world_of(3000, done), {}});
+      }
+    }
+    ::close(acks[1]);
+    ::close(at[1]);
+    int64_t acked = 0;
+    auto read_ack = [&] {
+      int64_t x;
+      ASSERT_EQ(::read(acks[0], &x, sizeof x), static_cast<ssize_t>(sizeof x));
+      acked = x;
+    };
+    if (step == "random") {
+      const int64_t until = 45 + static_cast<int64_t>(rand_r(&seed) % 200);
+      while (acked < until) read_ack();
+      ::usleep(rand_r(&seed) % 3000);
+    } else {
+      char c;
+      ASSERT_EQ(::read(at[0], &c, 1), 1);  // the snapshot thread is at the step
+      for (int i = 0; i < 20; ++i) read_ack();
+    }
+    ::kill(child, SIGKILL);
+    ::waitpid(child, nullptr, 0);
+    for (;;) {  // acknowledgements still in the pipe count too
+      int64_t x;
+      if (::read(acks[0], &x, sizeof x) != static_cast<ssize_t>(sizeof x)) break;
+      acked = x;
+    }
+    ::close(acks[0]);
+    ::close(at[0]);
+    Journal j(d.path.string());
+    Journal::Recovered rec;
+    ASSERT_NO_THROW(rec = j.recover());
+    const int64_t base = rec.snapshot ? rec.snapshot->version() : 0;
+    const int64_t last = base + static_cast<int64_t>(rec.txns.size());
+    EXPECT_GE(last, acked);       // nothing acknowledged is lost
+    EXPECT_LE(last, acked + 1);   // (the append in flight may have been durable)
+    for (size_t i = 0; i < rec.txns.size(); ++i)
+      ASSERT_EQ(rec.txns[i].ops[0].element.label, "r" + std::to_string(base + static_cast<int64_t>(i)));
+    if (step != "random") EXPECT_GT(acked, 40);
   }
 }

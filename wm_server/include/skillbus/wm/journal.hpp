@@ -30,14 +30,34 @@
 // A missing file is an error when the other one says it should be there: a snapshot
 // without a journal (the commits after the snapshot would be lost), a journal that goes
 // on from a snapshot that is not there. Neither file: a new data directory.
+//
+// Snapshots in the background (start_snapshot): the server hands over an image of the
+// world (WorldImage: pointers to immutable elements, taken in a few milliseconds) and a
+// thread encodes and writes snapshot.bin.tmp piece by piece, syncs and renames it, while
+// commits go on being appended to the old journal. A snapshot at version V next to a
+// journal going on from an older version is a consistent directory already (recovery
+// skips the records the snapshot has), so nothing waits for the snapshot. Then the
+// thread writes the new journal: its header (base V) and a copy of the old journal's
+// records after V, synced; only the last step holds the appends back: the records
+// appended meanwhile copied too, the rename, the directory's sync. A crash at any point
+// leaves either the old pair or the new one, each with every acknowledged record.
 #pragma once
 
+#include <condition_variable>
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "skillbus/wm/model.hpp"
+#include "skillbus/wm/store.hpp"
+#include "skillbus_msgs/wm_commit_t.hpp"
+#include "skillbus_msgs/wm_element_t.hpp"
+#include "skillbus_msgs/wm_relation_t.hpp"
 #include "skillbus_msgs/wm_snapshot_t.hpp"
 #include "skillbus_msgs/wm_txn_t.hpp"
 
@@ -77,6 +97,48 @@ struct JournalScan {
 };
 JournalScan scan_journal(const std::string& path);  // throws WmError if it cannot read
 
+// What a snapshot holds, as the server hands it to the journal: the world (an image,
+// cheap to take) and the remembered commits (exactly-once across restarts).
+struct SnapshotData {
+  WorldImage world;
+  std::vector<skillbus_msgs::wm_commit_t> recent;
+};
+
+// A snapshot file, checked (length, CRC, fingerprint) but decoded one element at a time,
+// so that a large world is never held twice (as messages and as the store). The file's
+// bytes are mapped, not copied, while it lives.
+class SnapshotFile {
+ public:
+  explicit SnapshotFile(const std::string& path);  // throws DataError (damaged), WmError (cannot read)
+  ~SnapshotFile();
+  SnapshotFile(const SnapshotFile&) = delete;
+  SnapshotFile& operator=(const SnapshotFile&) = delete;
+  int64_t version() const { return version_; }
+  int64_t next_id() const { return next_id_; }
+  int64_t total() const { return num_elements_; }
+  // Each calls fn once per item, in file order; throw DataError if the bytes do not
+  // decode (they passed the CRC: a writer's bug, not a crash).
+  void for_each_element(const std::function<void(skillbus_msgs::wm_element_t&)>& fn) const;
+  void for_each_relation(const std::function<void(skillbus_msgs::wm_relation_t&)>& fn) const;
+  std::vector<skillbus_msgs::wm_commit_t> recent() const;
+  // The whole snapshot as one message (tests and small worlds).
+  skillbus_msgs::wm_snapshot_t decode_all() const;
+
+ private:
+  [[noreturn]] void undecodable(const std::string& what) const;
+  std::string path_;
+  const uint8_t* body_ = nullptr;  // after the 16-byte file header
+  size_t size_ = 0;                // of the body
+  void* map_ = nullptr;
+  size_t map_size_ = 0;
+  int64_t version_ = 0, next_id_ = 0;
+  int32_t num_elements_ = 0;
+  size_t elements_at_ = 0;  // offsets in the body, found by one pass at open
+  size_t relations_at_ = 0;
+  size_t recent_at_ = 0;
+  int32_t num_relations_ = 0, num_recent_ = 0;
+};
+
 class Journal {
  public:
   // Creates the directory if needed and locks it (DIR/lock); throws WmError if it cannot
@@ -87,7 +149,7 @@ class Journal {
   Journal& operator=(const Journal&) = delete;
 
   struct Recovered {
-    std::optional<skillbus_msgs::wm_snapshot_t> snapshot;
+    std::shared_ptr<SnapshotFile> snapshot;     // none in a new data directory
     std::vector<skillbus_msgs::wm_txn_t> txns;  // after the snapshot, in commit order
     std::string note;                           // e.g. a cut-off torn record, a new directory
   };
@@ -96,18 +158,48 @@ class Journal {
   Recovered recover();
 
   void append(const skillbus_msgs::wm_txn_t& txn);  // durable on return; throws WmError
-  // A new snapshot, then a new empty journal going on from its version.
+  // A new snapshot, then a new empty journal going on from its version; durable on
+  // return (a scene load: the world it replaces is in no journal). Waits for a
+  // background snapshot first.
+  void write_snapshot(const SnapshotData& snapshot);
   void write_snapshot(const skillbus_msgs::wm_snapshot_t& snapshot);
-  long records_since_snapshot() const { return records_; }
+  // Starts writing a snapshot of `snapshot.world.version` (the version of the last
+  // appended record) in the background and returns at once; false (nothing started)
+  // while one is still being written. Its failure is logged and leaves the old snapshot
+  // and journal, which stay consistent; the next one is tried `retry_after` records on.
+  bool start_snapshot(SnapshotData snapshot);
+  bool snapshot_running() const;
+  void wait_for_snapshot();  // until the background snapshot, if any, has ended
+  // Records in the journal after the snapshot, and whether a snapshot is due (`every`
+  // records since the last one, or since the last attempt that failed).
+  long records_since_snapshot() const;
+  bool snapshot_due(long every) const;
+  long snapshots_written() const;
+  // Tests: called by the background thread between its steps ("written": the snapshot
+  // file is complete, before its sync; "renamed"; "journal": the new journal is written,
+  // before the appends are held back), to hold it there or to crash there.
+  std::function<void(const char* step)> test_hook;
   const std::string& dir() const { return dir_; }
 
  private:
   void start_journal(int64_t base_version);
+  void write_snapshot_file(const SnapshotData& snapshot) const;
+  void rotate_journal(int64_t base_version, uint64_t tail_from, long records_before);
+  void background(SnapshotData snapshot, uint64_t tail_from, long records_before);
+  void join_finished();
   std::string dir_;
   int lock_fd_ = -1;
+  // Appends and the switch to a new journal exclude each other; the snapshot file itself
+  // is written without the lock.
+  mutable std::mutex mu_;
+  std::condition_variable done_cv_;
   int fd_ = -1;
   uint64_t size_ = 0;    // the journal's length: its last complete record's end
   long records_ = 0;
+  long attempt_at_ = 0;  // records_ when the last snapshot was started and failed
+  long snapshots_ = 0;
+  bool running_ = false;
+  std::thread worker_;
   std::string broken_;   // why appends are refused (a write whose durability is unknown)
 };
 

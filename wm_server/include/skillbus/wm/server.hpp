@@ -33,6 +33,12 @@ struct ServerOptions {
   long snapshot_every = 1000;               // commits between snapshots
   size_t recent_memory = 4096;              // transactions remembered for exactly-once
   long crash_after_commits = -1;            // tests: die (_exit) after this many durable commits, before replying
+  // The largest reply of get, query and snapshot, encoded: a larger one is refused,
+  // naming paging. An LCM message over UDP is lost whole with any of its 64 KB
+  // fragments, and a default receive buffer (208 KB) holds about three of them.
+  size_t max_reply_bytes = 128 * 1024;
+  // The RPC server's memory of replies (answering retries) is bounded by bytes too.
+  size_t rpc_memory_bytes = 16 * 1024 * 1024;
 };
 
 class WorldModelServer {
@@ -41,14 +47,23 @@ class WorldModelServer {
   // Runs until the lockstep master ends the run, or `should_stop` says so (checked every frame).
   RunResult run_until(std::function<bool()> should_stop);
   const WorldStore& store() const { return store_; }
+  Journal& journal() { return journal_; }
   std::string startup_report() const { return startup_report_; }
   long rejected() const { return rejected_; }
 
  private:
   skillbus_msgs::wm_commit_t commit(skillbus_msgs::wm_txn_t txn);
-  skillbus_msgs::wm_elements_t elements_reply(const std::vector<const Element*>& found, bool ids_only = false) const;
+  // Which relations a reply carries: every relation touching its elements (get, query),
+  // or only those whose subject is one of them (snapshot pages: each relation comes once,
+  // with its subject's page; touching would put a container's thousand relations to
+  // elements of other pages into its page).
+  enum class Relations { Touching, BySubject };
+  skillbus_msgs::wm_elements_t elements_reply(const std::vector<const Element*>& found, bool ids_only,
+                                              const char* method, Relations relations) const;
+  [[noreturn]] void too_large(const char* method, size_t fitted, size_t found) const;
   skillbus_msgs::wm_elements_t on_get(const skillbus_msgs::wm_query_t& q) const;
-  skillbus_msgs::wm_elements_t on_query(const skillbus_msgs::wm_query_t& q) const;
+  skillbus_msgs::wm_elements_t on_query(const skillbus_msgs::wm_query_t& q, const char* method,
+                                        Relations relations) const;
   skillbus_msgs::wm_scene_t on_load_scene(const skillbus_msgs::wm_scene_t& req);
   skillbus_msgs::wm_scene_t on_save_scene(const skillbus_msgs::wm_scene_t& req) const;
   skillbus_msgs::wm_transform_t on_transform(const skillbus_msgs::wm_transform_t& req) const;
@@ -56,7 +71,7 @@ class WorldModelServer {
   void on_frame(int64_t frame, int64_t sim_time_ns);
   void recover();
   void remember(const skillbus_msgs::wm_commit_t& c);
-  void snapshot();
+  void snapshot(bool in_background);
   void load_scene_text(const std::string& text, const std::string& source, std::string* report);
 
   Bus& bus_;
