@@ -8,6 +8,7 @@
 #include <zlib.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -345,6 +346,11 @@ class BodyWriter {
   }
   void flush() {
     write_all(fd_, buf_.data(), buf_.size(), path_);
+    // Start the write-back of what is written now, without waiting for it: the sync at
+    // the end then has little left to do, and the journal's fdatasyncs meanwhile do not
+    // queue behind tens of megabytes flushed at once.
+    ::sync_file_range(fd_, static_cast<off_t>(flushed_), static_cast<off_t>(buf_.size()), SYNC_FILE_RANGE_WRITE);
+    flushed_ += buf_.size();
     buf_.clear();
   }
   uint64_t length() const { return len_; }
@@ -355,6 +361,7 @@ class BodyWriter {
   int fd_;
   std::string path_;
   std::vector<uint8_t> buf_, tmp_;
+  uint64_t flushed_ = fmt::kSnapshotHeaderSize;  // the file's bytes written so far
   uint32_t crc_ = static_cast<uint32_t>(crc32(0L, Z_NULL, 0));
   uint64_t len_ = 0;
 };
@@ -748,6 +755,7 @@ bool Journal::start_snapshot(SnapshotData snapshot) {
 
 void Journal::background(SnapshotData snapshot, uint64_t tail_from, long records_before) {
   const int64_t version = snapshot.world.version;
+  const auto t0 = std::chrono::steady_clock::now();
   std::string error;
   try {
     write_snapshot_file(snapshot);
@@ -764,6 +772,8 @@ void Journal::background(SnapshotData snapshot, uint64_t tail_from, long records
     else
       attempt_at_ = records_;
   }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (error.empty()) SB_INFO(kLog, "snapshot at version " << version << " written in the background in " << ms << " ms");
   if (!error.empty())
     SB_ERROR(kLog, "the snapshot at version " << version << " could not be written in the background: " << error
                                               << "; the last snapshot and the journal after it stay in use");

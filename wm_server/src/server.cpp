@@ -1,6 +1,7 @@
 #include "skillbus/wm/server.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -77,7 +78,7 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
     all.after = q.after;
     all.offset = q.offset;
     all.limit = q.limit;
-    return on_query(all, "snapshot", Relations::BySubject);
+    return on_query(all, "snapshot", Relations::ByObject);
   });
   // A client whose request ids must not repeat across its restarts (a lockstep
   // participant names its transactions by its name and a counter, the same every run)
@@ -166,14 +167,20 @@ void WorldModelServer::remember(const wm_commit_t& c) {
 void WorldModelServer::snapshot(bool in_background) {
   // An image of the world is pointers to its immutable elements: a few milliseconds for
   // 100,000 of them; the encoding and the writing happen in the journal's thread.
+  const auto t0 = std::chrono::steady_clock::now();
   SnapshotData s;
   s.world = store_.image();
   s.recent.reserve(recent_order_.size());
   for (const auto& key : recent_order_) s.recent.push_back(recent_.at(key));
-  if (in_background)
-    journal_.start_snapshot(std::move(s));
-  else
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (!in_background) {
     journal_.write_snapshot(s);
+    return;
+  }
+  const int64_t version = s.world.version;
+  if (journal_.start_snapshot(std::move(s)))
+    SB_INFO(kLog, "writing a snapshot at version " << version << " in the background (its image took " << ms
+                                                   << " ms)");
 }
 
 wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
@@ -271,7 +278,7 @@ wm_elements_t WorldModelServer::elements_reply(const std::vector<const Element*>
   }
   out.num_elements = static_cast<int32_t>(out.elements.size());
   if (ids_only) return out;
-  const auto rels = relations == Relations::Touching ? store_.relations_touching(found) : store_.relations_from(found);
+  const auto rels = relations == Relations::Touching ? store_.relations_touching(found) : store_.relations_to(found);
   for (const auto& r : rels) {
     out.relations.push_back(to_msg(r));
     bytes += static_cast<size_t>(out.relations.back()._getEncodedSizeNoHash());

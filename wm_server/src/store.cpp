@@ -326,11 +326,11 @@ std::vector<Relation> WorldStore::relations_touching(const std::vector<const Ele
   return out;
 }
 
-std::vector<Relation> WorldStore::relations_from(const std::vector<const Element*>& subjects) const {
+std::vector<Relation> WorldStore::relations_to(const std::vector<const Element*>& objects) const {
   std::vector<Relation> out;
-  for (const Element* e : subjects)
+  for (const Element* e : objects)
     for (const auto& r : relations_of(e->id))
-      if (r->subject == e->id) out.push_back(*r);
+      if (r->object == e->id) out.push_back(*r);
   std::sort(out.begin(), out.end());
   return out;
 }

@@ -54,10 +54,10 @@ class WorldModelServer {
  private:
   skillbus_msgs::wm_commit_t commit(skillbus_msgs::wm_txn_t txn);
   // Which relations a reply carries: every relation touching its elements (get, query),
-  // or only those whose subject is one of them (snapshot pages: each relation comes once,
-  // with its subject's page; touching would put a container's thousand relations to
-  // elements of other pages into its page).
-  enum class Relations { Touching, BySubject };
+  // or only those whose object is one of them (snapshot pages: each relation comes once,
+  // with its object's page; by subject or touching, a container's thousand skiros:contain
+  // relations would all go into its page, which no bound on a reply could take).
+  enum class Relations { Touching, ByObject };
   skillbus_msgs::wm_elements_t elements_reply(const std::vector<const Element*>& found, bool ids_only,
                                               const char* method, Relations relations) const;
   [[noreturn]] void too_large(const char* method, size_t fitted, size_t found) const;

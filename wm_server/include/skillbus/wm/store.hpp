@@ -101,7 +101,7 @@ class WorldStore {
   // before it, so that paging through a large result costs no more than reading it).
   std::vector<const Element*> query(const Query& q, const Page& page = {}) const;
   std::vector<Relation> relations_touching(const std::vector<const Element*>& elements) const;  // sorted
-  std::vector<Relation> relations_from(const std::vector<const Element*>& subjects) const;     // sorted
+  std::vector<Relation> relations_to(const std::vector<const Element*>& objects) const;        // sorted
   // Relations matching a pattern ("" = any; p matches its subproperties too).
   std::vector<Relation> relations(const std::string& s, const std::string& p, const std::string& o) const;
   ElementsView elements() const { return ElementsView(elements_); }
