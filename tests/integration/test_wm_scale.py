@@ -110,3 +110,50 @@ def test_a_large_query_is_refused_whole_paged_by_the_client_and_a_replica_forms(
                                     "for e in w._elements.values()), 'version': w.version}))"])
     assert sandbox.wait(check, 60) == 0, check.stderr()[-2000:]
     assert last_json(check.stdout()) == {"moved": commits, "version": 1 + commits}
+
+
+def test_the_wire_decoder_reads_what_lcm_reads():
+    """skillbus.world.wire decodes a page as LCM's generated Python plus element_from_msg
+    does: every value type, strings with and without text, several values, no values."""
+    import pytest
+    from skillbus.msgs import wm_elements_t, wm_element_t, wm_property_t, wm_relation_t, wm_value_t
+    from skillbus.world.convert import element_from_msg
+    from skillbus.world.wire import decode_elements
+
+    def value(kind, **kw):
+        v = wm_value_t()
+        v.type = kind
+        for k, x in kw.items():
+            setattr(v, k, x)
+        return v
+
+    m = wm_elements_t()
+    m.version, m.next_id, m.total = 7, 42, 3
+    props = {"skiros:PositionX": [value(wm_value_t.FLOAT, f=0.25)],
+             "skiros:Name": [value(wm_value_t.STRING, s="grün"), value(wm_value_t.STRING, s="")],
+             "skiros:Count": [value(wm_value_t.INT, i=-(2 ** 40))],
+             "skiros:Flag": [value(wm_value_t.BOOL, b=True), value(wm_value_t.BOOL, b=False)],
+             "skiros:Empty": []}
+    for n in range(3):
+        e = wm_element_t()
+        e.id, e.type, e.label = f"skiros:Cube-{n}", "skiros:Cube", f"c{n}" if n else ""
+        for key, values in props.items():
+            p = wm_property_t()
+            p.key, p.values, p.num_values = key, values, len(values)
+            e.properties.append(p)
+        e.num_properties = len(e.properties)
+        m.elements.append(e)
+    m.num_elements = 3
+    r = wm_relation_t()
+    r.subject, r.predicate, r.object = "skiros:Cube-0", "skiros:contain", "skiros:Cube-1"
+    m.relations, m.num_relations = [r], 1
+    data = m.encode()
+    page = decode_elements(data)
+    assert (page.version, page.next_id, page.total) == (7, 42, 3)
+    assert page.elements == [element_from_msg(e) for e in m.elements]
+    assert [type(v) for v in page.elements[0].getProperty("skiros:Flag").values] == [bool, bool]
+    assert page.relations == [("skiros:Cube-0", "skiros:contain", "skiros:Cube-1")]
+    with pytest.raises(ValueError):
+        decode_elements(data[:-3])
+    with pytest.raises(ValueError):
+        decode_elements(b"\0" * 8 + data[8:])

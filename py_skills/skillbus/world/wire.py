@@ -5,7 +5,7 @@ Why a decoder of our own: LCM's generated Python decodes field by field through 
 BytesIO, one object per element, property and value, and ``element_from_msg`` then builds
 the Element: about 50 µs an element, 5 s for a replica of 100,000. This reads the same
 bytes with precompiled structs straight into Elements (about a fifth of that). It reads
-exactly what ``wm_elements_t.decode`` reads (tests/py compares the two on the same bytes).
+exactly what ``wm_elements_t.decode`` reads (tests/integration/test_wm_scale.py compares them).
 """
 
 from __future__ import annotations
