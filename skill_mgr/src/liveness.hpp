@@ -24,6 +24,7 @@ class Liveness {
   Liveness& operator=(const Liveness&) = delete;
   void registered(const std::string& process);  // a registration counts as a heartbeat
   void on_frame();                              // announce (once a second), drop the silent
+  int64_t incarnation() const { return incarnation_; }
 
  private:
   void announce();

@@ -114,6 +114,7 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     out.task = next_task_++;
     out.state = state_code(State::Idle);
     out.message = "queued";
+    out.manager_incarnation = liveness_ ? liveness_->incarnation() : 0;
     starts_.emplace_back(out.task, typed);
     return out;
   });

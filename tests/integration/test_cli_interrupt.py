@@ -9,7 +9,7 @@ import sys
 import time
 
 from skillbus.waiting import wait_until
-from test_skills import LIBS, cli, start_system
+from test_skills import LIBS, cli, mgr_binary, start_system
 
 
 def ready_system(sandbox):
@@ -101,3 +101,34 @@ def test_no_manager_is_one_line(sandbox):
         assert lines[0].startswith("error: no skill manager answered on SB_SKILL_REQ within"), err
         assert "is the system running, in this network namespace?" in lines[0]
         assert time.monotonic() - t0 < 10
+
+
+def test_a_manager_killed_under_a_run_is_named_at_once(sandbox):
+    """kill -9 of the manager while `skillbus run` waits for its task: the run ends within
+    seconds, naming the silent manager, instead of waiting out its --timeout."""
+    mgr = ready_system(sandbox)
+    run = start_wait_run(sandbox, "--timeout", "120")
+    wait_running(sandbox, run)
+    sandbox.kill(mgr, signal.SIGKILL)
+    killed = time.monotonic()
+    rc = sandbox.wait(run, 20)
+    out, err = run.stdout(), run.stderr()
+    assert rc == 1, f"exit {rc}\n{out}\n{err}"
+    assert time.monotonic() - killed < 6.0
+    assert "task 2: Failure: the skill manager went silent: no announcement on SB_SKILL_MANAGER" in out, out + err
+    assert "Traceback" not in err, err
+
+
+def test_a_manager_restarted_under_a_run_is_named(sandbox):
+    """The manager killed and started again at once (as supervisord does): the new
+    incarnation's announcement tells the run its task was lost."""
+    mgr = ready_system(sandbox)
+    run = start_wait_run(sandbox, "--timeout", "120")
+    wait_running(sandbox, run)
+    sandbox.kill(mgr, signal.SIGKILL)
+    sandbox.start("skill_mgr-2", [mgr_binary(), "--wall-clock"])
+    rc = sandbox.wait(run, 20)
+    out, err = run.stdout(), run.stderr()
+    assert rc == 1, f"exit {rc}\n{out}\n{err}"
+    assert re.search(r"task 2: Failure: (the skill manager restarted while task 2 ran \(incarnation -?\d+ -> -?\d+\)"
+                     r"|the skill manager went silent)", out), out + err

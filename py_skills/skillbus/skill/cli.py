@@ -260,6 +260,56 @@ def _with_manager(command, args) -> int:
             return intr.exit_code if intr.signum else 1
 
 
+class ManagerWatch:
+    """Whether the skill manager that runs our task is still the one that started it.
+
+    The manager announces itself on SB_SKILL_MANAGER every second on the wall clock
+    (skill_alive_t, with an incarnation that changes when it restarts). A task lives in
+    the manager's memory: a manager that restarted has lost it, and one that went silent
+    (killed, hung) will never report its end. Either is said at once rather than after
+    the run's --timeout. The start's reply names the manager's incarnation; under
+    lockstep the manager does not announce itself (the clock master names a dead
+    participant) and the reply says 0: nothing is judged before a first announcement."""
+
+    SILENT_S = 3.5  # three missed announcements and a half
+
+    def __init__(self, bus) -> None:
+        import time
+        self._time = time.monotonic
+        self.incarnation: int | None = None
+        self.last_seen = 0.0
+        self.restarted_as: int | None = None
+        bus.subscribe(channel("SB_SKILL_MANAGER"), self._on_alive)
+
+    def started(self, task: skill_task_t) -> None:
+        """The manager that accepted the task: its incarnation (0: it does not announce
+        itself) counts as seen now."""
+        if task.manager_incarnation and self.incarnation is None:
+            self.incarnation = task.manager_incarnation
+            self.last_seen = self._time()
+
+    def _on_alive(self, ch, data) -> None:
+        from skillbus.msgs import skill_alive_t
+        a = decode(skill_alive_t, data)
+        if a is None:
+            return
+        if self.incarnation is None:
+            self.incarnation = a.incarnation
+        elif a.incarnation != self.incarnation and self.restarted_as is None:
+            self.restarted_as = a.incarnation
+        self.last_seen = self._time()
+
+    def lost(self, task: int) -> str:
+        """Why the task is lost, or ""."""
+        if self.restarted_as is not None:
+            return (f"the skill manager restarted while task {task} ran (incarnation {self.incarnation} -> "
+                    f"{self.restarted_as}): the task was lost with it")
+        if self.incarnation is not None and self._time() - self.last_seen > self.SILENT_S:
+            return (f"the skill manager went silent: no announcement on SB_SKILL_MANAGER for {self.SILENT_S} s "
+                    f"(killed or hung?); task {task}'s end is unknown")
+        return ""
+
+
 def _run(args, intr: Interrupts) -> int:
     from skillbus.monitor import watch_url
     bus = open_bus(watch_url(args.url))  # (a large receive buffer: progress is not lost while it prints)
@@ -308,12 +358,14 @@ def _run(args, intr: Interrupts) -> int:
     # The bus layer's queue (DEFAULT_QUEUE_CAPACITY) holds the progress that arrives while
     # an RPC is in flight; nothing else keeps this loop from the bus.
     bus.subscribe(channel("SB_SKILL_PROGRESS"), on_progress)
+    manager = ManagerWatch(bus)
     try:
         task = call(client, "start", req, skill_task_t, intr)
     except RpcError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     task_id[0] = task.task
+    manager.started(task)
     if args.detach:
         print(f"task {task.task}: {req.type} started, detached (stop it with: skillbus stop {task.task})",
               file=sys.stderr, flush=True)
@@ -321,17 +373,21 @@ def _run(args, intr: Interrupts) -> int:
               flush=True)
         return 0
     print(f"task {task.task}: {req.type} started", file=say, flush=True)
-    poll_until(lambda: final or intr.signum, args.timeout if args.timeout > 0 else math.inf, interval=0.2,
-               step=lambda s: intr.handle(bus, s))
+    poll_until(lambda: final or intr.signum or manager.lost(task.task), args.timeout if args.timeout > 0 else math.inf,
+               interval=0.2, step=lambda s: intr.handle(bus, s))
     code = None
-    if not final and intr.signum:
+    lost = "" if final else manager.lost(task.task)
+    if lost and not intr.signum:
+        print(f"task {task.task}: Failure: {lost}", file=say, flush=True)
+        code = 1
+    elif not final and intr.signum:
         print(f"interrupted ({intr.name}): stopping task {task.task}", file=sys.stderr, flush=True)
         code = intr.exit_code
     elif not final:
         print(f"error: task {task.task} did not end within {args.timeout} s: stopping it", file=sys.stderr,
               flush=True)
         code = EXIT_TIMEOUT
-    if code is not None and not final:
+    if code is not None and not final and not lost:
         _stop(client, bus, task.task, final, intr)
     if code is None:
         code = 0 if final[0].state == State.Success else 1
@@ -341,7 +397,8 @@ def _run(args, intr: Interrupts) -> int:
         tree = progress_json(p) if p is not None else None
         root = p.nodes[0] if p is not None and p.nodes else None
         print(json.dumps({"task": task.task, "skill": req.type, "label": req.label,
-                          "state": STATES[p.state] if final else None, "message": root.message if root else "",
+                          "state": STATES[p.state] if final else ("Failure" if lost else None),
+                          "message": lost or (root.message if root else ""),
                           "ended": bool(final), "exit_code": code, "tick": tree["tick"] if tree else None,
                           "tree": tree["nodes"] if tree else []}), flush=True)
     elif final:
