@@ -33,10 +33,14 @@ test-py: build
 	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
 	$(PY) -m pytest -q -rs tests
 
-# The world model's journal under kill -9 and simulated power loss at 1,000 random points
-# of a write sequence (`make test` runs 50); prints the figures (docs/world_model.md).
+# The long fault runs: the world model's journal under simulated power loss at 1,000
+# random points of a write sequence (`make test` runs 50; docs/world_model.md), then
+# kill -9 of every process of the pick-and-place system at a random moment of ClearTable,
+# under lockstep and on the wall clock, 10 times each (`make test` runs each process
+# once; docs/faults.md). About two hours.
 faults: build
 	SKILLBUS_FAULT_POINTS=$${SKILLBUS_FAULT_POINTS:-1000} $(PY) -m pytest -q -rs -s tests/integration/test_journal_faults.py -k power_loss
+	SKILLBUS_FAULT_TRIALS=$${SKILLBUS_FAULT_TRIALS:-10} $(PY) -m pytest -q -rs tests/integration/test_fault_suite.py
 
 demo: build
 	$(VENV)/bin/skillbus demo
@@ -44,6 +48,7 @@ demo: build
 bench: build
 	$(PY) bench/lockstep_overhead.py
 	$(PY) bench/wm_query.py
+	$(PY) bench/wm_scale.py
 	$(PY) bench/skill_ticks.py
 	$(PY) bench/sim_physics.py
 	$(PY) bench/can_latency.py

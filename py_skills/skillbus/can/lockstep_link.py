@@ -71,6 +71,7 @@ class LockstepCanLink:
         self._expected: list[tuple[str, int]] = []   # (sender, frames) announced for the next frame
         self._held: list[tuple[int, can.Message]] = []  # (due frame, message): sends from ticks
         self._sent = 0
+        self._hub_losses_seen = getattr(bus, "hub_losses", 0)
         self.stats = {"sent": 0, "received": 0, "out_of_band": 0}
         self._stop = False
         self._reader = threading.Thread(target=self._read, name="can-lockstep-reader", daemon=True)
@@ -130,6 +131,14 @@ class LockstepCanLink:
         if s.can_channel == self.can_channel and s.frames > 0:
             self._expected.append((m.stamp.sender, s.frames))
 
+    def _hub_note(self) -> str:
+        """Why frames may have been lost: the CAN hub went away since the last frame whose
+        frames all arrived (it may be back already: a restarted hub loses what was in
+        flight)."""
+        if getattr(self.real, "hub_losses", 0) == self._hub_losses_seen and getattr(self.real, "fault", None) is None:
+            return ""
+        return f" (the CAN hub went away meanwhile: CAN hub gone: {getattr(self.real, 'path', self.can_channel)})"
+
     def begin_frame(self, frame: int) -> None:
         """Hands canopen the CAN frames the others announced in the last frame (call first
         in on_frame), then sends what ticks held for this frame."""
@@ -144,12 +153,14 @@ class LockstepCanLink:
                     left = deadline - time.monotonic()
                     if left <= 0:
                         raise LockstepError(f"CAN frames lost on {self.can_channel}: {sender} announced {n} in frame "
-                                            f"{frame - 1}, {len(got)} arrived within {self.timeout:.1f} s")
+                                            f"{frame - 1}, {len(got)} arrived within {self.timeout:.1f} s"
+                                            + self._hub_note())
                     self._cv.wait(left)
             for msg in got:
                 self.stats["received"] += 1
                 self.network.notify(msg.arbitration_id, msg.data, msg.timestamp)
         self._expected = []
+        self._hub_losses_seen = getattr(self.real, "hub_losses", 0)
         due = [m for f, m in self._held if f <= frame]
         self._held = [(f, m) for f, m in self._held if f > frame]
         for msg in due:
