@@ -40,7 +40,7 @@ test-py: build
 # once; docs/faults.md). About two hours.
 faults: build
 	SKILLBUS_FAULT_POINTS=$${SKILLBUS_FAULT_POINTS:-1000} $(PY) -m pytest -q -rs -s tests/integration/test_journal_faults.py -k power_loss
-	SKILLBUS_FAULT_TRIALS=$${SKILLBUS_FAULT_TRIALS:-10} $(PY) -m pytest -q -rs tests/integration/test_fault_suite.py
+	SKILLBUS_FAULT_TRIALS=$${SKILLBUS_FAULT_TRIALS:-10} $(PY) -m pytest -q -rs -s tests/integration/test_fault_suite.py
 
 demo: build
 	$(VENV)/bin/skillbus demo
