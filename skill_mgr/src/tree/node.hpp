@@ -38,6 +38,9 @@ class Node {
   double progress() const { return progress_; }
   virtual const std::vector<std::unique_ptr<Node>>& children() const;
   virtual std::string processor_name() const { return ""; }
+  // The name a parent's message gives it: its skill type, or for an anonymous group its
+  // processor in parentheses, "(RetryOnFail(1))", as the progress tree shows it.
+  std::string display_name() const { return type_.empty() ? "(" + processor_name() + ")" : type_; }
 
  protected:
   // Hooks. start: false fails the node (message says why). step: one tick's work.

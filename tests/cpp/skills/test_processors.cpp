@@ -279,3 +279,15 @@ TEST(Processors, RetryOnFailFailingTheSameWayEachTimeSaysItOnce) {
   EXPECT_NE(why.find("gave up after 3 attempts"), std::string::npos) << why;
   EXPECT_EQ(why.find("the first: "), std::string::npos) << why;
 }
+
+TEST(Processors, AnAnonymousGroupIsNamedByItsProcessorInItsParentsMessage) {
+  std::string log;
+  Children inner, outer;
+  inner.push_back(std::make_unique<ScriptedLeaf>("Leaf", "F", log));
+  outer.push_back(std::make_unique<CompoundNode>("", "", make_processor("RetryOnFail(0)"), std::move(inner)));
+  CompoundNode top("Top", "", make_processor("SerialStar"), std::move(outer));
+  State s = State::Running;
+  for (int i = 0; i < 5 && s == State::Running; ++i) s = top.tick();
+  ASSERT_EQ(s, State::Failure);
+  EXPECT_EQ(top.message().rfind("(RetryOnFail(0)) failed: ", 0), 0u) << top.message();
+}

@@ -16,7 +16,7 @@ class ParallelFf : public Processor {
       const State s = children[i]->tick();
       if (s == State::Failure) {
         for (const auto& c : children) c->preempt();
-        say(children[i]->type() + " failed: " + children[i]->message());
+        say(children[i]->display_name() + " failed: " + children[i]->message());
         return State::Failure;
       }
       running |= s == State::Running;

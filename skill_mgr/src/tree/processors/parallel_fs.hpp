@@ -13,7 +13,7 @@ class ParallelFs : public Processor {
       const State s = children[i]->tick();
       if (finished(s)) {
         for (const auto& c : children) c->preempt();
-        say(children[i]->type() + (s == State::Success ? " succeeded" : " failed: " + children[i]->message()));
+        say(children[i]->display_name() + (s == State::Success ? " succeeded" : " failed: " + children[i]->message()));
         return s;
       }
     }

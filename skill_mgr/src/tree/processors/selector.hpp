@@ -14,7 +14,7 @@ class Selector : public Processor {
       const State s = children[i]->tick();
       if (s != State::Failure) {
         preempt_from(children, i + 1);
-        say(children[i]->type() + (s == State::Running ? " running" : " succeeded"));
+        say(children[i]->display_name() + (s == State::Running ? " running" : " succeeded"));
         return s;
       }
     }

@@ -12,7 +12,7 @@ class SelectorStar : public Processor {
     for (; next_ < children.size(); ++next_) {
       const State s = children[next_]->tick();
       if (s != State::Failure) {
-        say(children[next_]->type() + (s == State::Running ? " running" : " succeeded"));
+        say(children[next_]->display_name() + (s == State::Running ? " running" : " succeeded"));
         return s;
       }
     }

@@ -14,7 +14,7 @@ class Serial : public Processor {
       const State s = children[i]->tick();
       if (s != State::Success) {
         preempt_from(children, i + 1);
-        say(children[i]->type() + (s == State::Running ? " running" : " failed: " + children[i]->message()));
+        say(children[i]->display_name() + (s == State::Running ? " running" : " failed: " + children[i]->message()));
         return s;
       }
     }

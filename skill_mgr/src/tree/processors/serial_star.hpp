@@ -13,7 +13,7 @@ class SerialStar : public Processor {
     for (; next_ < children.size(); ++next_) {
       const State s = children[next_]->tick();
       if (s != State::Success) {
-        say(children[next_]->type() + (s == State::Running ? " running" : " failed: " + children[next_]->message()));
+        say(children[next_]->display_name() + (s == State::Running ? " running" : " failed: " + children[next_]->message()));
         return s;
       }
     }
