@@ -1,5 +1,6 @@
 #include "skillbus/log.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -23,9 +24,34 @@ const char* kNames[] = {"debug", "info", "warn", "error"};
 
 void set_log_level(LogLevel level) { g_level = level; }
 
+std::string log_safe(const std::string& text, size_t max_bytes) {
+  std::string out;
+  out.reserve(std::min(text.size(), max_bytes) + 16);
+  static const char kHex[] = "0123456789abcdef";
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (out.size() >= max_bytes) {
+      out += "... (" + std::to_string(text.size() - i) + " more bytes)";
+      break;
+    }
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\\') {
+      out += "\\\\";
+    } else if (c < 0x20 || c == 0x7f) {  // a newline or a terminal escape would forge lines
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
 void log_line(LogLevel level, const std::string& component, const std::string& text) {
   if (level < g_level) return;
-  std::fprintf(stderr, "[%s] %s: %s\n", kNames[static_cast<int>(level)], component.c_str(), text.c_str());
+  // Log text often quotes what came over the wire: one line per call, escaped, bounded.
+  std::fprintf(stderr, "[%s] %s: %s\n", kNames[static_cast<int>(level)], log_safe(component, 200).c_str(),
+               log_safe(text, 2000).c_str());
   std::fflush(stderr);
 }
 

@@ -11,6 +11,9 @@ namespace skillbus {
 enum class LogLevel { Debug = 0, Info = 1, Warn = 2, Error = 3 };
 
 void log_line(LogLevel level, const std::string& component, const std::string& text);
+// `text` as one printable line: control characters and backslashes escaped (\xNN, \\),
+// cut after `max_bytes` with a note of how much was left out. log_line applies it.
+std::string log_safe(const std::string& text, size_t max_bytes = 2000);
 void set_log_level(LogLevel level);  // default Info, or $SKILLBUS_LOG_LEVEL (debug|info|warn|error)
 
 // Counts bad input per channel and logs the first few of each channel, then every
