@@ -3,6 +3,7 @@
 #include <cstdlib>
 
 #include "lcm_bus.hpp"
+#include "skillbus/auth.hpp"
 #include "skillbus/bus.hpp"
 
 namespace skillbus {
@@ -19,7 +20,7 @@ std::unique_ptr<Bus> open_bus(const std::string& url_in) {
   const auto scheme_end = url.find("://");
   const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
   if (scheme == "udpm" || scheme == "memq" || scheme == "file" || scheme == "tcpq")
-    return std::make_unique<LcmBus>(url);
+    return auth::authenticated(std::make_unique<LcmBus>(url));
   if (scheme == "dds")
     throw BusError("bus URL '" + url + "': the Cyclone DDS backend is not built into this version");
   throw BusError("bus URL '" + url + "': unknown scheme (expected udpm://, memq:// or dds://)");

@@ -69,10 +69,13 @@ def channel(name: str) -> str:
 
 
 def open_bus(url: str | None = None) -> Bus:
+    """The bus the URL names; with a key ($SKILLBUS_KEY_FILE) every message is
+    authenticated (AuthenticatedBus), and with a policy ($SKILLBUS_POLICY_FILE) only the
+    identities it names may send on a channel."""
     url = resolve_url(url)
     scheme = url.split("://", 1)[0] if "://" in url else ""
     if scheme in ("udpm", "memq", "file", "tcpq"):
-        return LcmBus(url)
+        return authenticated(LcmBus(url))
     if scheme == "dds":
         raise BusError(f"bus URL '{url}': the Cyclone DDS backend is not built into this version")
     raise BusError(f"bus URL '{url}': unknown scheme (expected udpm://, memq:// or dds://)")
@@ -195,6 +198,88 @@ class DropEveryNthBus(Bus):
     def subscribe(self, channel: str, handler: Handler,
                   queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
         return self.inner.subscribe(channel, handler, queue_capacity)
+
+    def unsubscribe(self, subscription_id: int) -> None:
+        self.inner.unsubscribe(subscription_id)
+
+    def handle(self, timeout: float) -> bool:
+        return self.inner.handle(timeout)
+
+
+def authenticated(inner: Bus) -> Bus:
+    """`inner` behind the deployment's key, when there is one (skillbus.auth.key_path);
+    else `inner` as it is, with one warning per process: without a key anyone who can
+    reach the bus commands the robot."""
+    from skillbus import auth, policy
+    path = auth.key_path()
+    if path is None:
+        global _warned_open
+        if not _warned_open:
+            _warned_open = True
+            log.warning("no bus key (neither $%s nor %s): messages are neither signed nor checked; any "
+                        "process that reaches the bus can command this robot (skillbus key create; "
+                        "docs/security.md)", auth.KEY_ENV, auth.default_key_path())
+        return inner
+    try:
+        keys = auth.load_keys(path)
+        rules = policy.from_env()
+    except (auth.KeyFileError, policy.PolicyError) as e:
+        raise BusError(str(e)) from None
+    return AuthenticatedBus(inner, keys, auth.default_identity(), rules)
+
+
+_warned_open = False
+
+
+class AuthenticatedBus(Bus):
+    """Signs what it publishes and hands its handlers only messages that verify
+    (skillbus.auth): unsigned, forged, stale, replayed and forbidden ones are dropped and
+    counted in `rejected`, and logged at most once per 10 s per reason and sender."""
+
+    LOG_EVERY_S = 10.0
+
+    def __init__(self, inner: Bus, keys: list[bytes], identity: str, rules=None) -> None:
+        from skillbus import auth
+        self.inner, self.identity = inner, identity
+        self._sealer = auth.Sealer(keys[0], identity)
+        self._opener = auth.Opener(keys, policy=rules)
+        self._rejected_type = auth.Rejected
+        self._last_log: dict[tuple[str, str], float] = {}
+        self._quiet: collections.Counter[tuple[str, str]] = collections.Counter()
+
+    @property
+    def url(self) -> str:
+        return self.inner.url
+
+    @property
+    def rejected(self) -> collections.Counter:
+        """Messages dropped, by reason (skillbus.auth.REASONS); "ok" counts the good ones."""
+        return self._opener.stats
+
+    def publish(self, channel: str, data: bytes) -> None:
+        self.inner.publish(channel, self._sealer.seal(channel, bytes(data)))
+
+    def subscribe(self, channel: str, handler: Handler,
+                  queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
+        def verified(ch: str, data: bytes) -> None:
+            try:
+                opened = self._opener.open(ch, data)
+            except self._rejected_type as r:
+                self._note(r)
+                return
+            handler(ch, opened.payload)
+        return self.inner.subscribe(channel, verified, queue_capacity)
+
+    def _note(self, r) -> None:
+        import time
+        key = (r.reason, r.identity)
+        now = time.monotonic()
+        if now - self._last_log.get(key, -1e9) < self.LOG_EVERY_S:
+            self._quiet[key] += 1
+            return
+        self._last_log[key] = now
+        more = self._quiet.pop(key, 0)
+        log.warning("dropped %s%s", ascii(str(r))[1:-1], f" (and {more} more like it)" if more else "")
 
     def unsubscribe(self, subscription_id: int) -> None:
         self.inner.unsubscribe(subscription_id)

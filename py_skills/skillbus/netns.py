@@ -107,6 +107,13 @@ class Sandbox:
         self.procs: list[Proc] = []
         self._holder: subprocess.Popen | None = None
         self.mode = ""
+        # Every sandbox is a deployment of its own: its processes sign and check their
+        # messages with a key of its own (docs/security.md), unless $SKILLBUS_KEY_FILE says
+        # otherwise ("none": an open bus).
+        self._key_dir = Path(tempfile.mkdtemp(prefix="skillbus-key-"))
+        self.key_file = self._key_dir / "bus.key"
+        from skillbus.auth import create_key_file
+        create_key_file(self.key_file)
 
     # -- namespace --------------------------------------------------------
     def __enter__(self) -> "Sandbox":
@@ -157,6 +164,7 @@ class Sandbox:
     def env(self, extra: dict[str, str] | None = None) -> dict[str, str]:
         e = dict(os.environ)
         e["SKILLBUS_BUS_URL"] = self.url
+        e.setdefault("SKILLBUS_KEY_FILE", str(self.key_file))
         e["PYTHONUNBUFFERED"] = "1"
         e.update(extra or {})
         return e
@@ -210,5 +218,6 @@ class Sandbox:
             self.stop_all()
         finally:
             self._kill_holder()
+            shutil.rmtree(self._key_dir, ignore_errors=True)
             if self._own_dir and exc[0] is None:
                 shutil.rmtree(self.log_dir, ignore_errors=True)
