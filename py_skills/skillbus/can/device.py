@@ -32,11 +32,14 @@ import canopen
 
 from skillbus.can import cia402 as c
 from skillbus.can.eds import EDS  # noqa: F401  (also the runners' import)
-from skillbus.can.fingers import MAX_WIDTH_UM, FingerModel, SimFingers
+from skillbus.can.fingers import MAX_WIDTH_UM, FingerModel, SimFingers, sim_state_reading
+from skillbus.validate import BadValue, Rejects, integer, one_of
 
 log = logging.getLogger("gripper-device")
 RATED_FORCE = 400            # 40 N: above this, a long block is an over-current fault
 BLOCKED_TIMEOUT_S = 1.0
+MAX_VELOCITY_UM_S = 200_000  # 0x6081: the fingers' top speed (the physics server refuses faster)
+SDO_VALUE_RANGE = 0x06090030  # CiA 301 abort code: value range of parameter exceeded
 
 
 class GripperDevice:
@@ -51,17 +54,29 @@ class GripperDevice:
         self.error_code = 0
         self.was_gripped = False
         self.rpdo_errors = 0
+        # Received values not acted on (skillbus.validate): SB_SIM_STATE fields, RPDO
+        # set-points, SDO writes, frames of the wrong length; in the runners' summaries.
+        self.rejects = Rejects("gripper-device")
         self.bus_down = False  # a wall-clock runner's sends fail (step_on_the_wall_clock)
         self.lock = threading.Lock()
         # Frames are handled one at a time, and not while the node boots (boot()).
         self._frames = threading.RLock()
         handle = network.notify
+        # Frames canopen's handlers unpack without checking their length (a short one
+        # raises inside them): the NMT command (2 bytes) and SDO requests (8 bytes,
+        # CiA 301). Dropped and counted here, before canopen sees them.
+        lengths = {0x000: 2, 0x600 + node_id: 8}
 
         def notify(can_id: int, data: bytearray, timestamp: float) -> None:
+            want = lengths.get(can_id)
+            if want is not None and len(data) != want:
+                self.rejects.record(f"COB-ID 0x{can_id:03X}", BadValue("length", len(data), f"{want} bytes expected"))
+                return
             with self._frames:
                 handle(can_id, data, timestamp)
 
         network.notify = notify
+        self.node.add_write_callback(self._check_sdo_write)
         self.node.rpdo.read(from_od=True)
         self.node.rpdo[1].add_callback(self._on_rpdo)
         self.node.tpdo.read(from_od=True)
@@ -81,6 +96,28 @@ class GripperDevice:
         if len(data) != 6:
             self.rpdo_errors += 1  # CiA 301: a PDO of the wrong length is not processed
             log.warning("RPDO1 of %d bytes (6 expected) ignored", len(data))
+
+    # Objects whose value the device acts on, with what it can do: anything else written
+    # by SDO is refused with abort 0x06090030 (as a real drive refuses a value out of
+    # range) and counted. Their types bound the rest (U16, U32).
+    SDO_RANGES = {0x6060: ("modes of operation", (1,)),                 # profile position only
+                  0x6073: ("force limit", range(1, 0xFFFF + 1)),       # 0 would grip with no force
+                  0x6081: ("profile velocity", range(1, MAX_VELOCITY_UM_S + 1))}
+
+    def _check_sdo_write(self, index: int, subindex: int, od, data: bytes) -> None:
+        rule = self.SDO_RANGES.get(index)
+        if rule is None:
+            return
+        name, allowed = rule
+        value = od.decode_raw(data)
+        try:
+            if isinstance(allowed, range):
+                integer(value, name, allowed.start, allowed.stop - 1)
+            else:
+                one_of(value, name, allowed)
+        except BadValue as e:
+            self.rejects.record(f"SDO 0x{index:04X}", e)
+            raise canopen.SdoAbortedError(SDO_VALUE_RANGE) from None
 
     def _on_rpdo(self, pdo) -> None:
         if len(pdo.data) != 6:
@@ -111,8 +148,15 @@ class GripperDevice:
             if cw & c.CW_HALT:
                 self.model.halt()
             elif rising & c.CW_NEW_SET_POINT:
-                self.model.move_to(max(0, min(MAX_WIDTH_UM, target)), self.node.sdo[0x6081].raw or 1,
-                                   self.node.sdo[0x6073].raw)
+                # The target is checked only here, where it is used: the enable sequence
+                # carries whatever position the driver last saw, which may be a little
+                # outside the travel. A set-point outside it is not moved to.
+                try:
+                    target = integer(target, "target position", 0, MAX_WIDTH_UM)
+                except BadValue as e:
+                    self.rejects.record("RPDO1", e)
+                    return
+                self.model.move_to(target, self.node.sdo[0x6081].raw or 1, self.node.sdo[0x6073].raw)
                 self.was_gripped = False
 
     def _fault(self, code: int) -> None:
@@ -193,6 +237,27 @@ class GripperDevice:
             self._next_heartbeat_ns = sim_time_ns + period_ms * 1_000_000
 
     _next_heartbeat_ns: int | None = None
+
+
+def take_sim_state(dev: GripperDevice, fingers: SimFingers, s, where: str) -> bool:
+    """Gives `fingers` the physics server's state `s` (a decoded sim_state_t from `where`,
+    SB_SIM_STATE) if its values are sane (fingers.sim_state_reading); otherwise counts it
+    in dev.rejects and keeps the last good state. True when taken."""
+    try:
+        reading = sim_state_reading(s)
+    except BadValue as e:
+        dev.rejects.record(where, e)
+        return False
+    with dev.lock:
+        fingers.on_state(*reading)
+    return True
+
+
+def summary(dev: GripperDevice, bad_input: int = 0, **more) -> dict:
+    """The device's counts for a runner's JSON summary: frames and values it did not act on
+    (`bad_input`: the runner's own, e.g. states that did not decode, plus dev.rejects)."""
+    return {**more, "rpdo_errors": dev.rpdo_errors, "bad_input": bad_input + dev.rejects.total,
+            "rejected": dev.rejects.summary()}
 
 
 def step_on_the_wall_clock(dev: GripperDevice, dt: float) -> None:

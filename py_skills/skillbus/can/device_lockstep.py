@@ -8,7 +8,7 @@ import json
 
 import canopen
 
-from skillbus.can.device import EDS, GripperDevice
+from skillbus.can.device import EDS, GripperDevice, summary, take_sim_state
 from skillbus.can.fingers import SimFingers
 
 
@@ -47,8 +47,8 @@ def run(args) -> int:
         if s is None:
             bad[0] += 1
             return
-        last_state[0] = s
-        fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts}, s.finger_width_target)
+        if take_sim_state(dev, fingers, s, state_channel()):
+            last_state[0] = s
 
     p.subscribe(state_channel(), on_state)
     last: list[int | None] = [None]
@@ -68,7 +68,7 @@ def run(args) -> int:
     r = p.run()
     p.close()
     link.shutdown()
-    print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex,
-                      "can_sent": link.stats["sent"], "can_received": link.stats["received"],
-                      "rpdo_errors": dev.rpdo_errors, "bad_input": bad[0]}), flush=True)
+    print(json.dumps(summary(dev, bad[0] + link.rejects.total + p.bad_input.total, ok=r.ok, error=r.error,
+                             frames=r.frames, digest=r.digest_hex, can_sent=link.stats["sent"],
+                             can_received=link.stats["received"], can_rejected=link.rejects.summary())), flush=True)
     return 0 if r.ok else 1

@@ -8,7 +8,7 @@ import json
 
 import canopen
 
-from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock
+from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock, summary, take_sim_state
 from skillbus.can.fingers import SimFingers
 
 
@@ -27,12 +27,14 @@ def run(args) -> int:
     network.connect(interface=args.interface, channel=args.channel)
     fingers = SimFingers(lambda m: bus.publish(gripper_channel(), m.encode()))
     dev = GripperDevice(network, args.node_id, args.eds or EDS, fingers=fingers)
+    bad = [0]  # states that did not decode (values that are not sane: dev.rejects)
 
     def on_state(m) -> None:
         s = decode(sim_state_t, m.data)
-        if s is not None:
-            with dev.lock:
-                fingers.on_state(s.finger_width, s.finger_force, {x.body_b for x in s.contacts}, s.finger_width_target)
+        if s is None:
+            bad[0] += 1
+            return
+        take_sim_state(dev, fingers, s, m.channel)
 
     p.subscribe(state_channel(), on_state)
     dev.boot()
@@ -44,4 +46,6 @@ def run(args) -> int:
         pass
     finally:
         network.disconnect()
+        print(json.dumps(summary(dev, bad[0] + p.bad_input.total, node=args.node_id, channel=args.channel)),
+              flush=True)
     return 0

@@ -11,7 +11,7 @@ import time
 
 import canopen
 
-from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock
+from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock, summary
 
 
 def run(args) -> int:
@@ -31,4 +31,5 @@ def run(args) -> int:
         pass
     finally:
         network.disconnect()
+        print(json.dumps(summary(dev, node=args.node_id, channel=args.channel)), flush=True)
     return 0

@@ -4,7 +4,10 @@ RPDO1 (controlword, target position) out, TPDO1 (statusword, position, grip stat
 
 Non-blocking after start(): command() sends a set-point, status() returns the latest
 state; nothing waits inside a skill's tick. EMCY frames become faults with code and
-text; malformed frames are counted and logged, never raised into a skill.
+text; malformed frames and values outside what the device can report (a position
+beyond the travel, undefined grip bits, a heartbeat with no NMT state) are counted in
+`malformed` (by kind in `rejects`) and logged once per kind, never used nor raised into
+a skill.
 
 Supervision (on the wall clock a thread of the driver's own, every heartbeat period / 5;
 under lockstep advance() each frame, in sim time):
@@ -46,10 +49,13 @@ import canopen
 from skillbus import tick_context
 from skillbus.can import cia402 as c
 from skillbus.can.eds import EDS
+from skillbus.can.fingers import MAX_WIDTH_UM, WIDTH_SLACK_UM
+from skillbus.validate import BadValue, Rejects, integer, one_of
 from skillbus.waiting import WaitTimeout, wait_until
 
 log = logging.getLogger("gripper-driver")
 REBOOTED = "rebooted"  # the status's state from a node's boot-up until it is enabled again
+GRIP_BITS = c.GRIP_MOVING | c.GRIP_REACHED | c.GRIP_GRIPPED | c.GRIP_LOST  # every bit 0x2000 defines
 
 
 class GripperError(RuntimeError):
@@ -82,8 +88,10 @@ class GripperStatus:
 
 class GripperDriver:
     def __init__(self, network: canopen.Network, node_id: int, eds: str | Path = EDS, heartbeat_ms: int = 100,
-                 velocity_um_s: int = 50_000, force_limit: int = 200, clock=time.monotonic) -> None:
+                 velocity_um_s: int = 50_000, force_limit: int = 200, clock=time.monotonic,
+                 max_width_um: int = MAX_WIDTH_UM) -> None:
         self.network, self.heartbeat_ms, self.clock = network, heartbeat_ms, clock
+        self.max_width_um = max_width_um  # the gripper's travel: a position reported beyond it is not one
         self._startup: list[tuple[int, str]] | None = None  # lockstep start-up steps still to do
         self._startup_deadline = 0.0
         self._snapshots: dict[int, GripperStatus] = {}
@@ -104,7 +112,9 @@ class GripperDriver:
         self._wake = threading.Event()
         self._supervisor: threading.Thread | None = None
         self._cw = 0
-        self.malformed = 0
+        self.malformed = 0  # frames not used: wrong length or values out of range (by kind: rejects)
+        self.rejects = Rejects("gripper-driver")
+        self._filter_frames(network, node_id)
         self.node.tpdo.read(from_od=True)
         self.node.tpdo[1].add_callback(self._on_tpdo)
         self.node.rpdo.read(from_od=True)
@@ -113,6 +123,33 @@ class GripperDriver:
         network.subscribe(self.node.tpdo[1].cob_id, self._check_tpdo_length)
 
     # -- incoming ---------------------------------------------------------------------------
+    def _reject(self, where: str, error: BadValue) -> None:
+        self.malformed += 1
+        self.rejects.record(where, error)
+
+    def _filter_frames(self, network: canopen.Network, node_id: int) -> None:
+        """Drops (and counts) our node's frames that canopen's handlers would unpack without
+        checking: a heartbeat is one byte holding an NMT state, an EMCY and an SDO answer
+        are eight bytes (CiA 301). A short one raises inside canopen (on the wall clock its
+        listener only logs that; under lockstep it would fail the frame), and a heartbeat
+        with a state no node sends would count as the node being alive."""
+        handle = network.notify
+        heartbeat, lengths = 0x700 + node_id, {0x700 + node_id: 1, 0x80 + node_id: 8, 0x580 + node_id: 8}
+
+        def notify(can_id: int, data: bytearray, timestamp: float) -> None:
+            want = lengths.get(can_id)
+            if want is not None:
+                try:
+                    integer(len(data), "length", want, want)
+                    if can_id == heartbeat:
+                        one_of(data[0] & 0x7F, "NMT state", sorted(c.NMT_STATE_CODES.values()))
+                except BadValue as e:
+                    self._reject(f"COB-ID 0x{can_id:03X}", e)
+                    return
+            handle(can_id, data, timestamp)
+
+        network.notify = notify
+
     def _check_tpdo_length(self, can_id, data, timestamp) -> None:
         if len(data) != 7:
             self.malformed += 1
@@ -121,12 +158,25 @@ class GripperDriver:
     def _on_tpdo(self, pdo) -> None:
         if len(pdo.data) != 7:
             return
+        statusword = pdo["Statusword"].raw
+        try:
+            # A position beyond the travel (with the slack a measurement may overshoot) or a
+            # grip state with bits 0x2000 does not define is no status of this gripper:
+            # the last good status stays.
+            position = integer(pdo["Position actual value"].raw, "position actual value", -WIDTH_SLACK_UM,
+                               self.max_width_um + WIDTH_SLACK_UM)
+            grip = pdo["Grip state"].raw
+            if grip & ~GRIP_BITS:
+                raise BadValue("grip state", grip, f"bits outside 0x{GRIP_BITS:02X}")
+        except BadValue as e:
+            self._reject("TPDO1", e)
+            return
         with self._lock:
             s = self._status
-            s.statusword = pdo["Statusword"].raw
+            s.statusword = statusword
             s.state = c.state_of(s.statusword)
-            s.position_um = pdo["Position actual value"].raw
-            s.grip = pdo["Grip state"].raw
+            s.position_um = position
+            s.grip = grip
             s.target_reached = bool(s.statusword & c.SW_TARGET_REACHED)
             s.updates += 1
 

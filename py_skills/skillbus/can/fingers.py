@@ -16,7 +16,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from skillbus.validate import finite
+
 MAX_WIDTH_UM = 80_000
+# A measured width may overshoot the travel a little (pads pressed together, a joint at
+# its limit); a width further outside is not a measurement of these fingers.
+WIDTH_SLACK_UM = 5_000
+# The largest force limit 0x6073 can hold (U16 in 0.1 N): no force of these fingers is
+# larger, in either direction.
+MAX_FORCE_N = 0xFFFF / 10
 
 
 @dataclass
@@ -67,6 +75,20 @@ class FingerModel:
 FOLLOWING_WINDOW_UM = 5_000      # 0x6065 semantics: the fingers may lag the profile this much
 FOLLOWING_TIMEOUT_S = 0.2
 AT_TARGET_UM = 500
+
+
+def sim_state_reading(s) -> tuple[float, float, set[str], float]:
+    """What SimFingers.on_state takes from a sim_state_t (the physics server's ground
+    truth), checked before any of it is used: width and target between
+    closed and fully open (with WIDTH_SLACK_UM), the force within MAX_FORCE_N, all finite.
+    Raises skillbus.validate.BadValue naming the first bad field: an infinite width used
+    as it came killed the device (OverflowError making it micrometres), a NaN or a width
+    of 1e300 likewise, a negative one made it report nonsense."""
+    lo, hi = -WIDTH_SLACK_UM * 1e-6, (MAX_WIDTH_UM + WIDTH_SLACK_UM) * 1e-6
+    width = finite(s.finger_width, "finger_width", lo, hi)
+    force = finite(s.finger_force, "finger_force", -MAX_FORCE_N, MAX_FORCE_N)
+    target = finite(s.finger_width_target, "finger_width_target", lo, hi)
+    return width, force, {c.body_b for c in s.contacts}, target
 
 
 class SimFingers:

@@ -11,7 +11,8 @@ SocketCAN semantics:
   reading: one whose queue stays over the limit without draining for `stall_timeout`
   seconds is disconnected (logged with what it had queued), since the kernel's SocketCAN
   would not hold up a bus for one socket either;
-* a record that is neither 16 nor 72 bytes is counted and dropped (a broken client).
+* a record that is neither 16 nor 72 bytes, or whose length byte claims more data than
+  it has room for, is counted and dropped (a broken client).
 Filters are applied by each client (python-can's id/mask filters, as SocketCAN applies
 them per socket).
 """
@@ -28,7 +29,7 @@ import sys
 import time
 from pathlib import Path
 
-from skillbus.can.records import CAN_MTU, CANFD_MTU
+from skillbus.can.records import CANFD_MTU, check_record
 
 log = logging.getLogger("can-hub")
 QUEUE_LIMIT = 20000     # records per client before back-pressure
@@ -114,11 +115,12 @@ class Hub:
                 c.out.append(JOINED)
                 self._update(c)
                 continue
-            if len(rec) not in (CAN_MTU, CANFD_MTU):
+            try:
+                check_record(rec)  # its size, and a length byte that fits the data field
+            except ValueError as e:
                 self.bad += 1
                 if self.bad <= 5 or self.bad % 1000 == 0:
-                    log.warning("dropped a %d-byte record (not a can_frame or canfd_frame; %d so far)",
-                                len(rec), self.bad)
+                    log.warning("dropped a %d-byte record (%s; %d so far)", len(rec), e, self.bad)
                 continue
             for other in list(self.clients.values()):
                 if not other.gone and (other is not c or c.echo):

@@ -25,6 +25,7 @@ from __future__ import annotations
 import collections
 import logging
 import os
+import struct
 import threading
 import time
 from typing import Callable
@@ -36,8 +37,13 @@ from skillbus.bus import channel
 from skillbus.lockstep import LockstepError, LockstepParticipant, StampedMessage
 from skillbus.msgs import can_sync_t, decode
 from skillbus import tick_context as context
+from skillbus.validate import BadValue, Rejects, integer
 
 log = logging.getLogger("can-lockstep")
+# The most CAN frames one sender may announce for one lockstep frame: more than a second
+# of a saturated 1 Mbit/s bus (about 9,000 frames). A larger count is not traffic, and
+# waiting for it would stall the next frame until the timeout.
+MAX_SYNC_FRAMES = 10_000
 
 
 def sync_channel() -> str:
@@ -73,6 +79,7 @@ class LockstepCanLink:
         self._sent = 0
         self._hub_losses_seen = getattr(bus, "hub_losses", 0)
         self.stats = {"sent": 0, "received": 0, "out_of_band": 0}
+        self.rejects = Rejects("can-lockstep")  # announcements and frames not acted on
         self._stop = False
         self._reader = threading.Thread(target=self._read, name="can-lockstep-reader", daemon=True)
         self._reader.start()
@@ -118,18 +125,38 @@ class LockstepCanLink:
             if msg is None or msg.is_error_frame:
                 continue
             if msg.arbitration_id in self.out_of_band:
-                self.network.notify(msg.arbitration_id, msg.data, msg.timestamp)
+                self._notify(msg)  # (this thread must survive any frame)
                 continue
             with self._cv:
                 self._queue.append(msg)
                 self._cv.notify_all()
 
+    def _notify(self, msg: can.Message) -> None:
+        """Hands canopen one frame. A frame its handlers cannot unpack (too short for what
+        its COB-ID carries: struct.error and the like) is counted and dropped: under
+        lockstep the exception would fail the frame and end the session, in the reader
+        thread it would end the thread. Other errors (a CAN send that fails) still fail
+        the frame, naming their cause."""
+        try:
+            self.network.notify(msg.arbitration_id, msg.data, msg.timestamp)
+        except (struct.error, ValueError, IndexError) as e:
+            self.rejects.record(f"CAN 0x{msg.arbitration_id:03X}", BadValue("frame", bytes(msg.data),
+                                                                           f"{type(e).__name__}: {e}"))
+
     def _on_sync(self, m: StampedMessage) -> None:
         s = decode(can_sync_t, m.data)
         if s is None:
-            raise ValueError(f"{m.channel} from {m.stamp.sender} is not a can_sync_t")
-        if s.can_channel == self.can_channel and s.frames > 0:
-            self._expected.append((m.stamp.sender, s.frames))
+            self.rejects.record(m.channel, "not a can_sync_t")
+            return
+        if s.can_channel != self.can_channel:
+            return
+        try:
+            frames = integer(s.frames, "frames", 0, MAX_SYNC_FRAMES)
+        except BadValue as e:
+            self.rejects.record(m.channel, e)
+            return
+        if frames > 0:
+            self._expected.append((m.stamp.sender, frames))
 
     def _hub_note(self) -> str:
         """Why frames may have been lost: the CAN hub went away since the last frame whose
@@ -158,7 +185,7 @@ class LockstepCanLink:
                     self._cv.wait(left)
             for msg in got:
                 self.stats["received"] += 1
-                self.network.notify(msg.arbitration_id, msg.data, msg.timestamp)
+                self._notify(msg)
         self._expected = []
         self._hub_losses_seen = getattr(self.real, "hub_losses", 0)
         due = [m for f, m in self._held if f <= frame]

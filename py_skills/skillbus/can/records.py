@@ -17,14 +17,22 @@ def to_record(msg: can.Message) -> bytes:
     return build_can_frame(msg)
 
 
-def from_record(record: bytes, timestamp: float = 0.0, channel: str | None = None) -> can.Message:
-    """Raises ValueError on a record that is not a can_frame or canfd_frame."""
+def check_record(record: bytes) -> None:
+    """Raises ValueError unless `record` is a can_frame or canfd_frame whose length byte
+    fits its data field (8 bytes, 64 for CAN FD): a longer claim would have receivers read
+    padding as data."""
     if len(record) not in (CAN_MTU, CANFD_MTU):
         raise ValueError(f"a SocketCAN record is {CAN_MTU} or {CANFD_MTU} bytes, not {len(record)}")
+    fd, length = len(record) == CANFD_MTU, record[4]  # can_dlc / len: the byte after can_id
+    if length > (64 if fd else 8):
+        raise ValueError(f"a {'CAN FD' if fd else 'CAN'} record with {length} data bytes")
+
+
+def from_record(record: bytes, timestamp: float = 0.0, channel: str | None = None) -> can.Message:
+    """Raises ValueError on a record that is not a can_frame or canfd_frame."""
+    check_record(record)
     can_id, length, flags, data = dissect_can_frame(record)
     fd = len(record) == CANFD_MTU
-    if (not fd and length > 8) or length > 64:
-        raise ValueError(f"a {'CAN FD' if fd else 'CAN'} record with {length} data bytes")
     ext = bool(can_id & CAN_EFF_FLAG)
     return can.Message(
         timestamp=timestamp,
