@@ -78,6 +78,8 @@ def build_parser() -> argparse.ArgumentParser:
     cl.add_argument("--eds", default=None, help="the device's EDS (default: the skillbus gripper's)")
     cl.add_argument("--json", action="store_true",
                     help="print a JSON list of the frames: time, COB-ID, data and what it means")
+    from skillbus import key_cli
+    key_cli.add_parser(sub)
     from skillbus.world import cli as wm_cli
     wm_cli.add_parser(sub)
     from skillbus.sim import cli as sim_cli
@@ -111,6 +113,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def dispatch(args: argparse.Namespace) -> int:
+    if args.command == "key":
+        from skillbus import key_cli
+        return key_cli.main(args)
     if args.command == "demo":
         from skillbus import demo
         return demo.main(args)

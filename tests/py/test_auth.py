@@ -156,3 +156,19 @@ def test_the_bus_signs_and_delivers_only_what_verifies(tmp_path, monkeypatch):
         pass
     assert got == [b"signed"]
     assert bus.rejected["unsigned"] == 1 and bus.rejected["ok"] == 1
+
+
+def test_skillbus_key_creates_rotates_and_retires(tmp_path, capsys):
+    from skillbus.cli import main
+    path = tmp_path / "bus.key"
+    assert main(["key", "create", "--path", str(path)]) == 0
+    (first,) = auth.load_keys(path)
+    assert main(["key", "create", "--path", str(path)]) == 0 and auth.load_keys(path) == [first]  # kept
+    assert main(["key", "rotate", "--path", str(path)]) == 0
+    new, old = auth.load_keys(path)
+    assert old == first
+    assert main(["key", "retire", "--path", str(path)]) == 0 and auth.load_keys(path) == [new]
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    os.chmod(path, 0o640)
+    assert main(["key", "show", "--path", str(path)]) == 1
+    assert "chmod 600" in capsys.readouterr().err
