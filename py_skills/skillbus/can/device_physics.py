@@ -5,6 +5,7 @@ through canopen's notifier, frames from a local timer."""
 from __future__ import annotations
 
 import json
+import signal
 
 import canopen
 
@@ -40,12 +41,22 @@ def run(args) -> int:
     dev.boot()
     print(json.dumps({"node": args.node_id, "channel": args.channel, "physics": True}), flush=True)
     p.on_frame = lambda frame, t: step_on_the_wall_clock(dev, args.period_ms / 1000.0)
+    interrupted = []
+
+    def on_sigint(signum, frame) -> None:  # Ctrl-C ends the run; the summary below is printed
+        interrupted.append(signum)
+        p.stop()
+
+    signal.signal(signal.SIGINT, on_sigint)
+    failure: OSError | None = None
     try:
         p.run()
-    except KeyboardInterrupt:
-        pass
+    except OSError as e:
+        failure = e  # LCM's wait cut short by the signal raises OSError, before on_sigint has run
     finally:
         network.disconnect()
         print(json.dumps(summary(dev, bad[0] + p.bad_input.total, node=args.node_id, channel=args.channel)),
               flush=True)
+    if failure is not None and not interrupted:  # (by now on_sigint has run, if it was the signal)
+        raise failure
     return 0
