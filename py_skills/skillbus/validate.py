@@ -31,10 +31,13 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from collections import Counter
 from typing import Any, Iterable, Sequence
 
 REPR_LIMIT = 80  # characters of a rejected value shown in a log line (a forged string may be huge)
+MAX_KINDS = 64   # kinds one Rejects tells apart; further ones are counted together
+_INDEX = re.compile(r"\[\d+\]")
 
 
 def shown(value: Any) -> str:
@@ -127,11 +130,20 @@ def pose(values: Sequence[Any], name: str, reach: float) -> list[float]:
     return v
 
 
+def kind_of(where: str, field: str) -> str:
+    """The kind a reject is counted as: where it came from and the field, without indices
+    ("SB_ROBOT_OBJECTS: objects[].pose[]"), so that one bad array is one kind."""
+    return f"{where}: {_INDEX.sub('[]', field)}"
+
+
 class Rejects:
-    """What one receiver dropped, counted per kind ("<where>: <field>", e.g.
-    "SB_ROBOT_ARM_STATE: tool_pose.rotation"). The first reject of each kind is logged (one warning
-    line, the value escaped); the rest are only counted, so a flood of forged messages
-    cannot flood the log. `total` and `by_kind` go into the process's summary."""
+    """What one receiver dropped, counted per kind (kind_of: "<where>: <field>", e.g.
+    "SB_ROBOT_ARM_STATE: tool_pose.rotation"). The first reject of each kind is logged
+    (one warning line, the value escaped); the rest are only counted, so a flood of forged
+    messages cannot flood the log. Fields may carry names from the message (a property's
+    key), so after MAX_KINDS kinds the others are counted as one more per source,
+    "<where>: other kinds": neither memory nor the log grows with what a forger makes up. `total` and `by_kind`
+    go into the process's summary."""
 
     def __init__(self, component: str) -> None:
         self.log = logging.getLogger(component)
@@ -139,9 +151,10 @@ class Rejects:
 
     def record(self, where: str, error: BadValue | str) -> None:
         """Counts one dropped message or frame from `where` (a channel, a CAN object);
-        `error` is the BadValue that dropped it, or the reason as text."""
-        field = error.name if isinstance(error, BadValue) else str(error)
-        kind = f"{where}: {field}"
+        `error` is the BadValue that dropped it, or the reason as fixed text."""
+        kind = kind_of(where, error.name if isinstance(error, BadValue) else str(error))
+        if kind not in self.by_kind and len(self.by_kind) >= MAX_KINDS:
+            kind = f"{where}: other kinds"
         self.by_kind[kind] += 1
         if self.by_kind[kind] == 1:
             self.log.warning("rejected %s: %s -- dropped, nothing acted on; further rejects of this kind are "

@@ -9,7 +9,7 @@ import math
 
 import pytest
 
-from skillbus.validate import BadValue, Rejects, finite, finite_all, integer, one_of, pose, shown, text
+from skillbus.validate import MAX_KINDS, BadValue, Rejects, finite, finite_all, integer, one_of, pose, shown, text
 
 NOT_FINITE = [math.nan, math.inf, -math.inf]
 
@@ -107,3 +107,16 @@ def test_rejects_count_per_kind_and_log_each_kind_once(caplog):
     lines = [rec.getMessage() for rec in caplog.records]
     assert len(lines) == 3, lines  # one line per kind, however many came
     assert lines[0].startswith("rejected SB_X: finger_width=inf: not a finite number -- dropped")
+
+
+def test_kinds_have_no_indices_and_what_a_forger_makes_up_cannot_grow_them(caplog):
+    r = Rejects("test-receiver")
+    with caplog.at_level(logging.WARNING, logger="test-receiver"):
+        for i in range(3):
+            r.record("SB_ROBOT_OBJECTS", BadValue(f"objects[{i}].pose[{i + 1}]", math.nan, "not a finite number"))
+        for i in range(500):  # property keys are the sender's: each a field of its own
+            r.record("SB_WM_CHANGES", BadValue(f"ops[0].element.key{i}[0]", math.nan, "not a finite number"))
+    assert r.by_kind["SB_ROBOT_OBJECTS: objects[].pose[]"] == 3
+    assert len(r.by_kind) == MAX_KINDS + 1 and r.total == 503  # (+ the one for the rest)
+    assert r.by_kind["SB_WM_CHANGES: other kinds"] == 500 - (MAX_KINDS - 1)
+    assert len(caplog.records) == MAX_KINDS + 1
