@@ -19,8 +19,10 @@ from typing import Any
 from skillbus.bus import Bus
 from skillbus.msgs import (decode, joint_traj_point_t, motion_plan_t, motion_request_t, robot_arm_state_t,
                            robot_cmd_reply_t)
-from skillbus.robot.messages import arm_cmd_channel, arm_command, arm_state_channel, reply_channel, traj_point
+from skillbus.robot.messages import (arm_cmd_channel, arm_command, arm_state_channel, check_arm_state, reply_channel,
+                                     traj_point)
 from skillbus.rpc import RpcClient
+from skillbus.validate import BadValue, Rejects
 
 log = logging.getLogger("arm")
 
@@ -37,7 +39,8 @@ class Arm:
         self._state: robot_arm_state_t | None = None
         self._raw: bytes | None = None  # decoded only when a skill asks (ticks are rarer than frames)
         self.replies: dict[str, robot_cmd_reply_t] = {}
-        self.bad = 0
+        self.bad = 0  # messages not used: not decodable, or values not sane (by kind: rejects)
+        self.rejects = Rejects("arm")
         if participant is not None:
             participant.subscribe(arm_state_channel(), lambda m: self._on_state(m.data))
             participant.subscribe(reply_channel(), lambda m: self._on_reply(m.data))
@@ -73,8 +76,14 @@ class Arm:
             self._raw = None
             if s is None:
                 self.bad += 1
-            else:
-                self._state = s
+                return self._state
+            try:
+                check_arm_state(s)  # before a skill plans from it (the last good state stays)
+            except BadValue as e:
+                self.bad += 1
+                self.rejects.record(arm_state_channel(), e)
+                return self._state
+            self._state = s
         return self._state
 
     def _on_reply(self, data: bytes) -> None:

@@ -15,7 +15,8 @@ from typing import Any
 
 from skillbus.bus import Bus
 from skillbus.msgs import decode, robot_object_t, robot_objects_t
-from skillbus.robot.messages import objects_channel
+from skillbus.robot.messages import check_objects, objects_channel
+from skillbus.validate import BadValue, Rejects
 
 
 class CameraError(RuntimeError):
@@ -26,7 +27,8 @@ class Camera:
     def __init__(self, bus: Bus, participant: Any = None) -> None:
         self._seen: robot_objects_t | None = None
         self._raw: bytes | None = None
-        self.bad = 0
+        self.bad = 0  # messages not used: not decodable, or values not sane (by kind: rejects)
+        self.rejects = Rejects("camera")
         if participant is not None:
             participant.subscribe(objects_channel(), lambda m: self._on_objects(m.data))
         else:
@@ -43,8 +45,14 @@ class Camera:
             self._raw = None
             if m is None:
                 self.bad += 1
-            else:
-                self._seen = m
+                return self._seen
+            try:
+                check_objects(m)  # before Locate writes a pose into the world (the last good view stays)
+            except BadValue as e:
+                self.bad += 1
+                self.rejects.record(objects_channel(), e)
+                return self._seen
+            self._seen = m
         return self._seen
 
     def objects(self) -> list[robot_object_t]:

@@ -21,6 +21,15 @@ from typing import Sequence
 
 from skillbus.bus import channel
 from skillbus.msgs import joint_traj_point_t, robot_arm_cmd_t
+from skillbus.validate import BadValue, finite, finite_all, integer, pose, text
+
+# Bounds of what a robot's drivers can report; far outside any arm and workspace, so a
+# value beyond them is a corrupt or forged message, not a measurement.
+MAX_JOINTS = 64               # joints of one arm
+MAX_JOINT_POSITION = 100.0    # rad (m for prismatic joints): 16 turns
+MAX_JOINT_VELOCITY = 1_000.0  # rad/s
+MAX_JOINT_EFFORT = 1e6        # N m (N)
+REACH_M = 100.0               # a pose's distance from the world origin on each axis
 
 
 def arm_state_channel() -> str:
@@ -62,3 +71,29 @@ def arm_command(cmd_id: str, joints: Sequence[str],
     m.points = [p if isinstance(p, joint_traj_point_t) else traj_point(p[0], p[1]) for p in points]
     m.num_points = len(m.points)
     return m
+
+
+def check_arm_state(s) -> None:
+    """Raises BadValue unless the robot_arm_state_t `s` is one to act on: 1 to MAX_JOINTS
+    named joints (distinct names, one position, velocity and effort each), every number
+    finite and within the bounds above, the tool pose a pose (a unit quaternion), the
+    tracking error not negative. Skills plan from these positions and decide "settled"
+    from the tracking error: a NaN there never compares below a tolerance."""
+    n = integer(s.num_joints, "num_joints", 1, MAX_JOINTS)
+    names = [text(x, f"joint_names[{i}]") for i, x in enumerate(s.joint_names)]
+    if len(names) != n or len(set(names)) != n:
+        raise BadValue("joint_names", names, f"{n} distinct names expected")
+    finite_all(s.position, "position", -MAX_JOINT_POSITION, MAX_JOINT_POSITION, length=n)
+    finite_all(s.velocity, "velocity", -MAX_JOINT_VELOCITY, MAX_JOINT_VELOCITY, length=n)
+    finite_all(s.effort, "effort", -MAX_JOINT_EFFORT, MAX_JOINT_EFFORT, length=n)
+    pose(s.tool_pose, "tool_pose", REACH_M)
+    finite(s.arm_tracking_error, "arm_tracking_error", 0.0, MAX_JOINT_POSITION)
+
+
+def check_objects(m) -> None:
+    """Raises BadValue unless every object of the robot_objects_t `m` has a name and a
+    pose (REACH_M, a unit quaternion): Locate writes these poses into the world model."""
+    integer(m.num_objects, "num_objects", len(m.objects), len(m.objects))
+    for i, o in enumerate(m.objects):
+        text(o.name, f"objects[{i}].name")
+        pose(o.pose, f"objects[{i}].pose", REACH_M)

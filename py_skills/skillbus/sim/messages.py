@@ -15,6 +15,7 @@ from typing import Any
 
 from skillbus.bus import channel
 from skillbus.msgs import sim_gripper_cmd_t, sim_state_t
+from skillbus.validate import finite, finite_all, integer
 
 
 def state_channel() -> str:
@@ -55,3 +56,24 @@ def state_dict(s: sim_state_t) -> dict[str, Any]:
         "contacts": [{"finger": c.body_a, "object": c.body_b, "points": c.points, "normal_force": c.normal_force}
                      for c in s.contacts],
     }
+
+
+def check_state(s: sim_state_t) -> None:
+    """Raises BadValue unless every number of the ground truth `s` is finite, with one
+    position, velocity and effort per joint, 7 numbers per pose and 6 per twist, and no
+    negative contact count. (A diverging physics would publish NaN: recorded as it
+    came, it would make the record invalid JSON and every comparison with it false.)
+    The ranges of the fingers' values, which the gripper device acts on, are its own
+    check: skillbus.can.fingers.sim_state_reading."""
+    n = integer(s.num_joints, "num_joints", len(s.joint_names), len(s.joint_names))
+    for field in ("position", "velocity", "effort"):
+        finite_all(getattr(s, field), field, length=n)
+    finite_all(s.tool_pose, "tool_pose", length=7)
+    for field in ("finger_width", "finger_force", "finger_width_target", "arm_tracking_error"):
+        finite(getattr(s, field), field)
+    for i, o in enumerate(s.objects):
+        finite_all(o.pose, f"objects[{i}].pose", length=7)
+        finite_all(o.twist, f"objects[{i}].twist", length=6)
+    for i, c in enumerate(s.contacts):
+        integer(c.points, f"contacts[{i}].points", 0)
+        finite(c.normal_force, f"contacts[{i}].normal_force")

@@ -29,7 +29,9 @@ from skillbus.bus import open_bus
 from skillbus.lockstep import LockstepParticipant, StampedMessage
 from skillbus.msgs import decode, robot_cmd_reply_t, sim_cmd_reply_t, sim_state_t, test_sample_t
 from skillbus.robot import messages as robot
-from skillbus.sim.messages import gripper_channel, gripper_command, reply_channel, state_channel, state_dict
+from skillbus.sim.messages import (check_state, gripper_channel, gripper_command, reply_channel, state_channel,
+                                   state_dict)
+from skillbus.validate import BadValue, Rejects
 
 
 class ScriptError(ValueError):
@@ -61,7 +63,8 @@ class ScriptPlayer:
         self.states: list[dict[str, Any]] = []
         self.replies: list[dict[str, Any]] = []
         self.last_msg: sim_state_t | None = None
-        self.bad = 0
+        self.bad = 0  # messages not recorded: not decodable, or values not sane (by kind: rejects)
+        self.rejects = Rejects("sim-script")
         p.subscribe(state_channel(), self.on_state)
         p.subscribe(reply_channel(), lambda m: self.on_reply(m, sim_cmd_reply_t))
         p.subscribe(robot.reply_channel(), lambda m: self.on_reply(m, robot_cmd_reply_t))
@@ -71,6 +74,12 @@ class ScriptPlayer:
         s = decode(sim_state_t, m.data)
         if s is None:
             self.bad += 1
+            return
+        try:
+            check_state(s)
+        except BadValue as e:
+            self.bad += 1
+            self.rejects.record(m.channel, e)
             return
         self.last_msg = s  # turned into plain data only when recorded (it costs more than the decode)
         if s.header.frame % self.record_every == 0:
