@@ -19,8 +19,9 @@ from skillbus.bus import Bus, channel
 from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elements_t, wm_op_t, wm_query_t,
                            wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError
+from skillbus.validate import BadValue, Rejects, integer
 from skillbus.waiting import poll_until
-from skillbus.world.convert import element_from_msg, op, property_msg, relation_msg
+from skillbus.world.convert import check_op_msg, element_from_msg, op, property_msg, relation_msg
 from skillbus.world.element import Element
 from skillbus.world.wire import ElementsPage, decode_elements, query_all
 
@@ -48,6 +49,8 @@ class WorldModelInterface:
         self._txn_client_id = f"lockstep:{participant.name}" if participant is not None else self.rpc.client_id
         self._stale = False
         self._collecting: list[wm_change_t] | None = None
+        # Changes and results not acted on (skillbus.validate), by kind.
+        self.rejects = Rejects(f"wm-client {name}")
         if participant is not None:
             participant.subscribe(channel("SB_WM_CHANGES"), lambda m: self._on_change(m.data))
             participant.subscribe(channel("SB_WM_TXN_RESULT"), self._on_result)
@@ -139,6 +142,20 @@ class WorldModelInterface:
 
     def _on_change(self, data: bytes) -> None:
         ch = decode(wm_change_t, data)
+        if ch is not None:
+            try:
+                integer(ch.version, "version", 1)  # version 0 is the empty world, before any change
+                for i, o in enumerate(ch.ops):
+                    check_op_msg(o, f"ops[{i}]")
+            except BadValue as e:
+                # Not applied, not even in part. The world model has the truth: if this was
+                # a change the replica still needs (the server's, after all), it now misses
+                # a version, so it resyncs from a snapshot at the next read instead of going
+                # on without it (as after a lost change).
+                self.rejects.record(channel("SB_WM_CHANGES"), e)
+                if self._collecting is None and isinstance(ch.version, int) and ch.version > self.version:
+                    self._stale = True
+                return
         if ch is not None and self._collecting is not None:  # a resync is reading pages
             self._collecting.append(ch)
             return
@@ -167,6 +184,11 @@ class WorldModelInterface:
     def _on_result(self, m) -> None:
         r = decode(wm_commit_t, m.data)
         if r is not None and r.client_id == self._txn_client_id:
+            try:  # a result for a request never made would only fill `results`
+                integer(r.request_id, "request_id", 1, self._txn_ids)
+            except BadValue as e:
+                self.rejects.record(m.channel, e)
+                return
             self.results[r.request_id] = r
 
     def sync(self, version: int | None = None, timeout: float | None = None) -> None:

@@ -5,7 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 from skillbus.msgs import wm_element_t, wm_op_t, wm_property_t, wm_relation_t, wm_value_t
+from skillbus.validate import BadValue, finite, one_of, text
 from skillbus.world.element import Element, Property
+
+VALUE_TYPES = (wm_value_t.STRING, wm_value_t.INT, wm_value_t.FLOAT, wm_value_t.BOOL)
+OP_KINDS = (wm_op_t.ADD_ELEMENT, wm_op_t.UPDATE_ELEMENT, wm_op_t.REMOVE_ELEMENT, wm_op_t.ADD_RELATION,
+            wm_op_t.REMOVE_RELATION)
 
 
 def value_msg(v: Any, key: str) -> wm_value_t:
@@ -63,3 +68,29 @@ def op(kind: int, element: Element | None = None, relation: tuple[str, str, str]
     m.element = element_msg(element) if element is not None else wm_element_t()
     m.relation = relation_msg(*relation) if relation is not None else wm_relation_t()
     return m
+
+
+def check_element_msg(m: wm_element_t, name: str = "element", need_id: bool = True) -> None:
+    """Raises BadValue unless every value of `m` is one element_from_msg can take: a known
+    type (an unknown one was a KeyError inside the receiver) and, for a FLOAT, a finite
+    number (a NaN pose makes every transform through it NaN); and, with `need_id`, an id."""
+    if need_id:
+        text(m.id, f"{name}.id")
+    for p in m.properties:
+        for i, v in enumerate(p.values):
+            where = f"{name}.{p.key}[{i}]"
+            one_of(v.type, f"{where}.type", VALUE_TYPES)
+            if v.type == wm_value_t.FLOAT:
+                finite(v.f, where)
+
+
+def check_op_msg(o: wm_op_t, name: str = "op") -> None:
+    """Raises BadValue unless `o` is an operation a replica can apply: a known kind, an
+    element with an id and sane values (element operations), a relation with all three
+    parts (relation operations)."""
+    one_of(o.kind, f"{name}.kind", OP_KINDS)
+    if o.kind in (wm_op_t.ADD_RELATION, wm_op_t.REMOVE_RELATION):
+        for part in ("subject", "predicate", "object"):
+            text(getattr(o.relation, part), f"{name}.relation.{part}")
+    else:
+        check_element_msg(o.element, f"{name}.element")
