@@ -33,6 +33,7 @@ from typing import Any, Callable
 from skillbus.bus import Bus, channel
 from skillbus.log import BadInputCounter
 from skillbus import tick_context as context
+from skillbus.validate import BadValue, integer
 from skillbus.msgs import channel_count_t, header_t, lockstep_ack_t, lockstep_clock_t, lockstep_join_t
 
 
@@ -89,7 +90,7 @@ def peek_stamp(data: bytes) -> Stamp | None:
         h = header_t._decode_one(BytesIO(data[8:]))
     except Exception:
         return None
-    if not h.sender or h.seq < 0 or h.frame < 0:
+    if not h.sender or h.seq < 0 or h.frame < 0 or h.sim_time_ns < 0:  # (sim time starts at 0)
         return None
     return Stamp(h.frame, h.sim_time_ns, h.sender, h.seq)
 
@@ -212,6 +213,7 @@ class LockstepParticipant:
         self._stop_seen, self._stop_reason = False, ""
         self._last_acked, self._last_ack = -1, b""
         self._current = -1  # the frame being worked on (its clock may be resent meanwhile)
+        self._last_sim_time = 0  # sim time of the last clock taken: it never runs backwards
         self._running = bytes(32)
         self._stop_requested = False
         self._held: list[tuple[int, str, Any]] = []  # (due frame, channel, message): from ticks
@@ -313,7 +315,23 @@ class LockstepParticipant:
                                   len(data))
             return
         if self._next_clock is None:  # else: a resend of the clock we already hold
+            try:
+                self._check_clock(c)
+            except BadValue as e:
+                self.bad_input.record(ch, f"a clock for frame {frame} with {e}", len(data))
+                return
             self._next_clock = c
+            self._last_sim_time = c.header.sim_time_ns
+
+    def _check_clock(self, c: lockstep_clock_t) -> None:
+        """The values of the next frame's clock, before anything acts on them: its sim time
+        (what on_frame gets: a device steps its fingers by the difference, so a time that
+        runs backwards would move them the wrong way) and its counts (a negative count, or
+        one for a frame after this clock's, is no count of published messages)."""
+        integer(c.header.sim_time_ns, "sim_time_ns", self._last_sim_time)
+        for i, n in enumerate(c.counts):
+            integer(n.count, f"counts[{i}].count", 0)
+            integer(n.frame, f"counts[{i}].frame", 0, c.header.frame)
 
     # -- loops -------------------------------------------------------------
     def _send_ack(self, frame: int, sim_time_ns: int, error: str) -> None:
