@@ -21,15 +21,51 @@ import traceback
 from typing import Any
 
 from skillbus.bus import Bus, open_bus
-from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t
+from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t, skill_value_t
 from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, request_channel
 from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
 from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
 from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
+from skillbus.validate import BadValue, Rejects, finite, integer, one_of
+from skillbus.world.convert import check_element_msg
 
 log = logging.getLogger("skills-process")
+TICK_ACTIONS = (skill_tick_t.START, skill_tick_t.EXECUTE, skill_tick_t.PREEMPT, skill_tick_t.END)
+VALUE_TYPES = (skill_value_t.STRING, skill_value_t.INT, skill_value_t.FLOAT, skill_value_t.BOOL, skill_value_t.ELEMENT,
+               skill_value_t.JSON)
+
+
+def _no_constant(name: str):
+    """json.loads' parse_constant: NaN and Infinity are not JSON, only Python's json takes them."""
+    def reject(const: str):
+        raise BadValue(name, const, "not a finite number")
+    return reject
+
+
+def check_tick(t: skill_tick_t, actions=TICK_ACTIONS) -> None:
+    """Raises BadValue unless the manager's tick (or expand request) `t` is one to act on:
+    a frame of -1 (wall clock) or later and a sim time not before 0 (skills take it as
+    "now", the gripper's CAN sends are held until frame + 1), a known action, and
+    parameter values a skill can use: a known value type, finite FLOATs (also inside JSON
+    lists and dicts and element properties), JSON that parses."""
+    integer(t.frame, "frame", -1)
+    integer(t.sim_time_ns, "sim_time_ns", 0)
+    one_of(t.action, "action", actions)
+    for p in t.params:
+        for i, v in enumerate(p.values):
+            name = f"params.{p.key}[{i}]"
+            one_of(v.type, f"{name}.type", VALUE_TYPES)
+            if v.type == skill_value_t.FLOAT:
+                finite(v.f, name)
+            elif v.type == skill_value_t.JSON:
+                try:
+                    json.loads(v.s, parse_constant=_no_constant(name))
+                except json.JSONDecodeError as e:
+                    raise BadValue(name, v.s, f"not JSON ({e.msg})") from None
+            elif v.type == skill_value_t.ELEMENT:
+                check_element_msg(v.element, name, need_id=False)  # (an abstract element has no id yet)
 
 
 def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
@@ -82,6 +118,7 @@ class SkillProcess:
             # they were at the end of frame n, however the tick and the clock raced.
             participant.after_frame.append(lambda frame: self.server.retry_deferred())
         self.incarnation = time.time_ns()  # identity of this run of the process, not behaviour
+        self.rejects = Rejects(f"skills-process {name}")  # ticks and expansions refused (check_tick)
 
     def registration(self) -> skill_register_t:
         m = skill_register_t()
@@ -143,6 +180,12 @@ class SkillProcess:
         return gated
 
     def on_tick(self, t: skill_tick_t) -> skill_tick_reply_t:
+        try:
+            check_tick(t)
+        except BadValue as e:  # answered (the manager must not wait for it), never run
+            self.rejects.record(f"{self.area}.tick", e)
+            return self._reply(None, State.Failure, f"skill process {self.name} refused the tick of {t.label!r}: {e}",
+                               -1)
         with context.ticking(t.frame, t.sim_time_ns):
             return self._tick(t)
 
@@ -195,6 +238,13 @@ class SkillProcess:
             return self._reply(skill, State.Failure, f"{t.label}.{hook}() raised {type(e).__name__}: {e}", -1)
 
     def on_expand(self, t: skill_tick_t) -> skill_tree_t:
+        try:
+            check_tick(t, actions=(skill_tick_t.EXPAND,))
+        except BadValue as e:
+            self.rejects.record(f"{self.area}.expand", e)
+            out = skill_tree_t()
+            out.error = f"skill process {self.name} refused the expansion of {t.label!r}: {e}"
+            return out
         cls = self.classes.get(t.label)
         if cls is None or not issubclass(cls, SkillBase):
             out = skill_tree_t()
@@ -209,6 +259,21 @@ class SkillProcess:
             out = skill_tree_t()
             out.error = f"{t.label}.expand() raised {type(e).__name__}: {e}"
             return out
+
+
+def bad_input(proc: SkillProcess, wmi: Any, participant: Any) -> dict[str, Any]:
+    """For the process's summary: what it received and did not act on, in total and by
+    kind: its ticks, its world-model replica's changes, its interfaces' messages and
+    frames (those that count them: `rejects`), the lockstep layer's bad messages."""
+    counters = [proc.rejects, getattr(wmi, "rejects", None)]
+    counters += [getattr(interfaces.get(name), "rejects", None) for name in sorted(interfaces.configured())]
+    kinds: dict[str, int] = {}
+    for c in counters:
+        if c is not None:
+            for kind, n in c.summary().items():
+                kinds[kind] = kinds.get(kind, 0) + n
+    lockstep = participant.bad_input.total if participant is not None else 0
+    return {"bad_input": sum(kinds.values()) + lockstep, "rejected": kinds}
 
 
 def interface_specs(args) -> list[tuple[str, str, str]]:
@@ -290,7 +355,8 @@ def main(args) -> int:
         # Under lockstep the process follows the frames (its world-model replica changes
         # only at frame boundaries); RPC ticks are answered while it waits for a clock.
         r = participant.run()
-        print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex}), flush=True)
+        print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex,
+                          **bad_input(proc, wmi, participant)}), flush=True)
         return 0 if r.ok else 1
     Liveness(bus, proc).serve_forever()
 
