@@ -9,6 +9,7 @@
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
+#include "skillbus/auth.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/log.hpp"
 #include "skillbus/motion/planner.hpp"
@@ -90,6 +91,8 @@ int main(int argc, char** argv) {
   out["ok"] = true;
   out["served"] = rpc.served();
   out["bad_input"] = rpc.bad_input().total();
+  // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
+  if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);
   return 0;
 }

@@ -4,6 +4,7 @@
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
+#include "skillbus/auth.hpp"
 #include "skillbus/sim/server.hpp"
 
 using namespace skillbus;
@@ -19,6 +20,9 @@ int main(int argc, char** argv) {
   int64_t join_ms = 10000, ack_ms = 5000, message_ms = 2000;
   apps::add_url_option(app, url);
   app.add_option("--scene", o.scene_file, "the scene file (required; e.g. deploy/scenes/demo.scene.json)")->type_name("FILE");
+  app.add_option("--scenes", o.scenes_dir,
+                 "the folder SIM.load_scene takes scene names from (default: the --scene file's folder)")
+      ->type_name("DIR");
   app.add_option("--script", o.script_file, "play this command script in-process (no participant needed)")->type_name("FILE");
   app.add_option("--record-script", o.record_script, "write every accepted command to this file, as a script")->type_name("FILE");
   app.add_option("--name", o.name, "its name on the bus");
@@ -88,6 +92,8 @@ int main(int argc, char** argv) {
   out["finger_force"] = apps::rounded(state.finger_force, 3);
   out["objects"] = objects;
   out["frame_ms"] = frame_ms;
+  // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
+  if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

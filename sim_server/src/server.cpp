@@ -11,6 +11,7 @@
 #include "skillbus_msgs/robot_arm_state_t.hpp"
 #include "skillbus_msgs/robot_cmd_reply_t.hpp"
 #include "skillbus_msgs/robot_objects_t.hpp"
+#include "skillbus/files.hpp"
 #include "skillbus_msgs/sim_cmd_reply_t.hpp"
 #include "skillbus_msgs/sim_control_t.hpp"
 #include "skillbus_msgs/sim_gripper_cmd_t.hpp"
@@ -36,6 +37,11 @@ std::string reply_channel() { return channel("SB_SIM_CMD_REPLY"); }
 SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::move(options)) {
   if (!(opt_.speed > 0) || !std::isfinite(opt_.speed)) throw SceneError("--speed must be a positive number");
   physics_ = std::make_unique<Physics>(load(opt_.scene_file));
+  scenes_dir_ = opt_.scenes_dir;
+  if (scenes_dir_.empty()) {
+    const auto slash = opt_.scene_file.rfind('/');
+    scenes_dir_ = slash == std::string::npos ? "." : opt_.scene_file.substr(0, slash);
+  }
   if (opt_.duration_s > 0)
     opt_.frames = static_cast<int64_t>(std::llround(opt_.duration_s / (physics_->scene().physics.frame_ms * 1e-3)));
   if (!opt_.script_file.empty()) script_ = load_script(opt_.script_file);
@@ -210,8 +216,16 @@ void SimServer::add_services() {
     return status();
   });
   rpc_->add_method<Req, Rep>("load_scene", [this](const Req& r) {
-    if (r.scene.empty()) throw RpcBadRequest("load_scene needs a scene file path");
-    Scene s = load(r.scene);  // a SceneError becomes the error reply; the old world stays
+    if (r.scene.empty()) throw RpcBadRequest("load_scene needs a scene name");
+    // A scene by name, from the folder of the scene the server started with (or
+    // --scenes): a request never names a path (skillbus/files.hpp).
+    std::string path;
+    try {
+      path = file_in(scenes_dir_, r.scene, ".scene.json", "scene name");
+    } catch (const std::invalid_argument& e) {
+      throw RpcBadRequest(e.what());
+    }
+    Scene s = load(path);  // a SceneError becomes the error reply; the old world stays
     if (!opt_.wall_clock && std::abs(s.physics.frame_ms - physics_->scene().physics.frame_ms) > 1e-9)
       throw RpcError("the scene's frame_ms differs from the running lockstep frame period");
     physics_ = std::make_unique<Physics>(s);

@@ -5,6 +5,7 @@
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
+#include "skillbus/auth.hpp"
 
 using namespace skillbus;
 
@@ -60,6 +61,8 @@ int main(int argc, char** argv) {
   out["frames"] = r.frames;
   out["digest"] = r.digest_hex();
   out["tasks"] = tasks;
+  // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
+  if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

@@ -189,7 +189,7 @@ def sim_cli(box, *args):
 
 def test_control_services_in_wall_clock_mode(sandbox, binary, tmp_path):
     sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()), "--wall-clock",
-                                "--speed", "4"])
+                                "--speed", "4", "--scenes", str(tmp_path)])
     rc, s0 = sim_cli(sandbox, "status")
     assert rc == 0, s0
     assert not s0["lockstep"] and s0["collision_detector"] == "bullet" and s0["num_objects"] == 3
@@ -202,14 +202,19 @@ def test_control_services_in_wall_clock_mode(sandbox, binary, tmp_path):
     time.sleep(0.3)
     assert sim_cli(sandbox, "status")[1]["sim_time_ns"] > t_paused
     assert sim_cli(sandbox, "reset")[1]["digest"] == initial
-    rc, err = sim_cli(sandbox, "load-scene", str(tmp_path / "missing.json"))
+    rc, err = sim_cli(sandbox, "load-scene", "missing")
     assert rc == 1 and "cannot open the scene file" in err
+    # A scene by name from the server's scenes folder; a path is refused before any file is
+    # touched (neither whether it exists nor what it begins with comes back).
+    for path in ("/etc/passwd", "../demo", str(paths.demo_scene()), ".hidden", "a/b"):
+        rc, err = sim_cli(sandbox, "load-scene", path)
+        assert rc == 1 and "a name, not a path" in err and "root:" not in err, (path, err)
     assert sim_cli(sandbox, "status")[1]["num_objects"] == 3  # the old world stays
     two = json.loads(paths.demo_scene().read_text())
     two["objects"] = two["objects"][:2]
     f = tmp_path / "two.scene.json"
     scene_file.save(two, f, paths.demo_scene())
-    assert sim_cli(sandbox, "load-scene", str(f))[1]["num_objects"] == 2
+    assert sim_cli(sandbox, "load-scene", "two")[1]["num_objects"] == 2
     sandbox.kill(sim, 15)
     assert sandbox.wait(sim, 15) == 0
     assert last_json(sim.stdout())["ok"]

@@ -40,6 +40,18 @@ def test_bad_input_gets_named_errors_and_changes_nothing(sandbox, tmp_path):
     assert server.returncode is None, server.stderr()[-2000:]
 
 
+def test_scene_files_are_named_never_paths_and_stay_in_the_data_directory(sandbox, tmp_path):
+    import stat
+    data = tmp_path / "data"
+    server = start_server(sandbox, wm_binary(), data)
+    assert run_scenario(sandbox, "scene_files")["ok"]
+    saved = data / "scenes" / "snap-1.ttl"
+    assert saved.exists() and stat.S_IMODE(saved.stat().st_mode) == 0o600
+    assert sorted(p.name for p in data.iterdir()) == ["journal.bin", "lock", "scenes", "snapshot.bin"], \
+        "nothing was written outside DATA/scenes"
+    assert server.returncode is None
+
+
 def test_kill_9_during_2000_writes_loses_and_duplicates_nothing(sandbox, tmp_path):
     data = tmp_path / "data"
     server = start_server(sandbox, wm_binary(), data, "--snapshot-every", "300")

@@ -1,6 +1,6 @@
 """World-model scenarios that run inside the test sandbox, next to a running wm_server.
 Each asserts what it checks and exits non-zero with the failing line when a check fails.
-Usage: wm_scenarios.py api | bad_input | writer N | lockstep_writer FRAMES"""
+Usage: wm_scenarios.py api | bad_input | scene_files | writer N | lockstep_writer FRAMES"""
 
 from __future__ import annotations
 
@@ -172,12 +172,36 @@ def lockstep_writer(frames: int) -> None:
     sys.exit(0 if r.ok else 1)
 
 
+def scene_files() -> None:
+    """Scene files by name only, inside DATA/scenes: a path never reaches the disk."""
+    from skillbus.msgs import wm_scene_t
+    wmi = WorldModelInterface(open_bus(), "scene-files-test")
+
+    def call(method: str, path: str):
+        req = wm_scene_t()
+        req.path = path
+        return wmi._call(method, req, wm_scene_t)
+
+    for bad in ("../journal.bin", "/etc/passwd", "scenes/../../journal", ".journal", "a/b", ""):
+        if bad:
+            err = expect_error(lambda: call("save_scene", bad), "a name, not a path")
+        err = expect_error(lambda: call("load_scene", bad or "../x"), "a name, not a path")
+        assert "root:" not in err, err
+    saved = call("save_scene", "snap-1")
+    assert saved.path == "snap-1" and "skiros:Cube-2" in saved.turtle
+    expect_error(lambda: call("load_scene", "no-such-scene"), "cannot read")
+    loaded = call("load_scene", "snap-1.ttl")
+    print(json.dumps({"ok": True, "loaded_version": loaded.version}), flush=True)
+
+
 if __name__ == "__main__":
     what = sys.argv[1]
     if what == "api":
         api()
     elif what == "bad_input":
         bad_input()
+    elif what == "scene_files":
+        scene_files()
     elif what == "writer":
         writer(int(sys.argv[2]))
     elif what == "lockstep_writer":

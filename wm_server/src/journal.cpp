@@ -95,7 +95,7 @@ void sync_file(const std::string& path) {
 // on return: beside, synced, renamed, the directory synced.
 // Writes `bytes` as a new file at `path`, on disk on return; on failure no file is left.
 void write_file_synced(const std::string& path, const std::string& bytes) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) throw WmError(sys_error("cannot create " + path));
   try {
     write_all(fd, bytes.data(), bytes.size(), path);
@@ -369,7 +369,7 @@ class BodyWriter {
 // snapshot.bin.tmp with the body `body` writes, synced; renamed to snapshot.bin and the
 // directory synced by the caller. On failure no file is left.
 void write_snapshot_tmp(const std::string& tmp, const std::function<void(BodyWriter&)>& body) {
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
   try {
     uint8_t h[fmt::kSnapshotHeaderSize] = {0};
@@ -407,7 +407,7 @@ void snapshot_body(BodyWriter& w, const SnapshotData& d) {
 // The lock of a data directory: one process uses it at a time (a server, or a repair).
 int lock_dir(const std::string& dir) {
   const std::string path = dir + "/lock";
-  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
   if (fd < 0) throw WmError(sys_error("cannot open " + path));
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int e = errno;
@@ -428,7 +428,7 @@ int lock_dir(const std::string& dir) {
 }
 
 void make_dir(const std::string& dir) {
-  if (::mkdir(dir.c_str(), 0755) == 0) {
+  if (::mkdir(dir.c_str(), 0700) == 0) {
     // Its name in the parent must be durable too, or a power loss takes the whole directory.
     std::filesystem::path path = std::filesystem::path(dir).lexically_normal();
     if (!path.has_filename()) path = path.parent_path();  // "a/b/" names b too
@@ -582,7 +582,7 @@ Journal::~Journal() {
 
 void Journal::start_journal(int64_t base_version) {
   const std::string tmp = dir_ + "/journal.bin.tmp", path = dir_ + "/journal.bin";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0600);
   if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
   const std::string header = journal_header(base_version);
   try {
@@ -782,7 +782,7 @@ void Journal::background(SnapshotData snapshot, uint64_t tail_from, long records
 
 void Journal::rotate_journal(int64_t base_version, uint64_t tail_from, long records_before) {
   const std::string tmp = dir_ + "/journal.bin.tmp", path = dir_ + "/journal.bin";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0600);
   if (fd < 0) throw WmError(sys_error("cannot create " + tmp));
   // Only this thread renames the journal, so journal.bin is the file appended to.
   const int in = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);

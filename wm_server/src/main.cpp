@@ -4,6 +4,7 @@
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
+#include "skillbus/auth.hpp"
 #include "skillbus/wm/journal.hpp"
 #include "skillbus/wm/server.hpp"
 
@@ -60,6 +61,8 @@ int main(int argc, char** argv) {
   out["elements"] = server->store().elements().size();
   out["digest"] = r.digest_hex();
   out["rejected"] = server->rejected();
+  // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
+  if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);
   return r.ok ? 0 : 1;
 }

@@ -1,12 +1,19 @@
 #include "skillbus/wm/server.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
 #include "skillbus/digest.hpp"
+#include "skillbus/files.hpp"
 #include "skillbus/wm/convert.hpp"
 #include "skillbus/wm/scene.hpp"
 #include "skillbus/wm/transforms.hpp"
@@ -339,9 +346,19 @@ void WorldModelServer::load_scene_text(const std::string& text, const std::strin
   snapshot(false);  // a scene load is made durable as a snapshot before the reply
 }
 
+// Scene files named in a request live in DATA/scenes: a request names a scene, never a
+// path (skillbus/files.hpp), so it can neither overwrite the journal nor read other files.
+std::string WorldModelServer::scene_path(const std::string& name) const {
+  try {
+    return file_in(opt_.data_dir.empty() ? "" : opt_.data_dir + "/scenes", name, ".ttl", "scene name");
+  } catch (const std::invalid_argument& e) {
+    throw WmError(e.what());
+  }
+}
+
 wm_scene_t WorldModelServer::on_load_scene(const wm_scene_t& req) {
-  const std::string source = req.path.empty() ? "the request" : req.path;
-  const std::string text = req.path.empty() ? req.turtle : read_file(req.path);
+  const std::string source = req.path.empty() ? "the request" : "scene " + req.path;
+  const std::string text = req.path.empty() ? req.turtle : read_file(scene_path(req.path));
   wm_scene_t out{};
   load_scene_text(text, source, &out.report);
   out.version = store_.version();
@@ -358,8 +375,12 @@ wm_scene_t WorldModelServer::on_save_scene(const wm_scene_t& req) const {
   out.turtle = write_scene(store_, prefixes_);
   out.version = store_.version();
   if (!req.path.empty()) {
-    std::ofstream f(req.path, std::ios::binary | std::ios::trunc);
-    if (!(f << out.turtle)) throw WmError("cannot write " + req.path);
+    const std::string path = scene_path(req.path);
+    ::mkdir((opt_.data_dir + "/scenes").c_str(), 0700);
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0600);
+    const bool ok = fd >= 0 && ::write(fd, out.turtle.data(), out.turtle.size()) == static_cast<ssize_t>(out.turtle.size());
+    if (fd >= 0) ::close(fd);
+    if (!ok) throw WmError("cannot write the scene " + req.path + ": " + std::strerror(errno));
     out.path = req.path;
   }
   return out;

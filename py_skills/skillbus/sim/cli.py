@@ -13,7 +13,8 @@ COMMANDS = ("sim", "sim-script", "scene")
 def add_parsers(sub) -> None:
     s = sub.add_parser("sim", help="the physics server's control services (status, reset, ...)")
     s.add_argument("action", choices=["status", "digest", "reset", "load-scene", "pause", "resume"])
-    s.add_argument("scene", nargs="?", default="", help="load-scene: the scene file")
+    s.add_argument("scene", nargs="?", default="", help="load-scene: a scene's name in the server's scenes folder (sim_server --scenes; "
+                        "by default the folder of its --scene file), e.g. demo")
     s.add_argument("--url", default=None)
     s.add_argument("--timeout", type=float, default=5.0)
     s.add_argument("--json", action="store_true", help="JSON also for digest (status and the others always are)")

@@ -40,6 +40,7 @@ std::string reply_channel();    // SB_SIM_CMD_REPLY
 
 struct ServerOptions {
   std::string scene_file;
+  std::string scenes_dir;                  // SIM.load_scene's names (default: scene_file's folder)
   std::string script_file;                 // commands played in-process (no participant needed)
   std::string record_script;               // write every accepted command here, as a script
   std::string name = "sim";
@@ -91,6 +92,7 @@ class SimServer {
   Bus& bus_;
   ServerOptions opt_;
   std::unique_ptr<Physics> physics_;
+  std::string scenes_dir_;  // where SIM.load_scene finds a scene by name
   std::unique_ptr<RpcServer> rpc_;
   BadInputCounter bad_{"sim_server"};
   struct Reply {

@@ -66,6 +66,7 @@ class WorldModelServer {
                                         Relations relations) const;
   skillbus_msgs::wm_scene_t on_load_scene(const skillbus_msgs::wm_scene_t& req);
   skillbus_msgs::wm_scene_t on_save_scene(const skillbus_msgs::wm_scene_t& req) const;
+  std::string scene_path(const std::string& name) const;  // DATA/scenes/NAME.ttl, names only
   skillbus_msgs::wm_transform_t on_transform(const skillbus_msgs::wm_transform_t& req) const;
   void on_txn_message(const StampedMessage& m);
   void on_frame(int64_t frame, int64_t sim_time_ns);
