@@ -6,7 +6,10 @@ the wall time per frame. In the same run, two Python processes measure a raw LCM
 trip (publish, echo, receive) of a message the size of a clock. Each overhead is printed
 beside that round trip as a ratio. Every figure is the median of REPEATS runs, taken in
 an interleaved order so that a slow phase of the machine does not favour one figure.
-Everything runs in a private network namespace.
+Everything runs in a private network namespace. Every configuration runs twice: with the
+bus authenticated (every message signed and verified with the deployment's key, the
+default; docs/security.md) and without a key, so the cost of authentication is the
+difference within one run.
 
 Run: make bench   (or: .venv/bin/python bench/lockstep_overhead.py [--frames N])
 """
@@ -34,24 +37,28 @@ def summary(proc) -> dict:
     return s
 
 
+NO_KEY = {"SKILLBUS_KEY_FILE": "none"}
+
+
 def raw_round_trip(box: Sandbox, n: int, size: int) -> dict:
-    pong = box.start("pong", [sys.executable, HERE / "pingpong.py", "pong"])
-    ping = box.start("ping", [sys.executable, HERE / "pingpong.py", "ping", str(n), str(size)])
+    pong = box.start("pong", [sys.executable, HERE / "pingpong.py", "pong"], env=NO_KEY)
+    ping = box.start("ping", [sys.executable, HERE / "pingpong.py", "ping", str(n), str(size)], env=NO_KEY)
     box.wait(ping, 120)
     box.kill(pong)
     box.wait(pong, 10)
     return summary(ping)
 
 
-def lockstep(box: Sandbox, n: int, lang: str, frames: int) -> dict:
+def lockstep(box: Sandbox, n: int, lang: str, frames: int, signed: bool) -> dict:
     names = [f"p{i}" for i in range(n)]
+    env = None if signed else NO_KEY
     clock = box.start(f"clock-{lang}{n}", [paths.binary("sb_clock"), "--frames", str(frames),
-                                           "--participants", ",".join(names)])
+                                           "--participants", ",".join(names)], env=env)
     parts = []
     for name in names:
         argv = (python_participant_argv(name, "--bare") if lang == "py"
                 else [paths.binary("sb_demo_participant"), "--name", name, "--bare"])
-        parts.append(box.start(f"{lang}{n}-{name}", argv))
+        parts.append(box.start(f"{lang}{n}-{name}", argv, env=env))
     box.wait(clock, 300)
     for p in parts:
         box.wait(p, 30)
@@ -69,23 +76,27 @@ def main() -> int:
     args = ap.parse_args()
     configs = [(lang, n) for lang in ("py", "cpp") for n in (1, 2, 4, 8)]
     rt_runs: list[dict] = []
-    per_config: dict[tuple[str, int], list[float]] = {c: [] for c in configs}
+    per_config: dict[tuple[str, int, bool], list[float]] = {(*c, a): [] for c in configs for a in (True, False)}
     with Sandbox() as box:
         for _ in range(args.repeats):
             # A clock for one participant is ~90 bytes; the round trip uses the same size.
             rt_runs.append(raw_round_trip(box, args.round_trips, 96))
             for lang, n in configs:
-                per_config[(lang, n)].append(lockstep(box, n, lang, args.frames)["us_per_frame"])
+                for signed in (True, False):
+                    per_config[(lang, n, signed)].append(lockstep(box, n, lang, args.frames, signed)["us_per_frame"])
     rt = {k: statistics.median(r[k] for r in rt_runs) for k in ("mean_us", "median_us", "p99_us")}
-    rows = [(lang, n, statistics.median(per_config[(lang, n)])) for lang, n in configs]
+    rows = [(lang, n, statistics.median(per_config[(lang, n, True)]), statistics.median(per_config[(lang, n, False)]))
+            for lang, n in configs]
     print(f"lockstep frame overhead, {args.frames} bare frames each, median of {args.repeats} ({platform.machine()}, "
           f"{len(os.sched_getaffinity(0))} cores, {box.mode})")
-    print(f"raw Python LCM round trip (96 B): mean {rt['mean_us']:.1f} us, median {rt['median_us']:.1f} us, "
+    print(f"raw Python LCM round trip (96 B, no key): mean {rt['mean_us']:.1f} us, median {rt['median_us']:.1f} us, "
           f"p99 {rt['p99_us']:.1f} us")
-    print(f"{'participants':>12} {'language':>8} {'us/frame':>9} {'ratio to round trip':>20}")
-    for lang, n, us in rows:
-        print(f"{n:>12} {('Python' if lang == 'py' else 'C++'):>8} {us:>9.1f} {us / rt['mean_us']:>20.2f}")
-    py4 = next(us for lang, n, us in rows if lang == "py" and n == 4)
+    print(f"{'participants':>12} {'language':>8} {'us/frame':>9} {'ratio to round trip':>20} "
+          f"{'no key us/frame':>16} {'authentication':>15}")
+    for lang, n, us, bare in rows:
+        print(f"{n:>12} {('Python' if lang == 'py' else 'C++'):>8} {us:>9.1f} {us / rt['mean_us']:>20.2f} "
+              f"{bare:>16.1f} {us - bare:>+12.1f} us")
+    py4 = next(us for lang, n, us, _ in rows if lang == "py" and n == 4)
     verdict = "met" if py4 <= 3 * rt["mean_us"] else "NOT met"
     print(f"target (4 Python participants within 3x of one raw Python round trip): {verdict} "
           f"({py4 / rt['mean_us']:.2f}x)")

@@ -3,8 +3,10 @@
 // across the languages.
 #include "skillbus/auth.hpp"
 
+#include <openssl/core_names.h>
 #include <openssl/crypto.h>
-#include <openssl/hmac.h>
+#include <openssl/evp.h>
+#include <openssl/params.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -43,6 +45,37 @@ uint64_t get_u64(const uint8_t* p) {
   return v;
 }
 
+// A keyed HMAC-SHA256 ready to be copied: OpenSSL 3 fetches the digest and keys the
+// context on every init, which costs more than hashing a short message; once per key.
+class KeyedMac {
+ public:
+  explicit KeyedMac(const Key& key) {
+    mac_ = EVP_MAC_fetch(nullptr, "HMAC", nullptr);
+    ctx_ = mac_ ? EVP_MAC_CTX_new(mac_) : nullptr;
+    char digest[] = "SHA256";
+    const OSSL_PARAM params[] = {OSSL_PARAM_construct_utf8_string("digest", digest, 0), OSSL_PARAM_construct_end()};
+    if (!ctx_ || EVP_MAC_init(ctx_, key.data(), key.size(), params) != 1) throw BusError("OpenSSL HMAC-SHA256 unavailable");
+  }
+  ~KeyedMac() {
+    EVP_MAC_CTX_free(ctx_);
+    EVP_MAC_free(mac_);
+  }
+  KeyedMac(const KeyedMac&) = delete;
+  KeyedMac& operator=(const KeyedMac&) = delete;
+  EVP_MAC_CTX* copy() const { return EVP_MAC_CTX_dup(ctx_); }
+
+ private:
+  EVP_MAC* mac_ = nullptr;
+  EVP_MAC_CTX* ctx_ = nullptr;
+};
+
+const KeyedMac& keyed(const Key& key) {
+  static std::map<Key, std::unique_ptr<KeyedMac>> cache;  // (a process has one or two keys)
+  auto& slot = cache[key];
+  if (!slot) slot = std::make_unique<KeyedMac>(key);
+  return *slot;
+}
+
 // HMAC-SHA256(key, tag | u16 channel length | channel | u32 payload length | payload | fields)
 std::array<uint8_t, kMacSize> mac(const Key& key, const std::string& channel, const uint8_t* payload, size_t size,
                                   const uint8_t* fields, size_t fields_size) {
@@ -54,12 +87,11 @@ std::array<uint8_t, kMacSize> mac(const Key& key, const std::string& channel, co
   const auto n = static_cast<uint32_t>(size);
   for (int i = 0; i < 4; ++i) head.push_back(uint8_t(n >> (8 * i)));
   std::array<uint8_t, kMacSize> out{};
-  HMAC_CTX* ctx = HMAC_CTX_new();
-  unsigned int len = 0;
-  const bool ok = ctx && HMAC_Init_ex(ctx, key.data(), static_cast<int>(key.size()), EVP_sha256(), nullptr) == 1 &&
-                  HMAC_Update(ctx, head.data(), head.size()) == 1 && HMAC_Update(ctx, payload, size) == 1 &&
-                  HMAC_Update(ctx, fields, fields_size) == 1 && HMAC_Final(ctx, out.data(), &len) == 1;
-  HMAC_CTX_free(ctx);
+  EVP_MAC_CTX* ctx = keyed(key).copy();
+  size_t len = 0;
+  const bool ok = ctx && EVP_MAC_update(ctx, head.data(), head.size()) == 1 && EVP_MAC_update(ctx, payload, size) == 1 &&
+                  EVP_MAC_update(ctx, fields, fields_size) == 1 && EVP_MAC_final(ctx, out.data(), &len, out.size()) == 1;
+  EVP_MAC_CTX_free(ctx);
   if (!ok || len != kMacSize) throw BusError("OpenSSL HMAC-SHA256 failed");
   return out;
 }
@@ -323,14 +355,23 @@ int AuthenticatedBus::subscribe(const std::string& channel, Handler handler, int
   return inner_->subscribe(
       channel,
       [this, handler = std::move(handler)](const std::string& ch, const uint8_t* data, size_t size) {
-        size_t payload = 0;
-        std::string identity, why;
-        Reason reason{};
-        if (!opener_.open(ch, data, size, payload, identity, reason, why)) {
-          note(reason, identity, why);
-          return;
+        // One datagram reaches every subscription it matches within one handle(): it is
+        // verified once (a second check would call it a replay); a replay is another
+        // datagram, in a later handle().
+        const size_t tail = std::min<size_t>(size, 38);
+        std::string key = ch;
+        key.push_back('\0');
+        key.append(reinterpret_cast<const char*>(data + size - tail), tail);
+        auto it = verified_.find(key);
+        if (it == verified_.end()) {
+          size_t payload = 0;
+          std::string identity, why;
+          Reason reason{};
+          const bool ok = opener_.open(ch, data, size, payload, identity, reason, why);
+          if (!ok) note(reason, identity, why);
+          it = verified_.emplace(std::move(key), ok ? static_cast<long>(payload) : -1L).first;
         }
-        handler(ch, data, payload);
+        if (it->second >= 0) handler(ch, data, static_cast<size_t>(it->second));
       },
       queue_capacity);
 }

@@ -48,6 +48,7 @@ TAG = b"skillbus-auth-v1"
 MAC_SIZE = 32
 WINDOW_S = 30.0
 REPLAY_WINDOW = 4096  # counters per sender incarnation
+_WINDOW_MASK = (1 << REPLAY_WINDOW) - 1
 MAX_SENDERS = 4096    # sender incarnations remembered (the least recently heard forgotten)
 KEY_ENV = "SKILLBUS_KEY_FILE"
 IDENTITY_ENV = "SKILLBUS_IDENTITY"
@@ -127,16 +128,27 @@ def default_identity() -> str:
     return os.environ.get(IDENTITY_ENV) or "operator"
 
 
+_KEYED: dict[tuple[bytes, str], "hmac.HMAC"] = {}
+
+
 def _mac(key: bytes, channel: str, payload: bytes, fields: bytes) -> bytes:
-    ch = channel.encode()
-    m = hmac.new(key, digestmod=hashlib.sha256)
-    m.update(TAG)
-    m.update(struct.pack("<H", len(ch)))
-    m.update(ch)
-    m.update(struct.pack("<I", len(payload)))
+    # Keying (and hashing the tag and the channel) costs more than a short message: done
+    # once per key and channel, then copied. (The channels a process hears are few; the
+    # cache is bounded all the same, since names come from the wire.)
+    base = _KEYED.get((key, channel))
+    if base is None:
+        if len(_KEYED) > 4096:
+            _KEYED.clear()
+        ch = channel.encode()
+        base = _KEYED[(key, channel)] = hmac.new(key, TAG + struct.pack("<H", len(ch)) + ch, hashlib.sha256)
+    m = base.copy()
+    m.update(_U32.pack(len(payload)))
     m.update(payload)
     m.update(fields)
     return m.digest()
+
+
+_U32 = struct.Struct("<I")
 
 
 class Sealer:
@@ -234,7 +246,7 @@ class Opener:
         w.heard = now
         if counter > w.highest:
             shift = counter - w.highest
-            w.seen = ((w.seen << shift) | 1) & ((1 << REPLAY_WINDOW) - 1) if shift < REPLAY_WINDOW else 1
+            w.seen = ((w.seen << shift) | 1) & _WINDOW_MASK if shift < REPLAY_WINDOW else 1
             w.highest = counter
             return
         age = w.highest - counter

@@ -106,7 +106,12 @@ class AuthenticatedBus : public Bus {
   void publish(const std::string& channel, const void* data, size_t size) override;
   int subscribe(const std::string& channel, Handler handler, int queue_capacity = 10000) override;
   void unsubscribe(int subscription_id) override { inner_->unsubscribe(subscription_id); }
-  bool handle(std::chrono::milliseconds timeout) override { return inner_->handle(timeout); }
+  bool handle(std::chrono::milliseconds timeout) override {
+    verified_.clear();
+    const bool handled = inner_->handle(timeout);
+    verified_.clear();
+    return handled;
+  }
   std::string url() const override { return inner_->url(); }
   const Stats& stats() const { return opener_.stats(); }
   const std::string& identity() const { return identity_; }
@@ -118,6 +123,7 @@ class AuthenticatedBus : public Bus {
   Sealer sealer_;
   Opener opener_;
   std::map<std::pair<int, std::string>, std::pair<int64_t, uint64_t>> last_log_;  // -> (when, quiet since)
+  std::map<std::string, long> verified_;  // this handle()'s datagrams: payload size, -1 refused
 };
 
 // The key file this process uses: $SKILLBUS_KEY_FILE ("none": no key), else
