@@ -310,11 +310,13 @@ bool Opener::check_replay(const std::string& identity, uint64_t incarnation, uin
     const uint64_t shift = counter - w.highest;
     if (shift >= kReplayWindow) {
       std::fill(w.seen.begin(), w.seen.end(), 0);
-    } else {  // age i becomes age i + shift
-      std::vector<uint64_t> moved(kWords, 0);
-      for (uint64_t age = 0; age + shift < kReplayWindow; ++age)
-        if (test(age)) moved[(age + shift) / 64] |= uint64_t(1) << ((age + shift) % 64);
-      w.seen.swap(moved);
+    } else {  // age i becomes age i + shift: the bitset shifted towards higher words
+      const size_t words = shift / 64, bits = shift % 64;
+      for (size_t i = kWords; i-- > 0;) {
+        uint64_t v = i >= words ? w.seen[i - words] << bits : 0;
+        if (bits && i >= words + 1) v |= w.seen[i - words - 1] >> (64 - bits);
+        w.seen[i] = v;
+      }
     }
     w.highest = counter;
     set(0);

@@ -164,3 +164,20 @@ TEST(Auth, TheBusDeliversOnlyWhatVerifies) {
   EXPECT_EQ(stats_of(bus)->ok, 1u);
   EXPECT_EQ(stats_of(bus)->rejected.at("unsigned"), 1u);
 }
+
+TEST(Auth, TheReplayWindowSpansWords) {
+  // Counters far apart (several 64-bit words of the window): each is taken once, a skipped
+  // one late is taken, and everything beyond the window's 4,096 is refused.
+  Sealer s(key_of(0), "skills");
+  Opener o({key_of(0)});
+  std::vector<Bytes> sealed;
+  for (int i = 0; i < 5000; ++i) sealed.push_back(s.seal("SB_X", "m", 1));
+  for (int i : {0, 1, 64, 65, 130, 700}) EXPECT_TRUE(open(o, "SB_X", sealed[i]).ok) << i;
+  for (int i : {0, 1, 64, 65, 130, 700}) EXPECT_EQ(open(o, "SB_X", sealed[i]).reason, Reason::Replayed) << i;
+  EXPECT_TRUE(open(o, "SB_X", sealed[129]).ok);  // never seen: late, within the window
+  EXPECT_TRUE(open(o, "SB_X", sealed[4999]).ok);
+  EXPECT_EQ(open(o, "SB_X", sealed[700]).reason, Reason::Replayed);  // now beyond the window
+  EXPECT_EQ(open(o, "SB_X", sealed[800]).reason, Reason::Replayed);  // (never seen, but too old to tell)
+  EXPECT_TRUE(open(o, "SB_X", sealed[4000]).ok);
+  EXPECT_EQ(open(o, "SB_X", sealed[4000]).reason, Reason::Replayed);
+}
