@@ -25,6 +25,7 @@ import os
 import selectors
 import signal
 import socket
+import stat
 import sys
 import time
 from pathlib import Path
@@ -40,7 +41,29 @@ JOINED = b"JOIN1"
 
 
 def socket_dir() -> Path:
-    return Path(os.environ.get("SKILLBUS_CAN_DIR", "/tmp/skillbus-can"))
+    """Where named CAN buses live: $SKILLBUS_CAN_DIR, else a folder of this user's own
+    ($XDG_RUNTIME_DIR/skillbus-can, or /tmp/skillbus-can-UID): the bus carries gripper
+    commands, so no other user may reach or replace its socket."""
+    env = os.environ.get("SKILLBUS_CAN_DIR")
+    if env:
+        return Path(env)
+    runtime = os.environ.get("XDG_RUNTIME_DIR")
+    return Path(runtime) / "skillbus-can" if runtime else Path(f"/tmp/skillbus-can-{os.getuid()}")
+
+
+class UnsafePath(RuntimeError):
+    """The socket's folder or path is not this user's own (or not a socket)."""
+
+
+def private_dir(path: Path) -> None:
+    """Creates `path` 0700, or checks that an existing one is ours and closed to others
+    (a shared /tmp folder someone else made could hold a socket of theirs)."""
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    st = path.stat()
+    if st.st_uid != os.getuid() or st.st_mode & 0o077:
+        raise UnsafePath(f"the CAN socket folder {path} is not private to this user (owner uid {st.st_uid}, "
+                         f"mode {stat.S_IMODE(st.st_mode):o}): use a folder of your own (SKILLBUS_CAN_DIR) or "
+                         f"chmod 700 it")
 
 
 def socket_path(channel: str) -> Path:
@@ -61,11 +84,22 @@ class Hub:
     def __init__(self, path: Path, queue_limit: int = QUEUE_LIMIT, stall_timeout: float = 2.0) -> None:
         self.path = path
         self.queue_limit, self.stall_timeout = queue_limit, stall_timeout
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if path.exists():
+        if path.parent == socket_dir():
+            private_dir(path.parent)
+        else:
+            path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        if path.is_symlink() or path.exists():
+            st = path.lstat()
+            if not stat.S_ISSOCK(st.st_mode) or st.st_uid != os.getuid():
+                raise UnsafePath(f"{path} exists and is not a socket of this user's: not removing it "
+                                 f"(choose another CAN channel path)")
             path.unlink()  # a stale socket from a hub that died
         self.listener = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-        self.listener.bind(str(path))
+        old_umask = os.umask(0o177)  # the socket is born 0600: only this user connects
+        try:
+            self.listener.bind(str(path))
+        finally:
+            os.umask(old_umask)
         self.listener.listen(64)
         self.listener.setblocking(False)
         self.sel = selectors.DefaultSelector()
@@ -198,7 +232,11 @@ class Hub:
 
 
 def main(args) -> int:
-    hub = Hub(socket_path(args.channel), args.queue_limit, args.stall_timeout)
+    try:
+        hub = Hub(socket_path(args.channel), args.queue_limit, args.stall_timeout)
+    except (UnsafePath, OSError) as e:
+        print(f"error: can-hub: {e}", file=sys.stderr)
+        return 1
 
     def stop(*_):
         hub.running = False
