@@ -19,6 +19,7 @@ std::unique_ptr<Bus> open_bus(const std::string& url_in) {
   const std::string url = resolve_bus_url(url_in);
   const auto scheme_end = url.find("://");
   const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
+  if (scheme == "udpm") check_multicast_interface(url);
   if (scheme == "udpm" || scheme == "memq" || scheme == "file" || scheme == "tcpq")
     return auth::authenticated(std::make_unique<LcmBus>(url));
   if (scheme == "dds")

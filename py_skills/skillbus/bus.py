@@ -74,6 +74,8 @@ def open_bus(url: str | None = None) -> Bus:
     identities it names may send on a channel."""
     url = resolve_url(url)
     scheme = url.split("://", 1)[0] if "://" in url else ""
+    if scheme == "udpm":
+        check_multicast_interface(url)
     if scheme in ("udpm", "memq", "file", "tcpq"):
         return authenticated(LcmBus(url))
     if scheme == "dds":
@@ -82,6 +84,52 @@ def open_bus(url: str | None = None) -> Bus:
 
 
 _UDPM = re.compile(r"^udpm://([^:/?]*)(?::(\d+))?(\?.*)?$")
+
+
+def check_multicast_interface(url: str) -> None:
+    """Local by default: LCM joins a udpm:// group on the interface the routing table picks
+    for it; on a host whose default route leaves through a network card the process would
+    hear (and with ttl>0 talk to) the whole network. BusError, saying what to do, unless
+    that is loopback or the interface named by $SKILLBUS_NETWORK (``--network IFACE``).
+    The same check as common/src/network_guard.cpp."""
+    import socket
+    m = _UDPM.match(url)
+    if not m:
+        return
+    group, port = m.group(1) or "239.255.76.67", int(m.group(2) or 7667)
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        s.connect((group, port))  # (UDP: nothing is sent; the route is looked up)
+        source = s.getsockname()[0]
+    except OSError:
+        return  # no route: LCM says so itself
+    finally:
+        s.close()
+    if source.startswith("127."):
+        return
+    iface = _interface_of(source)
+    if iface and iface == os.environ.get("SKILLBUS_NETWORK"):
+        return
+    name = iface or "IFACE"
+    raise BusError(f"bus URL '{url}': the multicast group {group} would be joined on the network interface "
+                   f"{iface or '?'} ({source}), where other hosts can reach it. skillbus stays on this host unless "
+                   f"told otherwise: run inside a private network namespace (deploy/netns-run ...), or route "
+                   f"multicast to loopback (sudo ip route add 224.0.0.0/4 dev lo), or allow that network with "
+                   f"--network {name} (or SKILLBUS_NETWORK={name}; docs/security.md)")
+
+
+def _interface_of(address: str) -> str:
+    """The interface holding an IPv4 address ("" if none does), from `ip -o -4 addr`."""
+    import subprocess
+    try:
+        out = subprocess.run(["ip", "-o", "-4", "addr", "show"], capture_output=True, text=True, timeout=5).stdout
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    for line in out.splitlines():
+        parts = line.split()
+        if len(parts) >= 4 and parts[3].split("/")[0] == address:
+            return parts[1]
+    return ""
 
 
 def lane_of(channel: str) -> int:

@@ -12,6 +12,9 @@ from skillbus.log import setup_logging
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="skillbus", description="skill-based robot control without ROS")
     ap.add_argument("--log-level", default=None, help="debug, info, warn or error")
+    ap.add_argument("--network", default=None, metavar="IFACE",
+                    help="let the bus join its multicast group on this network interface (default: loopback "
+                         "only; docs/security.md)")
     sub = ap.add_subparsers(dest="command", required=True)
 
     d = sub.add_parser("demo", help="the main job: the robot clears the table (lockstep, under supervisord)")
@@ -92,6 +95,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     setup_logging(args.log_level)
+    if args.network:  # (read by open_bus here and by every program this command starts)
+        os.environ["SKILLBUS_NETWORK"] = args.network
     from skillbus.bus import BusError
     from skillbus.rpc import RpcTimeout
     try:

@@ -162,6 +162,11 @@ def start(conf: Path, wait_s: float = 30.0, expect: list[str] | None = None) -> 
     supervisord and every program down again; LaunchError then names the programs that
     did not start and shows the end of their logs."""
     conf = conf.resolve()
+    from skillbus.bus import BusError, check_multicast_interface, resolve_url
+    try:  # (before anything starts: every program would refuse the same way)
+        check_multicast_interface(resolve_url(None))
+    except BusError as e:
+        raise LaunchError(str(e)) from None
     if supervisord_pid(conf):
         raise LaunchError(f"a system is already launched in {conf.parent} "
                           f"(skillbus shutdown --run-dir {shlex.quote(str(conf.parent))})")

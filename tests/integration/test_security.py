@@ -54,3 +54,28 @@ def test_forged_clocks_neither_stop_a_lockstep_session_nor_take_it_over(sandbox,
     for who in ("skill_mgr", "wm"):
         got = r[who]["bus_rejected"]
         assert got.get("unsigned", 0) > 0 and got.get("bad_mac", 0) > 0 and got.get("forbidden", 0) > 0, where
+
+
+def test_the_bus_stays_on_this_host_unless_a_network_is_chosen(sandbox, tmp_path):
+    """In a namespace whose multicast route leaves through a network interface (a dummy
+    one here), every entry point refuses to join the group there, naming the interface and
+    what to do; --network IFACE (or SKILLBUS_NETWORK) allows it. (A veth pair stands in
+    for a network card: the kernel here has no dummy interfaces.)"""
+    import sys
+    from skillbus import paths
+    setup = sandbox.start("net", ["sh", "-c", "ip link add d0 type veth peer name d1 && ip addr add 10.88.0.1/24 dev d0 && "
+                                              "ip link set d1 up && ip link set d0 up multicast on && "
+                                              "ip route replace 224.0.0.0/4 dev d0"])
+    assert sandbox.wait(setup, 10) == 0, setup.stderr()
+    wm = sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm"])
+    assert sandbox.wait(wm, 10) != 0
+    assert "would be joined on the network interface d0 (10.88.0.1)" in wm.stderr(), wm.stderr()
+    assert "--network d0" in wm.stderr()
+    cli = sandbox.start("cli", [sys.executable, "-m", "skillbus.cli", "skills"])
+    assert sandbox.wait(cli, 30) == 1 and "network interface d0" in cli.stderr(), cli.stderr()
+    # Chosen: the C++ server starts (and is stopped), the CLI gets as far as asking for a manager.
+    wm = sandbox.start("wm-net", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm2",
+                                  "--network", "d0"])
+    cli = sandbox.start("cli-net", [sys.executable, "-m", "skillbus.cli", "--network", "d0", "skills"])
+    assert sandbox.wait(cli, 30) == 1 and "no skill manager answered" in cli.stderr(), cli.stderr()
+    assert wm.returncode is None, wm.stderr()

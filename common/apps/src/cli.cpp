@@ -56,6 +56,13 @@ const CLI::Validator& positive() {
 }
 
 CLI::Option* add_url_option(CLI::App& app, std::string& url) {
+  // --network IFACE: the bus may use that network interface (local by default; it sets
+  // $SKILLBUS_NETWORK, which open_bus reads).
+  app.add_option_function<std::string>(
+         "--network", [](const std::string& iface) { ::setenv("SKILLBUS_NETWORK", iface.c_str(), 1); },
+         "let the bus join its multicast group on this network interface (default: loopback only; "
+         "docs/security.md)")
+      ->type_name("IFACE");
   return app.add_option("--url", url,
                         "the bus URL (empty: $SKILLBUS_BUS_URL, else udpm://239.255.76.67:7667?ttl=0)");
 }

@@ -49,6 +49,11 @@ class Bus {
 // The URL from the argument, else $SKILLBUS_BUS_URL, else kDefaultBusUrl.
 std::string resolve_bus_url(const std::string& url = "");
 
+// udpm:// only: throws BusError (saying what to do) when the URL's multicast group would
+// be joined on a network interface other than loopback, unless that interface is
+// $SKILLBUS_NETWORK. open_bus() calls it: local by default (docs/security.md).
+void check_multicast_interface(const std::string& url);
+
 // Opens the backend that the URL names; throws BusError naming the URL when it cannot.
 std::unique_ptr<Bus> open_bus(const std::string& url = "");
 
