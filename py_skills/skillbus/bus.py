@@ -96,35 +96,48 @@ def check_multicast_interface(url: str) -> None:
     m = _UDPM.match(url)
     if not m:
         return
-    group, port = m.group(1) or "239.255.76.67", int(m.group(2) or 7667)
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    group = m.group(1) or "239.255.76.67"
     try:
-        s.connect((group, port))  # (UDP: nothing is sent; the route is looked up)
-        source = s.getsockname()[0]
+        address = int.from_bytes(socket.inet_aton(group), "big")
     except OSError:
-        return  # no route: LCM says so itself
-    finally:
-        s.close()
-    if source.startswith("127."):
-        return
-    iface = _interface_of(source)
-    if iface and iface == os.environ.get("SKILLBUS_NETWORK"):
-        return
-    name = iface or "IFACE"
+        return  # LCM names the bad URL itself
+    iface = route_interface(address)
+    if iface in ("", "lo") or iface == os.environ.get("SKILLBUS_NETWORK"):
+        return  # ("": no route; LCM fails with its own message)
     raise BusError(f"bus URL '{url}': the multicast group {group} would be joined on the network interface "
-                   f"{iface or '?'} ({source}), where other hosts can reach it. skillbus stays on this host unless "
-                   f"told otherwise: run inside a private network namespace (deploy/netns-run ...), or route "
-                   f"multicast to loopback (sudo ip route add 224.0.0.0/4 dev lo), or allow that network with "
-                   f"--network {name} (or SKILLBUS_NETWORK={name}; docs/security.md)")
+                   f"{iface}, where other hosts can reach it. skillbus stays on this host unless told otherwise: "
+                   f"run inside a private network namespace (deploy/netns-run ...), or route multicast to loopback "
+                   f"(sudo ip route add 224.0.0.0/4 dev lo), or allow that network with --network {iface} (or "
+                   f"SKILLBUS_NETWORK={iface}; docs/security.md)")
 
 
-def _interface_of(address: str) -> str:
-    """The interface holding an IPv4 address ("" if none does), from `ip -o -4 addr`."""
-    import subprocess
+def route_interface(address: int, table: str = "/proc/net/route") -> str:
+    """The interface of the main routing table's longest matching route for an IPv4
+    address (as an int), "" when none matches.
+
+    >>> import tempfile
+    >>> t = tempfile.NamedTemporaryFile("w", delete=False)
+    >>> _ = t.write("Iface\\tDestination\\tGateway\\tFlags\\tRefCnt\\tUse\\tMetric\\tMask\\n"
+    ...             "eth0\\t00000000\\t010200C0\\t0003\\t0\\t0\\t0\\t00000000\\n"
+    ...             "lo\\t000000E0\\t00000000\\t0001\\t0\\t0\\t0\\t000000F0\\n"); t.close()
+    >>> route_interface(0xEFFF4C43, t.name), route_interface(0x08080808, t.name)
+    ('lo', 'eth0')
+    """
+    best, best_len, best_metric = "", -1, 0
     try:
-        out = subprocess.run(["ip", "-o", "-4", "addr", "show"], capture_output=True, text=True, timeout=5).stdout
-    except (OSError, subprocess.SubprocessError):
+        lines = open(table).read().splitlines()[1:]
+    except OSError:
         return ""
+    for line in lines:
+        f = line.split()
+        if len(f) < 8 or not int(f[3], 16) & 1:  # RTF_UP
+            continue
+        dest = int.from_bytes(bytes.fromhex(f[1])[::-1], "big")  # (little-endian hex)
+        mask = int.from_bytes(bytes.fromhex(f[7])[::-1], "big")
+        length, metric = bin(mask).count("1"), int(f[6])
+        if address & mask == dest & mask and (length > best_len or (length == best_len and metric < best_metric)):
+            best, best_len, best_metric = f[0], length, metric
+    return best
     for line in out.splitlines():
         parts = line.split()
         if len(parts) >= 4 and parts[3].split("/")[0] == address:

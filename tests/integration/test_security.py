@@ -69,7 +69,7 @@ def test_the_bus_stays_on_this_host_unless_a_network_is_chosen(sandbox, tmp_path
     assert sandbox.wait(setup, 10) == 0, setup.stderr()
     wm = sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm"])
     assert sandbox.wait(wm, 10) != 0
-    assert "would be joined on the network interface d0 (10.88.0.1)" in wm.stderr(), wm.stderr()
+    assert "would be joined on the network interface d0," in wm.stderr(), wm.stderr()
     assert "--network d0" in wm.stderr()
     cli = sandbox.start("cli", [sys.executable, "-m", "skillbus.cli", "skills"])
     assert sandbox.wait(cli, 30) == 1 and "network interface d0" in cli.stderr(), cli.stderr()

@@ -109,6 +109,25 @@ def bad_input() -> None:
     bad.setProperty("skiros:PositionX", "left")
     expect_error(lambda: wmi.add_element(bad), "skiros:PositionX of skiros:Cube-")
     expect_error(lambda: wmi.add_element(Element("skiros:Unicorn")), "unknown type 'skiros:Unicorn'")
+    # A NaN or infinite number never reaches the world (sent as raw transactions: the
+    # server must refuse them whatever a client lets through).
+    from skillbus.msgs import header_t, wm_commit_t, wm_txn_t
+    from skillbus.world.convert import element_msg, op as op_of
+    for x in (float("nan"), float("inf"), float("-inf")):
+        e = Element("skiros:Cube", "nan")
+        e.setProperty("skiros:PositionX", 0.0)
+        m = element_msg(e)
+        m.properties[[q.key for q in m.properties].index("skiros:PositionX")].values[0].f = x
+        o = op_of(wm_op_t.ADD_ELEMENT)
+        o.element = m
+        txn = wm_txn_t()
+        txn.header, txn.client_id, txn.request_id, txn.expected_version = header_t(), "nan-test", 1, -1
+        txn.ops, txn.num_ops = [o], 1
+        try:
+            RpcClient(open_bus(), "WM", f"nan-{x}").call("commit", txn, wm_commit_t, timeout=2.0)
+            raise AssertionError(f"a commit with PositionX={x} was accepted")
+        except RpcRemoteError as err:
+            assert "is not a finite number" in str(err), err
     expect_error(lambda: wmi.set_relation("skiros:Table-1", "skiros:contain", "skiros:Ghost-3"),
                  "no element skiros:Ghost-3")
     expect_error(lambda: wmi.set_relation("skiros:Table-1", "skiros:likes", "skiros:Cube-2"),

@@ -1,5 +1,7 @@
 #include "skillbus/wm/convert.hpp"
 
+#include <cmath>
+
 namespace skillbus::wm {
 
 using skillbus_msgs::wm_value_t;
@@ -13,7 +15,14 @@ std::map<std::string, std::vector<Value>> properties_from_msg(const std::vector<
       switch (v.type) {
         case wm_value_t::STRING: values.emplace_back(v.s); break;
         case wm_value_t::INT: values.emplace_back(static_cast<int64_t>(v.i)); break;
-        case wm_value_t::FLOAT: values.emplace_back(v.f); break;
+        case wm_value_t::FLOAT:
+          // A NaN or an infinity is never a pose, a size or a weight; stored, it would reach
+          // every replica and every skill that reads it.
+          if (!std::isfinite(v.f))
+            throw WmError("property " + p.key + " of " + owner + " is not a finite number (" + std::to_string(v.f) +
+                          ")");
+          values.emplace_back(v.f);
+          break;
         case wm_value_t::BOOL: values.emplace_back(static_cast<bool>(v.b)); break;
         default:
           throw WmError("property " + p.key + " of " + owner + " has a value of unknown type " + std::to_string(v.type));
