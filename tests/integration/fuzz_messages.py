@@ -303,7 +303,14 @@ FIXUPS = {
     "skill_start_t": _fix_value_types, "skill_register_t": _fix_value_types, "wm_txn_t": _fix_value_types,
     "wm_change_t": _fix_value_types, "wm_query_t": _fix_value_types,
 }
-for _name in ("lockstep_ack_t", "lockstep_end_t", "test_sample_t", "sim_gripper_cmd_t", "robot_cmd_reply_t",
+def _fix_ack(b: Builder, m: Any) -> None:
+    _fix_header(b, m)
+    m.header.sender = b.rng.choice(b.ctx.participants)
+    m.error = ""  # (an ack naming an error ends the session: that is what it is for)
+
+
+FIXUPS["lockstep_ack_t"] = _fix_ack
+for _name in ( "lockstep_end_t", "test_sample_t", "sim_gripper_cmd_t", "robot_cmd_reply_t",
               "skill_alive_t", "can_sync_t", "sim_cmd_reply_t", "skill_progress_t"):
     FIXUPS.setdefault(_name, _fix_header)
 
@@ -584,7 +591,7 @@ class Generator:
         clock's counts) at the frames now due, so that it is taken for one of them."""
         if self.ctx.frame < 0 or not hasattr(msg, "header"):
             return []
-        f = self.ctx.frame + rng.choice([0, 1, 1, 1, 2])
+        f = self.ctx.frame + rng.choice([-1, 0, 1, 2, 3])
         undo = [(setattr, msg.header, "frame", msg.header.frame), (setattr, msg.header, "sim_time_ns",
                                                                    msg.header.sim_time_ns)]
         msg.header.frame, msg.header.sim_time_ns = f, f * 20_000_000

@@ -115,9 +115,13 @@ TARGETS: dict[str, tuple[list[Channel], Context, tuple]] = {
     "skills_process": (skill_process_channels(), Context(participants=["skills", "skill_mgr", "wm", "sim"]),
                        ("rpc", "SKPROC_SKILLS")),
     "gripper_device": ([Channel("SB_SIM_STATE", "sim_state_t")], Context(participants=["sim"]), ("gripper", 5)),
-    "lockstep": ([Channel("SB_LOCKSTEP_CLOCK", "lockstep_clock_t", weight=3), Channel("SB_DEMO_STATE", "test_sample_t"),
-                  Channel("SB_DEMO_CMD", "test_sample_t"), Channel("SB_LOCKSTEP_ACK", "lockstep_ack_t"),
-                  Channel("SB_LOCKSTEP_JOIN", "lockstep_join_t"), Channel("SB_LOCKSTEP_END", "lockstep_end_t")],
+    # (the participants' channels first: clocks and the demo's; the master's own less, an
+    # ack with an error or a stamped end request ends a session, which is what they are for)
+    "lockstep": ([Channel("SB_LOCKSTEP_CLOCK", "lockstep_clock_t", weight=4),
+                  Channel("SB_DEMO_STATE", "test_sample_t", weight=2), Channel("SB_DEMO_CMD", "test_sample_t", weight=2),
+                  Channel("SB_LOCKSTEP_ACK", "lockstep_ack_t", weight=0.25),
+                  Channel("SB_LOCKSTEP_JOIN", "lockstep_join_t", weight=0.5),
+                  Channel("SB_LOCKSTEP_END", "lockstep_end_t", weight=0.25)],
                  Context(participants=["cpp1", "py1"], master="clock"), ("clock", "sb_clock")),
 }
 

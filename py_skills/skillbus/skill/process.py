@@ -151,8 +151,13 @@ class SkillProcess:
                     self.errors.append(e)
             return client.call("register", self.registration(), skill_register_t, timeout=2.0)
 
-        reply = wait_until(attempt, timeout, f"registration with the skill manager on {request_channel('SKILL')}",
-                           interval=0.0, retry_on=(RpcError,))
+        try:
+            reply = wait_until(attempt, timeout, f"registration with the skill manager on {request_channel('SKILL')}",
+                               interval=0.0, retry_on=(RpcError,))
+        finally:
+            # Registered again whenever the manager's announcement does not list this process
+            # (forged announcements too): a client left subscribed each time would pile up.
+            client.close()
         for e in reply.errors:
             log.error("the manager refused: %s", e)
         return reply
