@@ -9,6 +9,7 @@ import sys
 
 import lcm
 
+from skillbus import auth
 from skillbus.msgs import decode, skill_progress_t
 from skillbus.skill import State
 from test_launch_run_dir import box, netns_procs  # noqa: F401 (box: a fixture)
@@ -20,7 +21,7 @@ def logged_progress(path):
     out = []
     for ev in lcm.EventLog(str(path), "r"):
         if ev.channel.endswith("SB_SKILL_PROGRESS"):
-            p = decode(skill_progress_t, ev.data)
+            p = decode(skill_progress_t, auth.strip(ev.data))  # (the log keeps the wire's authenticators)
             if p is not None and p.task == 1:
                 out.append(p)
     return out
