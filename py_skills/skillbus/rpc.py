@@ -93,8 +93,16 @@ class RpcDefer(Exception):
 
 
 class RpcServer:
-    def __init__(self, bus: Bus, area: str, memory: int = 4096) -> None:
+    """Answers requests of one area exactly once: a retried request gets the remembered
+    answer. The memory is bounded both in answers (`memory`) and in bytes
+    (`memory_bytes`: large answers would otherwise pile up), and so are the deferred
+    requests (`max_deferred`: the oldest is dropped, as if it had been lost)."""
+
+    def __init__(self, bus: Bus, area: str, memory: int = 4096, memory_bytes: int = 16 << 20,
+                 max_deferred: int = 1024) -> None:
         self.bus, self.area, self.memory = bus, area, memory
+        self.memory_bytes, self.max_deferred = memory_bytes, max_deferred
+        self._answered_bytes = 0
         self.req_channel, self.rep_channel = request_channel(area), reply_channel(area)
         self.methods: dict[str, RawMethod] = {}
         self._answered: collections.OrderedDict[tuple[str, int], bytes] = collections.OrderedDict()
@@ -151,6 +159,9 @@ class RpcServer:
                 rep.payload = method(bytes(req.payload))
             except RpcDefer:
                 self._deferred[key] = (ch, data)
+                while len(self._deferred) > self.max_deferred:
+                    self._deferred.popitem(last=False)
+                    self.bad_input.record(ch, "too many deferred requests: the oldest was dropped", 0)
                 return
             except RpcBadRequest as e:
                 rep.status, rep.error = BAD_REQUEST, str(e)
@@ -161,8 +172,10 @@ class RpcServer:
         buf = rep.encode()
         self.bus.publish(self.rep_channel, buf)
         self._answered[key] = buf
-        while len(self._answered) > self.memory:
-            self._answered.popitem(last=False)
+        self._answered_bytes += len(buf)
+        while len(self._answered) > self.memory or (self._answered_bytes > self.memory_bytes and len(self._answered) > 1):
+            _, old = self._answered.popitem(last=False)
+            self._answered_bytes -= len(old)
 
 
 class RpcClient:

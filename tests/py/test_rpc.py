@@ -94,3 +94,32 @@ def test_server_memory_is_bounded():
     for i in range(50):
         client.call("add", req("a", i), rpc_counter_t)
     assert len(server._answered) == 10
+
+
+def test_server_memory_is_bounded_in_bytes():
+    """Large answers: the remembered ones stay within memory_bytes (300 answers of 100 KB
+    would be 30 MB)."""
+    bus = open_bus("memq://")
+    server = RpcServer(bus, "counter", memory=4096, memory_bytes=1 << 20)
+    server.add_method("add", lambda r: r, rpc_counter_t, rpc_counter_t)
+    client = RpcClient(bus, "counter", "t")
+    for i in range(300):
+        client.call("add", req("k" * 100_000, i), rpc_counter_t)
+    assert server._answered_bytes <= 1 << 20 and 5 <= len(server._answered) <= 11
+    assert server._answered_bytes == sum(len(b) for b in server._answered.values())
+
+
+def test_deferred_requests_are_bounded():
+    from skillbus.rpc import RpcDefer
+    bus = open_bus("memq://")
+    server = RpcServer(bus, "counter", max_deferred=5)
+
+    def later(r):
+        raise RpcDefer()
+
+    server.add_method("later", later, rpc_counter_t, rpc_counter_t)
+    client = RpcClient(bus, "counter", "t")
+    for i in range(20):
+        with pytest.raises(RpcTimeout):
+            client.call("later", req("a", i), rpc_counter_t, timeout=0.05)
+    assert len(server._deferred) == 5
