@@ -422,13 +422,20 @@ def check(args) -> dict:
     try:
         if args.target == "wm_server":
             wm = RpcClient(bus, "WM", "fuzz-check")
-            q = msgs.wm_query_t()
-            q.limit = 50
-            page = wm.call("snapshot", q, msgs.wm_elements_t, timeout=5.0)
-            out["version"], out["elements"] = page.version, page.total
-            if page.elements:  # and one of them by id
+            read, after, first = 0, "", None
+            while True:  # the whole world, page by page, as a replica loads it
+                q = msgs.wm_query_t()
+                q.limit, q.after = 200, after
+                page = wm.call("snapshot", q, msgs.wm_elements_t, timeout=5.0)
+                read += len(page.elements)
+                first = first or page
+                if len(page.elements) < q.limit:
+                    break
+                after = page.elements[-1].id
+            out["version"], out["elements"], out["read"] = first.version, first.total, read
+            if first.elements:  # and one of them by id
                 g = msgs.wm_query_t()
-                g.ids, g.num_ids = [page.elements[0].id], 1
+                g.ids, g.num_ids = [first.elements[0].id], 1
                 out["get"] = wm.call("get", g, msgs.wm_elements_t, timeout=5.0).elements[0].id
         elif args.target == "skill_mgr":
             lst = RpcClient(bus, "SKILL", "fuzz-check").call("list", msgs.skill_start_t(), msgs.skill_list_t,
