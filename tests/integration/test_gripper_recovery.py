@@ -198,3 +198,32 @@ def test_the_gripper_skills_fail_at_once_naming_the_fault_and_work_after_recover
     rc, out, _ = run_skill(sandbox, "GripperClose")
     assert rc == 0 and "close: width 0.0 mm" in out, out
     assert skills.stderr().count("enabled again after its boot-up") == 1, skills.stderr()[-3000:]
+
+
+def test_a_device_fault_left_by_a_command_is_cleared_by_the_next_one(sandbox, tmp_path):
+    """The physics server's fingers stand still (paused) while the gripper closes: the
+    device reports a following error (EMCY 0x8611) and the command fails naming it. Once
+    the physics runs again, the next command clears the fault (CiA 402 fault reset, then
+    enabled again) and works: a fault does not leave the gripper unusable."""
+    from skillbus.sim.client import SimClient  # noqa: F401 (the CLI below is the same client)
+    path = tmp_path / "grip.sock"
+    start_hub(sandbox, path)
+    sandbox.start("sim", [paths.binary("sim_server"), "--scene", paths.demo_scene(), "--wall-clock"])
+    sandbox.start("device", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", path,
+                             "--node-id", "5", "--physics", "--name", "gripper"])
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
+                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    skills = sandbox.start("grip_skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name",
+                                           "grip_skills", "--library", "skillbus.skills.gripper",
+                                           "--gripper", f"{path}:5"])
+    skills.wait_for("registered", 60)
+    pause = sandbox.start("pause", [sys.executable, "-m", "skillbus.cli", "sim", "pause"])
+    assert sandbox.wait(pause, 30) == 0, pause.stderr()
+    rc, out, _ = run_skill(sandbox, "GripperClose")
+    assert rc == 1 and "gripper fault: EMCY 0x8611: following error" in out, out
+    resume = sandbox.start("resume", [sys.executable, "-m", "skillbus.cli", "sim", "resume"])
+    assert sandbox.wait(resume, 30) == 0, resume.stderr()
+    rc, out, _ = run_skill(sandbox, "GripperOpen")
+    assert rc == 0 and "open: width 80.0 mm" in out, out
+    assert "fault reset (EMCY 0x8611: following error) and enabled again" in skills.stderr(), skills.stderr()[-2000:]

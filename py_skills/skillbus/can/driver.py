@@ -108,6 +108,7 @@ class GripperDriver:
         self._started = False                # start-up done: a boot-up now means a restart
         self._operational_at: float | None = None  # when the NMT start went out
         self.restarts = self._restarts_handled = 0  # restarts of the node seen after start-up
+        self._recovery_asked = False  # a command asked to clear a device fault (fault reset, enable)
         self._stop = threading.Event()
         self._wake = threading.Event()
         self._supervisor: threading.Thread | None = None
@@ -255,6 +256,9 @@ class GripperDriver:
                 if self.restarts != self._restarts_handled:
                     self._restarts_handled = self.restarts
                     self._reinit()
+                if self._recovery_asked:
+                    self._recovery_asked = False
+                    self._recover()
                 self.poll()
             except Exception:  # the supervision must go on
                 log.exception("gripper node %d: supervision failed", self.node.id)
@@ -273,6 +277,34 @@ class GripperDriver:
             return
         log.warning("gripper node %d enabled again after its boot-up (configured and enabled in %.0f ms)",
                     self.node.id, (time.monotonic() - t0) * 1000)
+
+    def device_faults(self) -> list[str]:
+        """The faults the device itself reported (EMCY): a fault reset clears them, unlike
+        a lost heartbeat or a gone bus, which end only when those come back."""
+        with self._lock:
+            return [f for f in self._status.faults if f.startswith("EMCY ")]
+
+    def request_recovery(self) -> None:
+        """Clears a device fault left by an earlier command, without waiting: CiA 402 fault
+        reset, then shutdown, switch on, enable operation (on the wall clock in the
+        supervision thread, under lockstep one step per frame in advance()). A fault that
+        comes back stays in the status for the command to report."""
+        self._recovery_asked = True
+        self._wake.set()
+
+    def _recover(self) -> None:  # wall clock, the supervision thread
+        was = self.device_faults()
+        try:
+            self.fault_reset()
+            self._wait_state(c.SWITCH_ON_DISABLED, self.reinit_timeout)
+            self.enable(self.reinit_timeout)
+        except GripperError as e:
+            msg = f"gripper node {self.node.id}: not enabled again after a fault reset ({'; '.join(was)}): {e}"
+            with self._lock:
+                self._status.faults.append(msg)
+            log.error("%s", msg)
+            return
+        log.warning("gripper node %d: fault reset (%s) and enabled again", self.node.id, "; ".join(was) or "no fault")
 
     def configure(self) -> None:
         """Configuration by SDO (start-up only; under lockstep, before the run)."""
@@ -303,6 +335,15 @@ class GripperDriver:
         now = self.clock()
         if self._last_heartbeat is None:
             self._last_heartbeat = now  # supervision starts with the run
+        if self._recovery_asked and self._startup is None:
+            self._recovery_asked = False  # lockstep recovery: the start-up's steps after a fault reset
+            was = self.device_faults()
+            self.fault_reset()
+            log.warning("gripper node %d: fault reset (%s)", self.node.id, "; ".join(was) or "no fault")
+            self._startup = [(c.CW_SHUTDOWN, c.READY_TO_SWITCH_ON), (c.CW_SWITCH_ON, c.SWITCHED_ON),
+                             (c.CW_ENABLE_OPERATION, c.OPERATION_ENABLED)]
+            self._startup_started, self._startup_deadline = True, now + self._startup_timeout
+            self._send(c.CW_SHUTDOWN, self._status.position_um)
         if self._startup is not None:
             if not self._startup_started:
                 self._nmt_start()

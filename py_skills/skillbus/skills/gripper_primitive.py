@@ -33,6 +33,7 @@ class GripperPrimitive(PrimitiveBase):
             return False
         self.sent = False
         self.written = False
+        self.recovering = ""  # the device fault this command found and asked to clear
         self.started_at = tick_context.now_s()
         return True
 
@@ -41,8 +42,18 @@ class GripperPrimitive(PrimitiveBase):
         if tick_context.now_s() - self.started_at > TIMEOUT_S:
             return self.fail(f"{cmd}: no result within {TIMEOUT_S:.0f} s", -2)
         s = self.gripper.status()
-        if s.faults:
+        device_only = bool(s.faults) and all(f.startswith("EMCY ") for f in s.faults)  # (the status this tick sees)
+        if device_only and not self.sent and not self.recovering:
+            # A device fault an earlier command left (a following error, a task cut short by
+            # a fault): this command starts by clearing it, as an operator would; a fault
+            # that comes back, or one of the bus or the heartbeat, fails it.
+            self.recovering = s.faults[-1]
+            self.gripper.request_recovery()
+            return self.step(f"{cmd}: clearing the gripper fault an earlier command left ({self.recovering})")
+        if s.faults and not (self.recovering and not self.sent and s.faults[-1] == self.recovering):
             return self.fail(f"{cmd}: gripper fault: {s.faults[-1]}", -3)
+        if s.faults:
+            return self.step(f"{cmd}: clearing the gripper fault ({self.recovering})")
         if s.state != c.OPERATION_ENABLED:
             return self.step(f"{cmd}: waiting for the gripper (state {s.state})")
         if not self.sent:
