@@ -118,7 +118,8 @@ TARGETS: dict[str, tuple[list[Channel], Context, tuple]] = {
     # (the participants' channels first: clocks and the demo's; the master's own less, an
     # ack with an error or a stamped end request ends a session, which is what they are for)
     "lockstep": ([Channel("SB_LOCKSTEP_CLOCK", "lockstep_clock_t", weight=4),
-                  Channel("SB_DEMO_STATE", "test_sample_t", weight=2), Channel("SB_DEMO_CMD", "test_sample_t", weight=2),
+                  Channel("SB_DEMO_STATE", "test_sample_t", weight=2),
+                  Channel("SB_DEMO_CMD", "test_sample_t", weight=2),
                   Channel("SB_LOCKSTEP_ACK", "lockstep_ack_t", weight=0.25),
                   Channel("SB_LOCKSTEP_JOIN", "lockstep_join_t", weight=0.5),
                   Channel("SB_LOCKSTEP_END", "lockstep_end_t", weight=0.25)],
@@ -202,6 +203,7 @@ class Flood:
         self.opener = auth.Opener(keys)
         self.sent: collections.Counter[str] = collections.Counter()
         self.by_channel: collections.Counter[str] = collections.Counter()
+        self.unauth_by_channel: collections.Counter[str] = collections.Counter()
         self.requests = 0      # well-formed signed requests (each must be answered)
         self.answered: set[int] = set()
         self.last_signed: tuple[str, bytes] | None = None
@@ -327,6 +329,8 @@ class Flood:
             return
         self.sent[f.kind] += 1
         self.by_channel[f.channel] += 1
+        if f.kind not in SIGNED:
+            self.unauth_by_channel[f.channel] += 1
         ch = f.channel
         if f.kind in SIGNED:
             data = self.sealer.seal(ch, f.payload)
@@ -394,6 +398,7 @@ class Flood:
             "kinds": dict(sorted(self.sent.items())), "channels": dict(sorted(self.by_channel.items())),
             "signed": sum(n for k, n in self.sent.items() if k in SIGNED),
             "unauthenticated": sum(n for k, n in self.sent.items() if k in KINDS and k not in SIGNED),
+            "unauthenticated_by_channel": dict(sorted(self.unauth_by_channel.items())),
             "requests": self.requests, "answered": len(self.answered),
             "probes": len(times), "first_probe_s": round(probe0, 3),
             "probe_s": {"median": round(times[len(times) // 2], 4) if times else 0,
