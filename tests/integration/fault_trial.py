@@ -150,14 +150,18 @@ try:
 
         def next_session_done() -> bool:
             st = launch.status(conf)
-            if not all(st.get(n) == "EXITED" for n in lockstep_programs):
+            # Quiet: every lockstep program has ended for good, except the killed one,
+            # which supervisord restarted and which may wait to join a session that the
+            # others ended cleanly (it was killed after the task had ended).
+            others = [n for n in lockstep_programs if n != PROCESS]
+            if not all(st.get(n) == "EXITED" for n in others) or st.get(PROCESS, "EXITED") not in ("EXITED", "RUNNING"):
                 return False
-            if len(json_lines(logs / "sim.out")) > faulted_sessions:
+            if len(json_lines(logs / "sim.out")) > faulted_sessions and st.get(PROCESS, "EXITED") == "EXITED":
                 return True
-            if not started_next:
+            if not started_next and len(json_lines(logs / "sim.out")) <= faulted_sessions:
                 started_next.append(time.monotonic())
                 log("the faulted session ended cleanly: starting the next one")
-                launch.ctl(conf, "start", *lockstep_programs)
+                launch.ctl(conf, "start", *[n for n in lockstep_programs if st.get(n) == "EXITED"])
             return False
 
         out["next_done"] = bool(poll_until(next_session_done, 300, interval=1.0))
