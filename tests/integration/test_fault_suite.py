@@ -103,6 +103,7 @@ if TRIALS > 0:
     # time.
     PARALLEL = int(os.environ.get("SKILLBUS_FAULT_PARALLEL", "2"))
 
+    @pytest.mark.timeout(TRIALS * 300)  # (a trial takes one to two minutes; the default would cut ten)
     @pytest.mark.parametrize("process,clock", [(p, c) for p in PROCESSES for c in ("lockstep", "wall")],
                              ids=lambda v: str(v))
     def test_kill_9_at_random_moments_of_clear_table(tmp_path, process, clock):
