@@ -40,6 +40,7 @@ from codec_samples import samples  # noqa: E402
 from fuzz_messages import KINDS, SIGNED, Channel, Context, Generator, bad_trailer  # noqa: E402
 
 from skillbus.bus import open_bus  # noqa: E402
+from skillbus.waiting import WaitTimeout, poll_until, wait_until  # noqa: E402
 
 
 def bad_messages(rng: random.Random, count: int):
@@ -265,30 +266,31 @@ class Flood:
         """Waits until the target has handled everything sent so far; returns seconds."""
         t0 = time.monotonic()
         kind = self.probe_kind[0]
-        deadline = t0 + self.args.hang_timeout
         if kind == "rpc":
             from skillbus.rpc import RpcRemoteError, RpcTimeout
-            while True:
+
+            def answered() -> bool:
                 try:
                     self.client.call_raw(self.probe_method, self.probe_payload, timeout=2.0)
-                    break
                 except RpcRemoteError:
-                    break  # an error reply is an answer
-                except RpcTimeout:
-                    if time.monotonic() > deadline:
-                        raise Hang(f"no reply to {self.probe_arg}.{self.probe_method} within "
-                                   f"{self.args.hang_timeout:g} s") from None
+                    pass  # an error reply is an answer
+                return True
+            try:
+                wait_until(answered, self.args.hang_timeout, f"a reply to {self.probe_arg}.{self.probe_method}",
+                           interval=0.0, retry_on=(RpcTimeout,))
+            except WaitTimeout:
+                raise Hang(f"no reply to {self.probe_arg}.{self.probe_method} within "
+                           f"{self.args.hang_timeout:g} s") from None
         elif kind == "gripper":
-            self._probe_gripper(deadline)
+            self._probe_gripper()
         else:  # the lockstep target: the next frame (when a session runs; the test restarts them)
             seen = self.clocks_seen
-            while self.clocks_seen == seen and time.monotonic() < t0 + 0.2:
-                self.bus.handle(0.02)
+            poll_until(lambda: self.clocks_seen != seen, 0.2, step=self.bus.handle)
         dt = time.monotonic() - t0
         self.probe_times.append(dt)
         return dt
 
-    def _probe_gripper(self, deadline: float) -> None:
+    def _probe_gripper(self) -> None:
         """A sane physics state with a width of its own, then SDO reads of the position
         until the device reports that width: it has handled every state before it."""
         from skillbus.msgs import header_t, sim_state_t
@@ -302,23 +304,26 @@ class Flood:
         s.tool_pose = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]
         s.finger_width, s.finger_force, s.finger_width_target = um * 1e-6, 0.0, 0.08
         data = s.encode()
-        last_err = ""
-        next_send = 0.0
-        while True:
-            now = time.monotonic()
-            if now >= next_send:  # resent now and then: a state may be lost like any datagram
+        sent_at = [0.0]
+        last = [""]
+
+        def reports_it() -> bool:
+            if time.monotonic() - sent_at[0] > 0.5:  # resent now and then: a state may be lost like any datagram
                 self.bus.publish(state_channel(), data)
-                next_send = now + 0.5
+                sent_at[0] = time.monotonic()
             try:
                 raw = self.node.sdo.upload(0x6064, 0)
-                if abs(int.from_bytes(raw[:4], "little", signed=True) - um) <= 1:
-                    return
             except Exception as e:  # an SDO timeout or abort: not yet
-                last_err = f"{type(e).__name__}: {e}"
-            if time.monotonic() > deadline:
-                raise Hang(f"the gripper device did not report a width of {um} um within "
-                           f"{self.args.hang_timeout:g} s ({last_err or 'it reported another'})")
-            time.sleep(0.002)
+                last[0] = f"{type(e).__name__}: {e}"
+                return False
+            last[0] = f"it reported {int.from_bytes(raw[:4], 'little', signed=True)} um"
+            return abs(int.from_bytes(raw[:4], "little", signed=True) - um) <= 1
+        try:
+            wait_until(reports_it, self.args.hang_timeout, f"the gripper device reporting a width of {um} um",
+                       interval=0.002)
+        except WaitTimeout:
+            raise Hang(f"the gripper device did not report a width of {um} um within "
+                       f"{self.args.hang_timeout:g} s ({last[0]})") from None
 
     # -- sending -------------------------------------------------------------------------
     def send(self, i: int) -> None:
@@ -386,9 +391,7 @@ class Flood:
             hang = f"{why}: after message {i} (messages {max(a.start, i - a.burst)} to {i - 1} of seed {a.seed})"
         seconds = time.monotonic() - t0
         # the replies still on their way
-        wait_end = time.monotonic() + (0 if hang else 2.0)
-        while len(self.answered) < self.requests and time.monotonic() < wait_end:
-            self.bus.handle(0.05)
+        poll_until(lambda: len(self.answered) >= self.requests, 0 if hang else 2.0, step=self.bus.handle)
         udp1 = udp_counters()
         times = sorted(self.probe_times)
         sent = sum(self.sent.values())
@@ -450,11 +453,15 @@ def check(args) -> dict:
             sim = RpcClient(bus, "SIM", "fuzz-check")
             sim.call("resume", msgs.sim_control_t(), msgs.sim_status_t, timeout=5.0)  # a fuzzed pause is allowed
             a = sim.call("status", msgs.sim_control_t(), msgs.sim_status_t, timeout=5.0)
-            time.sleep(0.3)
-            b = sim.call("status", msgs.sim_control_t(), msgs.sim_status_t, timeout=5.0)
-            out["frames"] = [a.frame, b.frame]
-            if b.frame <= a.frame:
-                raise RuntimeError(f"the physics does not advance: frame {a.frame} then {b.frame}")
+            last = [a]
+
+            def advanced() -> bool:
+                last[0] = sim.call("status", msgs.sim_control_t(), msgs.sim_status_t, timeout=5.0)
+                return last[0].frame > a.frame
+            poll_until(advanced, 3.0, interval=0.1)
+            out["frames"] = [a.frame, last[0].frame]
+            if last[0].frame <= a.frame:
+                raise RuntimeError(f"the physics does not advance: frame {a.frame} then {last[0].frame}")
         elif args.target == "motion_server":
             m = msgs.motion_request_t()
             m.joint_names, m.num_joints = [f"joint{i}" for i in range(1, 7)], 6

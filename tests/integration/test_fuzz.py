@@ -28,6 +28,7 @@ import pytest
 from conftest import last_json, python_tool
 from skillbus import netns, paths, system
 from skillbus.netns import Sandbox
+from skillbus.waiting import poll_until
 
 COUNT = int(os.environ.get("SKILLBUS_FUZZ_MESSAGES", "20000"))
 SEED = int(os.environ.get("SKILLBUS_FUZZ_SEED", "2026"))
@@ -54,13 +55,10 @@ def flood(sandbox, target: str, watched, *extra: str, count: int = COUNT) -> dic
     the target stopped answering."""
     fz = sandbox.start(f"fuzz-{target}", python_tool("fuzz_publisher.py", "--target", target, "--count", str(count),
                                                      "--seed", str(SEED), *extra))
-    deadline = time.monotonic() + TIMEOUT
-    while fz.returncode is None and time.monotonic() < deadline:
-        if any(p.returncode is not None for p in watched):
-            time.sleep(1.0)  # (its probe may name it first)
-            sandbox.kill(fz, signal.SIGTERM)  # it stops and says where it was
-            break
-        time.sleep(0.05)
+    poll_until(lambda: fz.returncode is not None or any(p.returncode is not None for p in watched), TIMEOUT)
+    if fz.returncode is None and any(p.returncode is not None for p in watched):
+        poll_until(lambda: fz.returncode is not None, 1.0)  # (its probe may name it first)
+        sandbox.kill(fz, signal.SIGTERM)  # it stops and says where it was
     rc = sandbox.wait(fz, 40)
     r = last_json(fz.stdout())
     dead = {p.name: p.returncode for p in watched if p.returncode is not None}
@@ -304,13 +302,15 @@ def test_lockstep_participants(tmp_path):
         procs = start_session()
         fz = box.start("fuzz", python_tool("fuzz_publisher.py", "--target", "lockstep", "--count", str(COUNT),
                                            "--seed", str(SEED), "--rate", "5000"))
-        deadline = time.monotonic() + TIMEOUT
-        while fz.returncode is None and time.monotonic() < deadline:
+        def watch() -> bool:
+            nonlocal procs
             crashed(procs, fz)
             if procs[0].returncode is not None:  # the session ended (its frames, or a forged stop)
                 sessions.append(end_session(procs, fz))
                 procs = start_session()
-            time.sleep(0.05)
+            return fz.returncode is not None
+
+        poll_until(watch, TIMEOUT)
         assert box.wait(fz, 10) == 0, fz.stderr()[-2000:]
         r = last_json(fz.stdout())
         sessions.append(last := end_session(procs))
