@@ -5,7 +5,7 @@ PY     := $(VENV)/bin/python
 BUILD  := build
 JOBS   ?= 2
 
-.PHONY: setup build test test-cpp test-py faults demo bench clean
+.PHONY: setup build test test-cpp test-py faults fuzz demo bench clean
 
 setup:
 	@deploy/setup.sh
@@ -41,6 +41,12 @@ test-py: build
 faults: build
 	SKILLBUS_FAULT_POINTS=$${SKILLBUS_FAULT_POINTS:-1000} $(PY) -m pytest -q -rs -s tests/integration/test_journal_faults.py -k power_loss
 	SKILLBUS_FAULT_TRIALS=$${SKILLBUS_FAULT_TRIALS:-10} $(PY) -m pytest -q -rs -s tests/integration/test_fault_suite.py
+
+# Every process of the system flooded with 1,000,000 messages on every channel it hears
+# (random, truncated, bit flips, absurd values, valid; unsigned, forged, stale, replayed):
+# alive, answering, a normal end (`make test` sends 20,000 each; docs/security.md).
+fuzz: build
+	SKILLBUS_FUZZ_MESSAGES=$${SKILLBUS_FUZZ_MESSAGES:-1000000} $(PY) -m pytest -q -rs -s tests/integration/test_fuzz.py
 
 demo: build
 	$(VENV)/bin/skillbus demo

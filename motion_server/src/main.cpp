@@ -30,9 +30,18 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_
       throw RpcBadRequest("plan: joint " + std::to_string(i) + " is '" + req.joint_names[i] + "', expected '" +
                           joints[i].name + "'");
     if (!std::isfinite(req.start[i])) throw RpcBadRequest("plan: start of " + joints[i].name + " is not finite");
+    // Finite is not enough: a joint at 1e300 rad makes the kinematics' transforms invalid
+    // (DART aborts). An arm's start lies within its limits, give or take a little.
+    const double slack = 0.1;  // rad: a measured position may overshoot a limit slightly
+    if (req.start[i] < joints[i].lower - slack || req.start[i] > joints[i].upper + slack)
+      throw RpcBadRequest("plan: start of " + joints[i].name + " (" + std::to_string(req.start[i]) +
+                          " rad) is outside its limits [" + std::to_string(joints[i].lower) + ", " +
+                          std::to_string(joints[i].upper) + "]");
   }
   for (double v : req.target)
     if (!std::isfinite(v)) throw RpcBadRequest("plan: the target pose is not finite");
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(req.target[i]) > 1e3) throw RpcBadRequest("plan: the target position is beyond 1 km");
   const Eigen::Quaterniond q(req.target[6], req.target[3], req.target[4], req.target[5]);
   if (std::abs(q.norm() - 1.0) > 1e-3) throw RpcBadRequest("plan: the target quaternion is not a unit quaternion");
   motion::PlanRequest pr;

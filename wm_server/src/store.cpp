@@ -34,7 +34,24 @@ bool ElementsView::operator==(const ElementsView& o) const {
   return true;
 }
 
+namespace {
+
+// A NUL inside a string cannot be sent: LCM writes strings up to their first NUL, so a
+// stored one would make every reply that carries it undecodable (from a Turtle scene's
+// "\u0000" too, not only from a message).
+bool has_nul(const std::string& s) { return s.find('\0') != std::string::npos; }
+
+}  // namespace
+
 void WorldStore::check_element(const Element& e) const {
+  if (has_nul(e.id) || has_nul(e.type) || has_nul(e.label))
+    throw WmError("element " + e.id.substr(0, e.id.find('\0')) + ": a NUL character in its id, type or label");
+  for (const auto& [key, values] : e.properties) {
+    bool nul = has_nul(key);
+    for (const auto& v : values)
+      if (const auto* text = std::get_if<std::string>(&v)) nul = nul || has_nul(*text);
+    if (nul) throw WmError("property " + key.substr(0, key.find('\0')) + " of " + e.id + ": a NUL character");
+  }
   if (e.id.empty() || e.id.find_first_of(" \t\n<>\"") != std::string::npos)
     throw WmError("bad element id '" + e.id + "' (want prefix:Name, no spaces)");
   if (e.type.empty()) throw WmError("element " + e.id + " has no type");

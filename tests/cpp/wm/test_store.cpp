@@ -104,6 +104,12 @@ TEST_F(World, BadInputIsNamed) {
             std::string::npos);
   EXPECT_NE(error_of({add(element("skiros:Cube-2", "skiros:Cube"))}).find("exists already"), std::string::npos);
   EXPECT_NE(error_of({}).find("at least one operation"), std::string::npos);
+  // A NUL in any string: it could never be sent again (LCM writes strings up to a NUL).
+  EXPECT_NE(error_of({add(element("", "skiros:Cube", std::string("a\0b", 3)))}).find("a NUL character"),
+            std::string::npos);
+  EXPECT_NE(error_of({add(element("", "skiros:Cube", "", {{"skiros:Color", {std::string("r\0d", 3)}}}))})
+                .find("a NUL character"),
+            std::string::npos);
   EXPECT_EQ(store.version(), 1);
 }
 
