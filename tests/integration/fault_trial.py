@@ -154,9 +154,10 @@ try:
             # which supervisord restarted and which may wait to join a session that the
             # others ended cleanly (it was killed after the task had ended).
             others = [n for n in lockstep_programs if n != PROCESS]
-            if not all(st.get(n) == "EXITED" for n in others) or st.get(PROCESS, "EXITED") not in ("EXITED", "RUNNING"):
+            killed = st.get(PROCESS, "EXITED") if PROCESS in lockstep_programs else "EXITED"  # (a server runs on)
+            if not all(st.get(n) == "EXITED" for n in others) or killed not in ("EXITED", "RUNNING"):
                 return False
-            if len(json_lines(logs / "sim.out")) > faulted_sessions and st.get(PROCESS, "EXITED") == "EXITED":
+            if len(json_lines(logs / "sim.out")) > faulted_sessions and killed == "EXITED":
                 return True
             if not started_next and len(json_lines(logs / "sim.out")) <= faulted_sessions:
                 started_next.append(time.monotonic())
