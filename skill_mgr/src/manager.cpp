@@ -1,5 +1,8 @@
 #include "manager.hpp"
 
+#include <algorithm>
+#include <cctype>
+
 #include <sstream>
 
 #include "liveness.hpp"
@@ -69,6 +72,21 @@ Manager::Manager(Bus& bus, ManagerOptions options)
   // RPC handlers only record requests: they can run while a tick waits for a skill
   // process, so they must not touch running trees.
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
+    // Bounded: every holder of the bus key may register, so names and numbers that would
+    // grow the registry (and the announcement that lists it) without end are refused.
+    auto name_ok = [](const std::string& n, size_t max) {
+      if (n.empty() || n.size() > max) return false;
+      for (char c : n)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) return false;
+      return true;
+    };
+    if (!name_ok(reg.process, 64) || !name_ok(reg.rpc_area, 64))
+      throw RpcBadRequest("register: a process name and RPC area are 1 to 64 letters, digits, '_', '-' or '.'");
+    const auto known = registry_.processes();
+    if (std::find(known.begin(), known.end(), reg.process) == known.end() && known.size() >= kMaxProcesses)
+      throw RpcError("register: " + std::to_string(kMaxProcesses) + " skill processes are registered already");
+    if (reg.skills.size() > kMaxSkillsPerProcess)
+      throw RpcBadRequest("register: at most " + std::to_string(kMaxSkillsPerProcess) + " skills per process");
     skill_register_t out = reg;
     if (liveness_) liveness_->registered(reg.process);
     out.errors = registry_.add(reg);

@@ -21,6 +21,10 @@
 
 namespace skillbus::skills {
 
+// What one registration may add (anyone with the bus key may register).
+constexpr size_t kMaxProcesses = 64;
+constexpr size_t kMaxSkillsPerProcess = 1024;
+
 struct ManagerOptions {
   std::string name = "skill_mgr";         // lockstep participant name
   bool wall_clock = false;
