@@ -32,7 +32,9 @@ class ArmError(RuntimeError):
 
 
 class Arm:
-    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 10.0) -> None:
+    # A plan is asked for inside a skill's tick: the call must end (and name the motion
+    # service) before the manager's tick timeout (2 s in the system) names the skill process.
+    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 1.5) -> None:
         self.bus, self.participant = bus, participant
         self.motion = RpcClient(bus, "MOTION", name)
         self.motion_timeout = motion_timeout

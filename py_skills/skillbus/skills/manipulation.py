@@ -20,6 +20,7 @@ from skillbus.robot import camera as camera_service
 from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SerialStar,
                             SkillBase, SkillDescription)
 from skillbus.msgs import wm_op_t
+from skillbus.rpc import RpcError
 from skillbus.world.convert import op
 from skillbus.quat import qmul, yaw_of
 from skillbus.world.poses import (parent_of, reparent, reparent_ops, set_world_pose, world_pose,
@@ -213,7 +214,10 @@ class _ArmMotion(PrimitiveBase):
     def execute(self):
         if self.cmd is None:
             pose, cartesian, what = self.target()
-            plan = self.arm.plan(pose, cartesian)
+            try:
+                plan = self.arm.plan(pose, cartesian)
+            except RpcError as e:  # named here, within the tick, not as a tick that never returned
+                return self.fail(f"{self.label} to {what}: the motion service did not answer ({e})", -5)
             if not plan.ok:
                 return self.fail(f"{self.label} to {what}: {plan.error}", -1)
             self.cmd = command_id(self.label)
