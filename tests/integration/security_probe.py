@@ -16,7 +16,6 @@ physics, wipe the world with load_scene, forge a world-model change for the repl
 from __future__ import annotations
 
 import json
-import math
 import os
 import secrets
 import subprocess

@@ -153,6 +153,19 @@ def test_a_client_gives_up_after_its_reconnect_timeout_naming_the_hub(sandbox, t
 
 # -- the gripper skills, through the skill manager ------------------------------------------------
 
+def start_gripper_skills(sandbox, tmp_path, path):
+    """A world model, the manager and a skill process with the gripper skills on the CAN
+    bus at `path` (wall clock), once the process has registered."""
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
+                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    skills = sandbox.start("grip_skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name",
+                                           "grip_skills", "--library", "skillbus.skills.gripper",
+                                           "--gripper", f"{path}:5"])
+    skills.wait_for("registered", 60)
+    return skills
+
+
 def run_skill(sandbox, skill, timeout=30):
     p = sandbox.start(f"run-{skill}-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", "run", skill,
                                                              "-p", "Gripper=skiros:Gripper-7", "--timeout", "30"])
@@ -165,13 +178,7 @@ def test_the_gripper_skills_fail_at_once_naming_the_fault_and_work_after_recover
     path = tmp_path / "grip.sock"
     hub = start_hub(sandbox, path)
     device = start_device(sandbox, path)
-    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
-                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
-    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
-    skills = sandbox.start("grip_skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name",
-                                           "grip_skills", "--library", "skillbus.skills.gripper",
-                                           "--gripper", f"{path}:5"])
-    skills.wait_for("registered", 60)
+    skills = start_gripper_skills(sandbox, tmp_path, path)
     rc, out, _ = run_skill(sandbox, "GripperClose")
     assert rc == 0 and "close: width 0.0 mm" in out, out
 
@@ -205,19 +212,12 @@ def test_a_device_fault_left_by_a_command_is_cleared_by_the_next_one(sandbox, tm
     device reports a following error (EMCY 0x8611) and the command fails naming it. Once
     the physics runs again, the next command clears the fault (CiA 402 fault reset, then
     enabled again) and works: a fault does not leave the gripper unusable."""
-    from skillbus.sim.client import SimClient  # noqa: F401 (the CLI below is the same client)
     path = tmp_path / "grip.sock"
     start_hub(sandbox, path)
     sandbox.start("sim", [paths.binary("sim_server"), "--scene", paths.demo_scene(), "--wall-clock"])
     sandbox.start("device", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", path,
                              "--node-id", "5", "--physics", "--name", "gripper"])
-    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
-                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
-    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
-    skills = sandbox.start("grip_skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name",
-                                           "grip_skills", "--library", "skillbus.skills.gripper",
-                                           "--gripper", f"{path}:5"])
-    skills.wait_for("registered", 60)
+    skills = start_gripper_skills(sandbox, tmp_path, path)
     pause = sandbox.start("pause", [sys.executable, "-m", "skillbus.cli", "sim", "pause"])
     assert sandbox.wait(pause, 30) == 0, pause.stderr()
     rc, out, _ = run_skill(sandbox, "GripperClose")
