@@ -56,3 +56,25 @@ def test_lagging_the_profile_without_a_stall_is_a_following_error():
         g.on_state(0.08 - 0.05 * 0.01 * (i + 1), 5.0, set())
         g.step(0.01)
     assert not g.following_error()
+
+
+def test_fingers_as_fast_as_a_slowed_physics_are_not_behind():
+    """On the wall clock a loaded machine runs the physics slower than real time: the
+    fingers move at the commanded speed in the physics' time and lag the device's own
+    clock. Not a following error (it faulted the gripper in the fault suite's wall-clock
+    trials); lagging in the physics' time still is."""
+    def run(width_after):
+        f = SimFingers(lambda m: None)
+        f.on_state(0.08, 0.0, set(), 0.08, 0.0)
+        f.move_to(0, 50_000, 200)
+        sim = 0.0
+        for i in range(100):  # 1 s of the device's time, the physics at a third of it
+            sim += 0.01 / 3
+            f.on_state(width_after(sim), 2.0, set(), 0.0, sim)
+            f.step(0.01)
+            if f.following_error():
+                return True
+        return False
+
+    assert not run(lambda t: 0.08 - 0.05 * t)  # on the profile in physics time
+    assert run(lambda t: 0.08)  # stuck: behind in physics time too

@@ -77,7 +77,7 @@ FOLLOWING_TIMEOUT_S = 0.2
 AT_TARGET_UM = 500
 
 
-def sim_state_reading(s) -> tuple[float, float, set[str], float]:
+def sim_state_reading(s) -> tuple[float, float, set[str], float, float | None]:
     """What SimFingers.on_state takes from a sim_state_t (the physics server's ground
     truth), checked before any of it is used: width and target between
     closed and fully open (with WIDTH_SLACK_UM), the force within MAX_FORCE_N, all finite.
@@ -88,7 +88,8 @@ def sim_state_reading(s) -> tuple[float, float, set[str], float]:
     width = finite(s.finger_width, "finger_width", lo, hi)
     force = finite(s.finger_force, "finger_force", -MAX_FORCE_N, MAX_FORCE_N)
     target = finite(s.finger_width_target, "finger_width_target", lo, hi)
-    return width, force, {c.body_b for c in s.contacts}, target
+    sim_time = s.header.sim_time_ns * 1e-9 if s.header.sim_time_ns >= 0 else None
+    return width, force, {c.body_b for c in s.contacts}, target, sim_time
 
 
 class SimFingers:
@@ -110,11 +111,18 @@ class SimFingers:
         self._start, self._elapsed, self._lagging = self.width, 0.0, 0.0
         self._commands = 0
         self.acknowledged = True
+        self._sim_now: float | None = None    # the physics' time of its last state, s
+        self._sim_start: float | None = None  # ... when it took the set-point of this move
 
-    def on_state(self, width_m: float, force_n: float, touching: set[str], width_target_m: float | None = None) -> None:
+    def on_state(self, width_m: float, force_n: float, touching: set[str], width_target_m: float | None = None,
+                 sim_time_s: float | None = None) -> None:
         self.width, self.force, self.touching = width_m * 1e6, force_n, touching
         # Force and contacts say something about this move only once the physics has it.
+        was = self.acknowledged
         self.acknowledged = width_target_m is None or abs(width_target_m * 1e6 - self.target) < 1.0
+        self._sim_now = sim_time_s
+        if self.acknowledged and not was:
+            self._sim_start = sim_time_s
 
     def _send(self, target: float) -> None:
         from skillbus.sim.messages import gripper_command
@@ -127,7 +135,7 @@ class SimFingers:
         self.force_limit_n = max(0.1, force_limit / 10.0)
         self.moving, self.blocked_for = True, 0.0
         self._start, self._elapsed, self._lagging = self.width, 0.0, 0.0
-        self.acknowledged = False
+        self.acknowledged, self._sim_start = False, None
         self._send(self.target)
 
     def halt(self) -> None:
@@ -159,9 +167,16 @@ class SimFingers:
         if self.stalled:
             self.blocked_for += dt
             return
-        # following error: behind the commanded profile by more than the window
+        # following error: behind the commanded profile by more than the window. The
+        # profile runs in the physics' time from when it took the set-point: on the wall
+        # clock a loaded machine slows the physics below real time, and fingers that move
+        # as fast as the physics lets them are not behind (they were, in the device's own
+        # time, and a busy machine faulted the gripper).
+        elapsed = self._elapsed
+        if self._sim_start is not None and self._sim_now is not None:
+            elapsed = max(0.0, self._sim_now - self._sim_start)
         d = self.target - self._start
-        planned = self._start + max(-abs(d), min(abs(d), self.velocity * self._elapsed)) * (1 if d >= 0 else -1)
+        planned = self._start + max(-abs(d), min(abs(d), self.velocity * elapsed)) * (1 if d >= 0 else -1)
         behind = abs(planned - self.width) > FOLLOWING_WINDOW_UM
         self._lagging = self._lagging + dt if behind else 0.0
 
