@@ -17,8 +17,8 @@ import time
 from skillbus import tick_context
 from skillbus.robot import arm as arm_service
 from skillbus.robot import camera as camera_service
-from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SerialStar,
-                            SkillBase, SkillDescription)
+from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SelectorStar,
+                            SerialStar, SkillBase, SkillDescription)
 from skillbus.msgs import wm_op_t
 from skillbus.rpc import RpcError
 from skillbus.world.convert import op
@@ -303,8 +303,8 @@ class place(SkillBase):
 
 class transfer_products(SkillBase):
     """Every product the world model has in From into To, each Pick-and-Place retried on
-    failure (RetryOnFail(Retries)); a product the Gripper already holds (a task cut short
-    by a fault left it there) is placed in To first. The products are read when this skill
+    failure (RetryOnFail(Retries)); a product the Gripper already holds (a task or an
+    attempt cut short by a fault left it there) is placed without a Pick. The products are read when this skill
     starts, so a Locate just before it decides them."""
 
     def createDescription(self):
@@ -327,9 +327,16 @@ class transfer_products(SkillBase):
             steps.append(retried(self.skill("Place", "", remap={"Location": "To"}, specify={"Object": obj})))
         for oid in contents(source.id):
             obj = self.wmi.get_element(oid)
-            steps.append(retried(self.skill(SerialStar())(
-                self.skill("Pick", "", specify={"Object": obj}),
+            # Place it if the gripper holds it, else Pick and Place it: an attempt that
+            # failed after the grasp (a release cut short by a gripper fault) leaves the
+            # product in the gripper, where a second Pick would fail its NotHolding
+            # pre-condition. SelectorStar: the choice is made once per attempt.
+            steps.append(retried(self.skill(SelectorStar())(
                 self.skill("Place", "", remap={"Location": "To"}, specify={"Object": obj}),
+                self.skill(SerialStar())(
+                    self.skill("Pick", "", specify={"Object": obj}),
+                    self.skill("Place", "", remap={"Location": "To"}, specify={"Object": obj}),
+                ),
             )))
         skill.setProcessor(SerialStar())
         skill(*steps)
