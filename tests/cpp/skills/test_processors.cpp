@@ -291,3 +291,19 @@ TEST(Processors, AnAnonymousGroupIsNamedByItsProcessorInItsParentsMessage) {
   ASSERT_EQ(s, State::Failure);
   EXPECT_EQ(top.message().rfind("(RetryOnFail(0)) failed: ", 0), 0u) << top.message();
 }
+
+TEST(Processors, ASelectorThatFailsNamesItsLastChildsFailure) {
+  // A task whose fallback failed must say why (a ClearTable ended with only "all children
+  // failed" when the skill process died under its Pick).
+  for (const char* processor : {"Selector", "SelectorStar"}) {
+    Children kids;
+    kids.push_back(std::make_unique<FailingLeaf>(std::vector<std::string>{"pre-condition Holding failed"}));
+    kids.push_back(std::make_unique<FailingLeaf>(std::vector<std::string>{"skill process skills did not answer"}));
+    CompoundNode sel("Sel", "", make_processor(processor), std::move(kids));
+    State s = State::Running;
+    for (int i = 0; i < 5 && s == State::Running; ++i) s = sel.tick();
+    ASSERT_EQ(s, State::Failure) << processor;
+    EXPECT_NE(sel.message().find("all children failed; the last: "), std::string::npos) << sel.message();
+    EXPECT_NE(sel.message().find("skill process skills did not answer"), std::string::npos) << sel.message();
+  }
+}

@@ -18,7 +18,11 @@ class Selector : public Processor {
         return s;
       }
     }
-    say("all children failed");
+    // Named by the last child's failure: the fallback, usually the one that says why (a
+    // failed guard before it is the expected case, not the cause).
+    say(children.empty() ? std::string("all children failed")
+                         : "all children failed; the last: " + children.back()->display_name() + " failed: " +
+                               children.back()->message());
     return State::Failure;
   }
   std::string name() const override { return "Selector"; }
