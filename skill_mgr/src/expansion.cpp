@@ -62,8 +62,8 @@ std::string build_expansion(TaskContext& ctx, const Implementation& owner, const
         const auto impls = ctx.registry.find(n.type, n.label);
         for (auto& [key, sp] : specify) {
           if (impls.empty() || key.empty()) break;
-          const std::string bad = fit_specified(impls.front()->description, sp);
-          if (!bad.empty() && !unknown_keys(impls.front()->description, n).empty()) break;  // named below
+          const std::string bad = fit_specified(impls.front().description, sp);
+          if (!bad.empty() && !unknown_keys(impls.front().description, n).empty()) break;  // named below
           if (!bad.empty()) return where + "specify " + key + ": " + bad;
         }
       }
@@ -82,7 +82,7 @@ std::string build_expansion(TaskContext& ctx, const Implementation& owner, const
         }
         // A remap or specify of a key the child does not have would be ignored silently
         // (SkiROS2 does): a typo in a tree is an error that names it.
-        const std::string bad = unknown_keys(impls.front()->description, n);
+        const std::string bad = unknown_keys(impls.front().description, n);
         if (!bad.empty()) return where + bad;
         node = make_placeholder_node(ctx, n.type, n.label, scopes[i]);
       }

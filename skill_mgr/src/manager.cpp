@@ -123,10 +123,10 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     skill_start_t typed = req;
     for (auto& p : typed.params) {
       if (!p.data_type.empty()) continue;
-      const std::string bad = parse_text(impls.front()->description, p);
+      const std::string bad = parse_text(impls.front().description, p);
       if (!bad.empty()) throw RpcError(bad);
     }
-    const std::string bad = check_given(impls.front()->description, typed.params);
+    const std::string bad = check_given(impls.front().description, typed.params);
     if (!bad.empty()) throw RpcError(bad);
     skill_task_t out{};
     out.task = next_task_++;
@@ -191,8 +191,8 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
   std::string bad;
   for (auto p : req.params) {  // a fresh blackboard per task; the user's values override static ones
     if (impls.empty()) break;
-    if (p.data_type.empty() && bad.empty()) bad = parse_text(impls.front()->description, p);  // --start KEY=VALUE
-    if (bad.empty()) bad = check_given(impls.front()->description, {p});
+    if (p.data_type.empty() && bad.empty()) bad = parse_text(impls.front().description, p);  // --start KEY=VALUE
+    if (bad.empty()) bad = check_given(impls.front().description, {p});
     t->blackboard.give(p.key, p);
   }
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
@@ -213,7 +213,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
     world_.ensure(std::chrono::milliseconds(500), &why);
   }
   t->root = make_placeholder_node(*t->ctx, req.type, req.label, std::make_shared<Scope>());
-  SB_INFO(kLog, "task " << id << ": " << req.type << " (" << impls.front()->description.label << ") started");
+  SB_INFO(kLog, "task " << id << ": " << req.type << " (" << impls.front().description.label << ") started");
   tasks_[id] = std::move(t);
 }
 

@@ -25,16 +25,11 @@ std::vector<std::string> Registry::add(const skillbus_msgs::skill_register_t& re
   return refused;
 }
 
-std::vector<const Implementation*> Registry::find(const std::string& type, const std::string& label) const {
-  std::vector<const Implementation*> out;
+std::vector<Implementation> Registry::find(const std::string& type, const std::string& label) const {
+  std::vector<Implementation> out;
   for (const auto& [l, impl] : by_label_)
-    if (impl.description.type == type && (label.empty() || l == label)) out.push_back(&impl);
+    if (impl.description.type == type && (label.empty() || l == label)) out.push_back(impl);
   return out;
-}
-
-const Implementation* Registry::by_label(const std::string& label) const {
-  auto it = by_label_.find(label);
-  return it == by_label_.end() ? nullptr : &it->second;
 }
 
 std::vector<std::string> Registry::types() const {

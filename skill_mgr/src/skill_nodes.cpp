@@ -13,14 +13,11 @@ std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& im
 
 std::unique_ptr<Node> make_placeholder_node(TaskContext& ctx, const std::string& type, const std::string& label,
                                             std::shared_ptr<Scope> scope) {
-  const auto impls = ctx.registry.find(type, label);
+  auto impls = ctx.registry.find(type, label);
   if (impls.empty()) return nullptr;
-  if (impls.size() > 1 && label.empty()) {  // by type only: the first implementation that can start
-    std::vector<Implementation> copies;
-    for (const auto* x : impls) copies.push_back(*x);
-    return std::make_unique<Alternatives>(ctx, std::move(copies), std::move(scope));
-  }
-  return make_skill_node(ctx, *impls.front(), std::move(scope));
+  if (impls.size() > 1 && label.empty())  // by type only: the first implementation that can start
+    return std::make_unique<Alternatives>(ctx, std::move(impls), std::move(scope));
+  return make_skill_node(ctx, impls.front(), std::move(scope));
 }
 
 }  // namespace skillbus::skills

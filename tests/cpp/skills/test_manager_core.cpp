@@ -62,11 +62,25 @@ TEST(Registry, AnnouncementsReplaceAProcessesSkillsAndLabelsAreUnique) {
   ASSERT_EQ(refused.size(), 1u);
   EXPECT_EQ(refused[0], "skill pick of b: the label is served by a");
   EXPECT_EQ(r.find("Pick").size(), 2u);          // pick (a) and pick_fast (b), in label order
-  EXPECT_EQ(r.find("Pick", "pick_fast").front()->process, "b");
+  EXPECT_EQ(r.find("Pick", "pick_fast").front().process, "b");
   r.add(announcement("a", 2, {description("Place", "place")}));  // a restarted, without Pick now
   EXPECT_EQ(r.find("Pick").size(), 1u);
   EXPECT_EQ(r.incarnation_of("a"), 2);
   EXPECT_EQ(r.processes(), (std::vector<std::string>{"a", "b"}));
+}
+
+TEST(Registry, WhatFindReturnsOutlivesTheNextAnnouncement) {
+  // The manager pumps the bus inside a start request (it loads the world copy); an
+  // announcement heard meanwhile replaced the entries that a started task still read
+  // (a use after free, found by the fuzz run under AddressSanitizer).
+  Registry r;
+  r.add(announcement("a", 1, {description("Pick", "pick")}));
+  const auto found = r.find("Pick");
+  r.add(announcement("a", 2, {description("Place", "place")}));
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found.front().description.label, "pick");
+  EXPECT_EQ(found.front().incarnation, 1);
+  EXPECT_TRUE(r.find("Pick").empty());
 }
 
 TEST(Registry, ADroppedProcessIsNamedUntilItsTypeIsServedAgain) {
