@@ -183,6 +183,15 @@ RpcClient& Manager::client(const std::string& area) {
 }
 
 void Manager::begin(const skill_start_t& req, int64_t id) {
+  if (!world_.ready() && opt_.wall_clock && std::chrono::steady_clock::now() - last_world_try_ > std::chrono::seconds(5)) {
+    // The world copy is loaded before a task starts (its element parameters are checked
+    // and filled from it); with no world model server the task runs without one. First:
+    // this pumps the bus, and what is heard meanwhile (a registration) may change the
+    // skills looked up below.
+    last_world_try_ = std::chrono::steady_clock::now();
+    std::string why;
+    world_.ensure(std::chrono::milliseconds(500), &why);
+  }
   auto t = std::make_unique<Task>();
   t->id = id;
   t->type = req.type;
@@ -205,14 +214,11 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
     record_result(id, "Failure: " + why);
     return;
   }
-  if (!world_.ready() && opt_.wall_clock && std::chrono::steady_clock::now() - last_world_try_ > std::chrono::seconds(5)) {
-    // The world copy is loaded before a task starts (its element parameters are checked
-    // and filled from it); with no world model server the task runs without one.
-    last_world_try_ = std::chrono::steady_clock::now();
-    std::string why;
-    world_.ensure(std::chrono::milliseconds(500), &why);
-  }
   t->root = make_placeholder_node(*t->ctx, req.type, req.label, std::make_shared<Scope>());
+  if (!t->root) {  // (cannot happen: nothing between the lookup and here pumps the bus)
+    record_result(id, "Failure: " + unknown_skill_error(req.type, req.label));
+    return;
+  }
   SB_INFO(kLog, "task " << id << ": " << req.type << " (" << impls.front().description.label << ") started");
   tasks_[id] = std::move(t);
 }
