@@ -11,6 +11,10 @@ constexpr double kPeakOverMean = 1.5;      // a cubic segment with resting ends 
 constexpr double kCartesianSpeed = 0.1;    // m/s of the tool along a line (at speed_scale 1)
 constexpr int64_t kMinSegmentNs = 50'000'000;
 constexpr double kMaxJointJump = 0.5;      // rad between neighbouring line waypoints: a branch switch
+// An IK solve per waypoint costs up to milliseconds: a line of more waypoints than this (a
+// step_m of 1e-7: millions) kept the service busy for minutes and deaf to every other
+// request. 2 m in 1 mm steps.
+constexpr double kMaxWaypoints = 2000;
 
 int64_t segment_ns(const Kinematics& k, const Eigen::VectorXd& a, const Eigen::VectorXd& b, double scale,
                    double min_s) {
@@ -45,7 +49,13 @@ Plan plan_motion(const Kinematics& k, const PlanRequest& req) {
     return plan;
   }
   const double dist = (req.target.translation() - from.translation()).norm();
-  const int n = std::max(1, static_cast<int>(std::ceil(dist / step)));
+  const double waypoints = std::ceil(dist / step);
+  if (!(waypoints <= kMaxWaypoints)) {  // (also NaN)
+    plan.error = "along the line: " + std::to_string(dist) + " m every " + std::to_string(step) + " m is more than " +
+                 std::to_string(static_cast<int>(kMaxWaypoints)) + " waypoints; give a larger step_m";
+    return plan;
+  }
+  const int n = std::max(1, static_cast<int>(waypoints));
   const Eigen::Quaterniond qa(from.linear()), qb(req.target.linear());
   Eigen::VectorXd prev = req.start;
   int64_t t = 0;

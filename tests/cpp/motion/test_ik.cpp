@@ -2,6 +2,7 @@
 // by forward kinematics), unreachable ones reported as such, lines and timing in limits.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 
 #include "skillbus/motion/ik.hpp"
@@ -133,4 +134,20 @@ TEST(Planner, AnUnreachableLineFailsNamingTheWaypoint) {
   const Plan p = plan_motion(kin(), req);
   EXPECT_FALSE(p.ok);
   EXPECT_NE(p.error.find("along the line, waypoint"), std::string::npos) << p.error;
+}
+
+TEST(Planner, ALineOfTooManyWaypointsIsRefusedAtOnce) {
+  // A step_m of 1.5e-7 m (a flipped bit in the fuzz run) asked for millions of IK solves.
+  PlanRequest req;
+  req.start = home();
+  req.target = top_down(0.5, -0.1, 0.43);
+  req.cartesian = true;
+  req.step_m = 1.5e-7;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Plan p = plan_motion(kin(), req);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(100));
+  EXPECT_FALSE(p.ok);
+  EXPECT_NE(p.error.find("waypoints; give a larger step_m"), std::string::npos) << p.error;
+  req.step_m = 1e-300;  // (the count would overflow an int)
+  EXPECT_FALSE(plan_motion(kin(), req).ok);
 }
