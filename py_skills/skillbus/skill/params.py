@@ -14,4 +14,4 @@ from skillbus.skill.param import Param, ParamTypes
 from skillbus.skill.param_handler import ParamHandler
 from skillbus.world.element import Element
 
-__all__ = ["Param", "ParamHandler", "ParamTypes"]
+__all__ = ["Element", "Param", "ParamHandler", "ParamTypes"]  # Element: SkiROS2's module has it too
