@@ -68,8 +68,8 @@ class SkillDescription:
     def addParam(self, key: str, value: Any, param_type: ParamTypes, options: list | None = None,
                  description: str = "") -> None:
         """Adds a parameter. `options` may hold ParamOptions (SkiROS2's: for an element
-        parameter they add conditions) and values the parameter may take (skillbus: the
-        manager refuses any other)."""
+        parameter they add conditions) and values the parameter may take (skillbus: shown
+        by ``skillbus skills``, not enforced)."""
         options = list(options or [])
         allowed = [o for o in options if not isinstance(o, ParamOptions)]
         self._params.addParam(key, value, param_type, allowed, description)

@@ -48,7 +48,7 @@ _MIN_STEP = timedelta(microseconds=2)
 class Param(Property):
     """A parameter: ``Param(key, description, value, param_type)``. `value` is a type
     (no value yet), a value, or a list of values of one type. `options` lists the values
-    the parameter may take (skillbus; the manager refuses others)."""
+    the parameter may take (skillbus: shown by ``skillbus skills``, not enforced)."""
 
     def __init__(self, key: str, description: str, value: Any, param_type: ParamTypes | int,
                  options: list | None = None) -> None:
