@@ -1,5 +1,8 @@
-"""Conditions and grounding against a live world model (wm_server with the demo scene)."""
+"""Conditions and grounding against a live world model (wm_server with the demo scene);
+each condition kind is also judged by Python's Condition.evaluate on the same world, which
+must agree with the manager."""
 
+import json
 import sys
 import time
 from pathlib import Path
@@ -9,6 +12,7 @@ import pytest
 from test_skills import LIBS, cli, mgr_binary
 
 REPO = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
 
 
 @pytest.fixture
@@ -37,12 +41,25 @@ CASES = [
 ]
 
 
+def python_verdict(system, skill, params) -> bool:
+    """Whether the condition holds by Condition.evaluate(params, wmi) in Python, on the
+    same world (condition_probe.py): it must agree with the manager's check."""
+    p = system.start(f"probe-{skill}-{len(system.procs)}", [sys.executable, str(HERE / "condition_probe.py"), skill,
+                                                           *params], env={"PYTHONPATH": str(LIBS)})
+    assert system.wait(p, 30) == 0, p.stderr()
+    verdicts = json.loads(p.stdout().strip().splitlines()[-1])
+    assert len(verdicts) == 1, verdicts
+    return next(iter(verdicts.values()))
+
+
 @pytest.mark.parametrize("skill,good,bad,label", CASES, ids=[c[0] for c in CASES])
 def test_each_condition_true_and_false(system, skill, good, bad, label):
     rc, out, err = cli(system, "run", skill, *[x for p in good for x in ("-p", p)], "--timeout", "20")
     assert rc == 0, out + err
+    assert python_verdict(system, skill, good), f"Python's evaluate says {label} fails; the manager ran {skill}"
     rc, out, err = cli(system, "run", skill, *[x for p in bad for x in ("-p", p)], "--timeout", "20")
     assert rc == 1 and f"pre-condition {label}" in out and "failed" in out, out + err
+    assert not python_verdict(system, skill, bad), f"Python's evaluate says {label} holds; the manager refused it"
 
 
 def test_grounding_fills_inferred_and_abstract_parameters_jointly(system):

@@ -90,8 +90,7 @@ def test_parameter_kinds():
     p["Width"].value = 1  # an int where a float is wanted is fine
     with pytest.raises(TypeError, match="parameter Width holds float, not str"):
         p["Width"].value = "wide"
-    with pytest.raises(KeyError, match="no parameter 'Nope'"):
-        p["Nope"]
+    assert p["Nope"] is None  # SkiROS2: a missing key logs an error (see test_skiros2_params.py)
     p["Waypoints"].value = [1, 2]  # a list-typed parameter holds the list as one value
     assert p["Waypoints"].values == [[1, 2]] and p["Waypoints"].value == [1, 2]
 

@@ -87,9 +87,21 @@ def apply_param_msgs(skill: SkillCore, params: list[skill_param_t]) -> None:
 
 
 def condition_msgs(conditions: list[ConditionBase]) -> list[skill_condition_t]:
+    """The conditions as the manager takes them: a ConditionOr becomes its members, marked
+    with one or_label that no other ConditionOr of the list has (the manager groups a run
+    of members by it; SkiROS2 labels every ConditionOr "or")."""
     out = []
+    or_labels: set[str] = set()
     for c in conditions:
-        members, or_label = (c.conditions, c.label) if isinstance(c, ConditionOr) else ([c], "")
+        members, or_label = ([c], "")
+        if isinstance(c, ConditionOr):
+            _check_or(c)
+            members, or_label = c.conditions, c.label
+            n = 1
+            while or_label in or_labels:
+                n += 1
+                or_label = f"{c.label} ({n})"
+            or_labels.add(or_label)
         for x in members:
             m = skill_condition_t()
             m.kind, m.label, m.subject, m.object = x.kind, x.label, x.subject_key, x.object_key
@@ -97,6 +109,18 @@ def condition_msgs(conditions: list[ConditionBase]) -> list[skill_condition_t]:
             m.value = value_msg(x.value) if x.value is not None else skill_value_t()
             out.append(m)
     return out
+
+
+def _check_or(c: ConditionOr) -> None:
+    """What the manager cannot check is refused when the skill registers, not misjudged."""
+    if not c.conditions:
+        raise ValueError(f"ConditionOr {c.label!r} has no conditions: it can never hold (addCondition its members)")
+    if not c.desired_state:
+        raise ValueError(f"ConditionOr {c.label!r}: desired_state False is not supported by the skill manager; "
+                         f"add its members as separate conditions, each with the opposite desired state")
+    if any(isinstance(x, ConditionOr) for x in c.conditions):
+        raise ValueError(f"ConditionOr {c.label!r}: a ConditionOr inside another is not supported by the skill "
+                         f"manager")
 
 
 def description_msg(skill: SkillCore) -> skill_description_t:

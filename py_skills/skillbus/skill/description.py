@@ -11,15 +11,34 @@ done, as in SkiROS2. Subclass it and fill ``createDescription``::
 
 from __future__ import annotations
 
+import enum
 from typing import Any
 
-from skillbus.skill.conditions import (ConditionAbstractRelation, ConditionBase, ConditionGenerate,
-                                       ConditionHasProperty, ConditionIsSpecified, ConditionOnType,
+from skillbus.skill.conditions import (AbstractConditionRelation, ConditionBase, ConditionGenerate,
+                                       ConditionHasProperty, ConditionIsSpecified, ConditionOnType, ConditionOr,
                                        ConditionProperty, ConditionRelation)
 from skillbus.skill.params import ParamHandler, ParamTypes
 from skillbus.world.element import Element
 
 ROBOT_CONCEPT = "skiros:Agent"
+
+
+class ParamOptions(enum.Enum):
+    """Options of an element parameter (SkiROS2's, from its abstract_skill module): each
+    adds conditions about the parameter to the description (SkillDescription.addParam).
+
+    Consume:     the skill uses the element up (post: ConditionGenerate, not desired)
+    Output:      the skill fills it in (no condition; marks intent)
+    Unspecify:   the parameter is left empty (post: ConditionIsSpecified, not desired)
+    Lock:        the element must be idle and is busy while the skill runs (pre and post:
+                 skiros:StateProperty = "Idle"; hold: not "Idle")
+    RespectType: the element must be of the parameter's concept (pre: ConditionOnType)
+    """
+    Consume = 1
+    Output = 2
+    Unspecify = 3
+    Lock = 4
+    RespectType = 5
 
 
 class SkillDescription:
@@ -48,7 +67,31 @@ class SkillDescription:
 
     def addParam(self, key: str, value: Any, param_type: ParamTypes, options: list | None = None,
                  description: str = "") -> None:
-        self._params.addParam(key, value, param_type, options, description)
+        """Adds a parameter. `options` may hold ParamOptions (SkiROS2's: for an element
+        parameter they add conditions) and values the parameter may take (skillbus: shown
+        by ``skillbus skills``, not enforced)."""
+        options = list(options or [])
+        allowed = [o for o in options if not isinstance(o, ParamOptions)]
+        self._params.addParam(key, value, param_type, allowed, description)
+        if isinstance(value, Element):
+            for o in options:
+                if isinstance(o, ParamOptions):
+                    self._add_option_conditions(key, value, o)
+
+    def _add_option_conditions(self, key: str, value: Element, option: ParamOptions) -> None:
+        # The labels are SkiROS2's, so a ported skill's conditions read the same.
+        if option == ParamOptions.Consume:
+            self._post_conditions.append(ConditionGenerate("Consume" + key, key, False))
+        elif option == ParamOptions.Unspecify:
+            self._post_conditions.append(ConditionIsSpecified("Unset" + key, key, False))
+        elif option == ParamOptions.Lock:
+            self._pre_conditions.append(ConditionProperty(key + "Idle", "skiros:StateProperty", key, "=", "Idle", True))
+            self._hold_conditions.append(ConditionProperty(key + "Busy", "skiros:StateProperty", key, "=", "Idle",
+                                                           False))
+            self._post_conditions.append(ConditionProperty(key + "Idle", "skiros:StateProperty", key, "=", "Idle",
+                                                           True))
+        elif option == ParamOptions.RespectType:
+            self._pre_conditions.append(ConditionOnType(key + "OfType", key, value.type))
 
     def addPreCondition(self, condition: ConditionBase) -> None:
         self._pre_conditions.append(self._condition(condition))
@@ -94,7 +137,11 @@ class SkillDescription:
         return ConditionRelation(label, relation, subject_param, object_param, desired_state)
 
     def getAbstractRelationCond(self, label, relation, subject_param, object_param, desired_state=True):
-        return ConditionAbstractRelation(label, relation, subject_param, object_param, desired_state)
+        return AbstractConditionRelation(label, relation, subject_param, object_param, desired_state)
+
+    def getOrCond(self, desired_state=True):
+        """An empty ConditionOr: addCondition its members."""
+        return ConditionOr(desired_state=desired_state)
 
     def getPropCond(self, label, property, subject_param, operator, value, desired_state=True):
         return ConditionProperty(label, property, subject_param, operator, value, desired_state)

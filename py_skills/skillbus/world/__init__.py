@@ -10,7 +10,8 @@ Example::
         print(e.id, e.label)
 """
 
-from skillbus.world.element import Element, Property
+from skillbus.world.element import Element
+from skillbus.world.property import Property
 from skillbus.world.client import WorldModelError, WorldModelInterface
 
 __all__ = ["Element", "Property", "WorldModelError", "WorldModelInterface"]

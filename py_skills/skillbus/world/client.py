@@ -228,10 +228,54 @@ class WorldModelInterface:
         return [self._with_relations(e) for _, e in sorted(self._elements.items())]
 
     def get_relations(self, subj: str = "", pred: str = "", obj: str = "") -> list[dict]:
+        """The relations (as Element relation dicts, with the actual ids) that match: ""
+        or "-1" is any element (SkiROS2 code passes "-1" for "any"), `pred` exactly."""
+        subj, obj = _any(subj), _any(obj)
         self._fresh()
         pool = self._by_node.get(subj or obj, set()) if (subj or obj) else self._relations
         return [{"src": s, "type": p, "dst": o, "state": True, "abstract": False} for (s, p, o) in sorted(pool)
                 if subj in ("", s) and pred in ("", p) and obj in ("", o)]
+
+    def has_element(self, eid: str) -> bool:
+        self._fresh()
+        return eid in self._elements
+
+    def has_relation(self, subj: str, pred: str, obj: str) -> bool:
+        """Whether `subj` `pred` `obj` holds, a subproperty of `pred` counting (as in the
+        skill manager's condition check); "" or "-1" is any element on that side (not on
+        both). The replica answers unless a relation between the two is there under
+        another predicate: then the server's ontology says if that one is a subproperty."""
+        subj, obj = _any(subj), _any(obj)
+        if not subj and not obj:
+            raise ValueError("has_relation needs a subject or an object")
+        self._fresh()
+        near = [r for r in self._by_node.get(subj or obj, ()) if subj in ("", r[0]) and obj in ("", r[2])]
+        if not near:
+            return False
+        if not pred or any(r[1] == pred for r in near):
+            return True
+        # Ask for the element at one end with a relation pattern: "" is the element itself,
+        # "*" any (skillbus.wm Query).
+        q = _query(ids=[subj or obj])
+        q.relations = [relation_msg("", pred, obj or "*") if subj else relation_msg("*", pred, "")]
+        q.num_relations, q.ids_only = 1, True
+        return bool(self.query(q))
+
+    def is_instance_of(self, eid: str, concept: str) -> bool:
+        """Whether element `eid`'s type is `concept` or a subclass of it (the server's
+        ontology; an unknown concept has no instances but those typed with it)."""
+        self._fresh()
+        e = self._elements.get(eid)
+        if e is None:
+            return False
+        if e.type == concept:
+            return True
+        q = _query(ids=[eid], type_=concept)
+        q.ids_only = True
+        try:
+            return bool(self.query(q))
+        except WorldModelError:  # the server refuses a query for a concept it does not know
+            return False
 
     def resolve_elements(self, e: Element) -> list[Element]:
         """Elements matching `e`: its type (with subclasses, asked of the server's
@@ -425,6 +469,12 @@ class WorldModelInterface:
             return self.rpc.call(method, req, rep_type, timeout=timeout or self.timeout)
         except RpcRemoteError as e:
             raise WorldModelError(str(e)) from None
+
+
+def _any(end: str) -> str:
+    """A relation end as a filter: "-1" (SkiROS2's "this element", used in its client
+    calls for "any") and "" are any."""
+    return "" if end == "-1" else end
 
 
 def _query(ids: list[str] | None = None, type_: str = "", label: str = "", exact: bool = False) -> wm_query_t:

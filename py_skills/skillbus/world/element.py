@@ -13,75 +13,16 @@ skill code ports by changing imports.
 from __future__ import annotations
 
 import copy
+import logging
 from typing import Any, Iterable
+
+from skillbus.world import element_data
+from skillbus.world.property import Property
+
+log = logging.getLogger("skillbus.world")
 
 _DATATYPES = {"xsd:double": float, "xsd:float": float, "xsd:int": int, "xsd:integer": int,
               "xsd:boolean": bool, "xsd:string": str}
-
-
-class Property:
-    """A key with a list of values of one type (``value`` is the first)."""
-
-    def __init__(self, key: str, value: Any = None, is_list: bool = False) -> None:
-        self.key = key
-        self._type: type | None = value if isinstance(value, type) else None
-        self._values: list = [] if value is None or isinstance(value, type) else self._as_list(value)
-        if self._values and self._type is None:
-            self._type = type(self._values[0])
-
-    @staticmethod
-    def _as_list(v: Any) -> list:
-        return list(v) if isinstance(v, (list, tuple)) else [v]
-
-    @classmethod
-    def _from_wire(cls, key: str, values: list) -> "Property":
-        """A property read off the wire (skillbus.world.wire): `values` taken as they are."""
-        p = cls.__new__(cls)
-        p.key, p._values = key, values
-        p._type = type(values[0]) if values else None
-        return p
-
-    def dataType(self) -> type | None:
-        return self._type
-
-    @property
-    def value(self) -> Any:
-        return self._values[0] if self._values else None
-
-    @value.setter
-    def value(self, v: Any) -> None:
-        self.setValues(v)
-
-    @property
-    def values(self) -> list:
-        return self._values
-
-    @values.setter
-    def values(self, v: Any) -> None:
-        self.setValues(v)
-
-    def setValues(self, v: Any) -> None:
-        self._values = self._as_list(v)
-        if self._values and self._type is None:
-            self._type = type(self._values[0])
-
-    def setValue(self, v: Any, index: int = 0) -> None:
-        self._values[index] = v
-
-    def append(self, v: Any) -> None:
-        self._values.append(v)
-
-    def find(self, v: Any) -> int:
-        return self._values.index(v) if v in self._values else -1
-
-    def isSpecified(self) -> bool:
-        return bool(self._values)
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, Property) and (self.key, self._values) == (other.key, other._values)
-
-    def __repr__(self) -> str:
-        return f"{self.key}: {self._values}"
 
 
 class Element:
@@ -132,7 +73,12 @@ class Element:
         return self._id == ""
 
     def getIdNumber(self) -> int:
-        return int(self._id.rsplit("-", 1)[1]) if "-" in self._id else -1
+        """The number at the end of the id (``skiros:Cube-3`` gives 3); -1 without one
+        (an abstract element). SkiROS2 reads the part after the first ``-`` and raises on
+        an id like ``a:b-c-2``; the number after the last one is the same for every id the
+        world model gives."""
+        _, dash, number = self._id.rpartition("-")
+        return int(number) if dash and number.isdigit() else -1
 
     def setUri(self, eid: Any) -> None:
         self._id = f"{self._type}-{eid}"
@@ -140,7 +86,7 @@ class Element:
     def printState(self, verbose: bool = False, filter: str = "") -> str:
         out = (self._id or self._type) + "-" + self._label
         if verbose:
-            out += "".join(f"\n{p}" for k, p in self._properties.items() if filter in ("", k))
+            out += "".join(f"\n{p.printState()}" for k, p in self._properties.items() if filter in ("", k))
             out += "".join(f"\n{r}" for r in self._relations)
         return out
 
@@ -151,6 +97,8 @@ class Element:
         return (isinstance(other, Element) and (self._id, self._type, self._label) == (other._id, other._type, other._label)
                 and self._properties == other._properties
                 and sorted(map(_rel_key, self._relations)) == sorted(map(_rel_key, other._relations)))
+
+    __hash__ = None  # type: ignore[assignment]  # mutable, compared by value
 
     def clone(self) -> "Element":
         return copy.deepcopy(self)
@@ -166,14 +114,18 @@ class Element:
         return self._loaded
 
     # -- properties -------------------------------------------------------
-    def available_properties(self) -> list[str]:
-        return list(self._properties)
+    @property
+    def available_properties(self):
+        """The property keys (a view, as in SkiROS2)."""
+        return self._properties.keys()
 
     @property
     def properties(self) -> list[Property]:
         return list(self._properties.values())
 
     def hasProperty(self, key: str, value: Any = None, not_none: bool = False) -> bool:
+        """Whether the element has the property; with `value`, whether that is among its
+        values; with `not_none`, whether it has a value at all."""
         if key not in self._properties:
             return False
         if value is not None:
@@ -185,14 +137,19 @@ class Element:
             raise KeyError(f"{self.printState()} has no property {key}")
         return self._properties[key]
 
-    def setProperty(self, key: str, value: Any, datatype: str | None = None, is_list: bool = False,
-                    force_convertion: bool = False) -> None:
+    def setProperty(self, key: str, value: Any, datatype: str | None = None, force_convertion: bool = False,
+                    *, is_list: bool = False) -> None:
+        """Sets the property's values (a list sets several). With `datatype` (an xsd type)
+        the property is made anew with that type and the value converted to it (SkiROS2
+        leaves it empty unless the value has the type already); with `force_convertion`
+        the value is converted to the existing property's type. A type as the value makes
+        an empty property of that type."""
         if datatype:
             if datatype not in _DATATYPES:
                 raise ValueError(f"datatype {datatype} is not one of {sorted(_DATATYPES)}")
             conv = _DATATYPES[datatype]
             prop = Property(key, conv)
-            if value is not None:
+            if value is not None and not isinstance(value, type):
                 prop.setValues([conv(v) for v in Property._as_list(value)])
             self._properties[key] = prop
         elif key in self._properties:
@@ -201,25 +158,53 @@ class Element:
                 value = [prop.dataType()(v) for v in Property._as_list(value)]
             prop.setValues(value)
         else:
-            self._properties[key] = Property(key, value, is_list)
+            self._properties[key] = Property(key, value)
 
     def appendProperty(self, key: str, value: Any) -> None:
+        """Adds a value to the property, making it if it is missing."""
         if key in self._properties:
-            self._properties[key].append(value)
+            self._properties[key].addValue(value)
         else:
-            self.setProperty(key, value, is_list=True)
+            self.setProperty(key, value)
 
     def removeProperty(self, key: str) -> None:
         del self._properties[key]
 
+    # -- data codes (SkiROS2's spatial reasoner; see skillbus.world.element_data) ----
+    def hasData(self, code: str) -> bool:
+        return element_data.has_data(self, code)
+
+    def getData(self, code: str) -> Any:
+        return element_data.get_data(self, code)
+
+    def setData(self, code: str, data: Any) -> None:
+        element_data.set_data(self, code, data)
+
     # -- relations --------------------------------------------------------
+    # A relation is a dict {src, type, dst, state, abstract}. "-1" as src or dst stands for
+    # this element (SkiROS2's convention); an element read from the world model carries
+    # its own id there instead. Lookups take either form for either: getRelations(subj="-1")
+    # finds the element's outgoing relations whichever way they are written.
+    def _is_me(self, end: str) -> bool:
+        return end == "-1" or (end != "" and end == self._id)
+
+    def _same_end(self, stored: str, asked: str) -> bool:
+        return stored == asked or (self._is_me(asked) and self._is_me(stored))
+
+    def _end_matches(self, stored: str, asked: str) -> bool:
+        return asked == "" or self._same_end(stored, asked)
+
     def getRelations(self, subj: str = "", pred: str | Iterable[str] = (), obj: str = "") -> list[dict]:
+        """The relations (the stored dicts themselves, in order) matching the filters: "" is
+        any; `pred` may be a list (any of them); "-1" or the element's id is this element."""
         preds = [pred] if isinstance(pred, str) else list(pred)
         preds = [] if preds and preds[0] == "" else preds
         return [r for r in self._relations
-                if subj in ("", r["src"]) and (not preds or r["type"] in preds) and obj in ("", r["dst"])]
+                if self._end_matches(r["src"], subj) and (not preds or r["type"] in preds)
+                and self._end_matches(r["dst"], obj)]
 
     def getRelation(self, subj: str = "", pred: str | Iterable[str] = (), obj: str = "") -> dict | None:
+        """The first relation getRelations finds, or None."""
         found = self.getRelations(subj, pred, obj)
         return found[0] if found else None
 
@@ -250,6 +235,38 @@ class Element:
     def removeRelations(self, relations: Iterable[dict]) -> None:
         for r in list(relations):
             self.removeRelation(r)
+
+    def removeRelation2(self, subj: str, predicate: str, obj: str, value: bool = True, abstract: bool = False) -> None:
+        """Removes the relation given by its parts ("-1" or the id: this element); logs an
+        error (as SkiROS2) when the element has no such relation."""
+        for r in self._relations:
+            if (r["type"] == predicate and r["state"] == value and r["abstract"] == abstract
+                    and self._same_end(r["src"], subj) and self._same_end(r["dst"], obj)):
+                self._relations.remove(r)
+                return
+        log.error("removeRelation2: %s has no relation %s-%s-%s (state %s, abstract %s)", self.printState(), subj,
+                  predicate, obj, value, abstract)
+
+    def isInstance(self, abstract: "Element", wmi: Any) -> bool:
+        """Whether this element fits the abstract description `abstract`: its type or a
+        subclass, its label unless that is "" or "Unknown", every value of its
+        properties, and its relations (with "-1" standing for the element) as the world
+        model `wmi` has them (a subproperty of a relation counts)."""
+        if self._type != abstract.type and not (self._id and wmi.is_instance_of(self._id, abstract.type)):
+            return False
+        if abstract.label not in ("", "Unknown") and abstract.label != self._label:
+            return False
+        for key, p in abstract._properties.items():
+            if not self.hasProperty(key) or any(v not in self.getProperty(key).values for v in p.values):
+                return False
+        for r in abstract._relations:
+            if r["src"] in ("-1", abstract.id):
+                ok = wmi.has_relation(self._id, r["type"], "")
+            else:
+                ok = wmi.has_relation("", r["type"], self._id)
+            if not ok:
+                return False
+        return True
 
     def _resolved_relations(self) -> list[tuple[str, str, str]]:
         """Relations with "-1" replaced by this element's id (only true, concrete ones)."""
