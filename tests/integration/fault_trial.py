@@ -26,6 +26,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -92,7 +93,6 @@ def registered() -> bool:
 
 conf = launch.write_config(RUN, programs(RUN, task=TASK if LOCKSTEP else None, lockstep=LOCKSTEP), lockstep=LOCKSTEP)
 logs = RUN / "logs"
-launch.start(conf, wait_s=90)
 bus = open_bus()
 seen = {"frame": -1, "sim": None}
 
@@ -105,14 +105,40 @@ def on_sim(ch, data):
 
 
 bus.subscribe(channel("SB_SIM_STATE"), on_sim)
+# The frames are read from before the system starts, in a thread, until the kill: a
+# lockstep session runs at 5x real time, and frames read only after launch.start returned
+# were a backlog: on a loaded machine the session had ended before the trial saw its kill
+# frame, and the trial then killed "pid 0", its own process group (no output at all).
+reading = threading.Event()
+reading.set()
+
+
+def read_frames() -> None:
+    while reading.is_set():
+        bus.handle(0.05)
+
+
+def stop_reading() -> None:
+    reading.clear()
+    reader.join(5)
+
+
+reader = threading.Thread(target=read_frames, daemon=True)
+reader.start()
+launch.start(conf, wait_s=90)
 try:
+    if not LOCKSTEP:
+        stop_reading()  # (the main thread reads the bus from here on)
     if LOCKSTEP:
         # A frame of the first session's 1,615 (ClearTable at 20 ms frames).
         kill_frame = rng.randrange(20, 1550)
         out["kill_frame"] = kill_frame
-        reached = poll_until(lambda: seen["frame"] >= kill_frame, 120, step=bus.handle)
+        reached = poll_until(lambda: seen["frame"] >= kill_frame, 120)
         out["kill_reached"] = bool(reached)
         victim = pid_of(PROCESS)
+        stop_reading()
+        if victim <= 0:  # (os.kill(0) would kill this trial's own process group)
+            raise SystemExit(f"{PROCESS} is not running at the kill frame {kill_frame} (frame seen: {seen['frame']})")
         os.kill(victim, signal.SIGKILL)
         killed_at = time.monotonic()
         log(f"killed {PROCESS} (pid {victim}) at frame {seen['frame']}")
@@ -184,6 +210,8 @@ try:
         out["kill_after_s"] = kill_after
         time.sleep(kill_after)
         victim = pid_of(PROCESS)
+        if victim <= 0:  # (os.kill(0) would kill this trial's own process group)
+            raise SystemExit(f"{PROCESS} is not running {kill_after} s into ClearTable")
         os.kill(victim, signal.SIGKILL)
         killed_at = time.monotonic()
         log(f"killed {PROCESS} (pid {victim}) {kill_after} s into ClearTable")
