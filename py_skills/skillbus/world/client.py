@@ -24,6 +24,7 @@ from skillbus.waiting import poll_until
 from skillbus.world.convert import check_op_msg, element_from_msg, op, property_msg, relation_msg
 from skillbus.world.element import Element
 from skillbus.world.skiros2_queries import SkiROS2Queries
+from skillbus.world.sparql import SparqlQueries
 from skillbus.world.wire import ElementsPage, decode_elements, query_all
 
 __all__ = ["WorldModelError", "WorldModelInterface", "query_all"]
@@ -35,7 +36,7 @@ class WorldModelError(RuntimeError):
     """A request the world model refused; the message says why."""
 
 
-class WorldModelInterface(SkiROS2Queries):
+class WorldModelInterface(SparqlQueries, SkiROS2Queries):
     def __init__(self, bus: Bus, name: str = "wmi", participant: Any = None, timeout: float = 5.0) -> None:
         self.bus, self.participant, self.timeout = bus, participant, timeout
         self.rpc = RpcClient(bus, "WM", name)

@@ -2,13 +2,14 @@
 OntologyInterface and WorldModelInterface method names), answered from the replica and
 the world model server's queries (wm.query).
 
-The server has no RPC that lists its ontology, runs SPARQL or changes the ontology; so:
+The server answers SPARQL (world/sparql.py) but changes no ontology; so:
 
 * ``get_sub_classes`` and ``get_sub_properties`` name the class (property) itself and
   those of its subclasses (subproperties) that the world *uses*: the types of its
   elements, the predicates of its relations (the server says which are below). That is
   what code that filters the world's elements or relations by them needs.
-* ``get_super_class``, ``query_ontology``, ``add_class``, ``get_template_element`` (the
+* ``query_ontology`` is SPARQL on the server (world/sparql.py).
+* ``get_super_class``, ``add_class``, ``get_template_element`` (the
   ontology's individuals), ``lock`` / ``unlock`` raise NotImplementedError saying why.
 * There are no reasoner plug-ins: ``get_reasoner`` is None for every predicate.
 """
@@ -226,10 +227,6 @@ class SkiROS2Queries:
                                   f"and from the class axioms of a scene that `skillbus wm load` replaces the "
                                   f"world with)")
 
-    def query_ontology(self, query: str, cut_prefix: bool = True, context: str = "") -> list[str]:
-        raise NotImplementedError("query_ontology: the world model server runs no SPARQL; ask with query() "
-                                  "(type, label, properties, relation patterns), get_relations, has_relation, "
-                                  "is_instance_of or may_relate")
 
 
 def _witness(relations: set, by_node: dict, pred: str) -> tuple[str, str, str] | None:
