@@ -4,8 +4,8 @@ SkiROS2's template library and its standard utility primitives (skill_libs/
 skiros2_template_lib.py, skiros2_std_lib.py: the upstream text, imports rewritten). And the
 world-model client's set_relation after another client replaced the world.
 
-Both servers get SkiROS2's upper concepts (wm_server/ontology/skiros2_sumo.ttl): the
-utility primitives take any sumo:Object."""
+The core ontology has SkiROS2's upper concepts (sumo:Object, sumo:Agent): the utility
+primitives take any sumo:Object."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from skillbus import paths
 from test_skills import LIBS, mgr_binary
 
 REPO = Path(__file__).resolve().parents[2]
-ONTOLOGY = ["--ontology", ",".join(str(REPO / "wm_server" / "ontology" / f) for f in ("skiros.ttl", "skiros2_sumo.ttl"))]
+ONTOLOGY: list[str] = []  # (the servers' default, wm_server/ontology/skiros.ttl)
 # The libraries, then this tree's skillbus (not whichever one is installed).
 ENV = {"PYTHONPATH": os.pathsep.join([str(LIBS), str(REPO / "py_skills")])}
 UPSTREAM = ("RVMI+skiros2_template_lib", "RVMI+skiros2_std_lib")
