@@ -166,7 +166,12 @@ class Sandbox:
         e["SKILLBUS_BUS_URL"] = self.url
         e.setdefault("SKILLBUS_KEY_FILE", str(self.key_file))
         e["PYTHONUNBUFFERED"] = "1"
-        e.update(extra or {})
+        extra = dict(extra or {})
+        if extra.get("PYTHONPATH") and os.environ.get("PYTHONPATH"):
+            # Added in front, not instead: a caller run with PYTHONPATH set (a work tree's
+            # py_skills ahead of an installed skillbus) must see its processes import the same.
+            extra["PYTHONPATH"] = os.pathsep.join([extra["PYTHONPATH"], os.environ["PYTHONPATH"]])
+        e.update(extra)
         return e
 
     # -- processes --------------------------------------------------------

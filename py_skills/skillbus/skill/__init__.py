@@ -14,7 +14,8 @@ from skillbus.skill.description import ParamOptions, SkillDescription
 from skillbus.skill.params import Param, ParamHandler, ParamTypes
 from skillbus.skill.processors import (InferInvalid, Invert, Loop, NoFail, ParallelFf, ParallelFs, Processor,
                                        RetryOnFail, Selector, SelectorStar, Sequential, Serial, SerialStar)
-from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, SkillWrapper, State
+from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
+from skillbus.skill.wrapper import SkillWrapper
 from skillbus.world.element import Element
 
 __all__ = [

@@ -236,7 +236,9 @@ def print_tree(p: skill_progress_t, verbose: bool = False) -> None:
         name = n.type or f"({n.processor})"
         proc = f" [{n.processor}]" if n.processor and n.type else ""
         msg = f": {n.message}" if n.message else ""
-        print(f"{'  ' * d}{name}{proc} {STATES.get(n.state, '?')}{msg}" + (f" (code {n.code})" if n.code else ""))
+        # A negative code is an error's; a positive one is the progress counter (SkiROS2's:
+        # each step and success adds one), shown by --json only.
+        print(f"{'  ' * d}{name}{proc} {STATES.get(n.state, '?')}{msg}" + (f" (code {n.code})" if n.code < 0 else ""))
         if verbose and n.params:
             for line in n.params.strip().splitlines():
                 print(f"{'  ' * (d + 2)}{line}")
@@ -344,7 +346,9 @@ def _run(args, intr: Interrupts) -> int:
             return
         last[0] = p
         if args.watch:
-            shown = [(n.state, n.message) for n in p.nodes]
+            # (with --json each new progress code is a new line: a step that repeats its message
+            # still counts up)
+            shown = [(n.state, n.message) + ((n.code,) if as_json else ()) for n in p.nodes]
             if shown != last_shown[0]:
                 last_shown[0] = shown
                 if as_json:

@@ -141,10 +141,11 @@ def tree_msg(root: SkillWrapper) -> skill_tree_t:
     def walk(node: SkillWrapper, parent: int) -> None:
         n = skill_tree_node_t()
         n.type, n.label, n.processor, n.parent = node.type, node.label, node.processor.spec(), parent
-        n.remap_from = list(node.remap)
-        n.remap_to = [node.remap[k] for k in n.remap_from]
+        remaps = node.remaps
+        n.remap_from = list(remaps)
+        n.remap_to = [remaps[k] for k in n.remap_from]
         n.num_remaps = len(n.remap_from)
-        n.specify = [specify_msg(k, v) for k, v in node.specify.items()]
+        n.specify = [specify_msg(k, v) for k, v in node.specified.items()]
         n.num_specify = len(n.specify)
         t.nodes.append(n)
         me = len(t.nodes) - 1

@@ -20,7 +20,7 @@ from skillbus.skill.conditions import (AbstractConditionRelation, ConditionBase,
 from skillbus.skill.params import ParamHandler, ParamTypes
 from skillbus.world.element import Element
 
-ROBOT_CONCEPT = "skiros:Agent"
+ROBOT_CONCEPT = "sumo:Agent"  # (SkiROS2's: its robots are cora:Robot, skillbus's skiros:Robot, both below it)
 
 
 class ParamOptions(enum.Enum):

@@ -68,11 +68,12 @@ def check_tick(t: skill_tick_t, actions=TICK_ACTIONS) -> None:
                 check_element_msg(v.element, name, need_id=False)  # (an abstract element has no id yet)
 
 
-def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
-    """Imports each module and instantiates each skill class it defines, to check it.
-    Returns implementations by label, and the errors (each naming its library or skill);
-    a library or skill that fails is left out and the rest still load."""
-    found: dict[str, type] = {}
+def load_libraries(modules: list[str], wmi: Any = None) -> tuple[dict[str, SkillCore], list[str]]:
+    """Imports each module and makes one instance of each skill class it defines (with the
+    world-model client, then onInit for a primitive), to check it. Returns those instances
+    by label, and the errors (each naming its library or skill); a library or skill that
+    fails is left out and the rest still load."""
+    found: dict[str, SkillCore] = {}
     errors: list[str] = []
     for mod_name in modules:
         try:
@@ -87,6 +88,7 @@ def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
                 continue  # a private base class that skills of the library build on
             try:
                 skill = cls()
+                skill.wmi = wmi
                 if isinstance(skill, PrimitiveBase) and skill.onInit() is False:
                     raise RuntimeError("onInit() returned False")
             except Exception as e:
@@ -95,14 +97,18 @@ def load_libraries(modules: list[str]) -> tuple[dict[str, type], list[str]]:
             if skill.label in found:
                 errors.append(f"skill {mod_name}.{name}: label {skill.label!r} is taken by another skill")
                 continue
-            found[skill.label] = cls
+            found[skill.label] = skill
     return found, errors
 
 
 class SkillProcess:
     def __init__(self, bus: Bus, name: str, libraries: list[str], wmi: Any = None, participant: Any = None) -> None:
         self.bus, self.name, self.wmi, self.participant = bus, name, wmi, participant
-        self.classes, self.errors = load_libraries(libraries)
+        # The skills as loaded: one instance of each, by label. A compound's expand() runs
+        # on its instance (it lives as long as the process: what it keys by id(self) or
+        # self.id stays its own); each run of a primitive gets an instance of its own.
+        self.loaded, self.errors = load_libraries(libraries, wmi)
+        self.classes: dict[str, type] = {label: type(s) for label, s in self.loaded.items()}
         for e in self.errors:
             log.error("%s", e)
         self.area = "SKPROC_" + name.upper()
@@ -123,7 +129,7 @@ class SkillProcess:
     def registration(self) -> skill_register_t:
         m = skill_register_t()
         m.process, m.rpc_area, m.incarnation = self.name, self.area, self.incarnation
-        m.skills = [description_msg(cls()) for _, cls in sorted(self.classes.items())]
+        m.skills = [description_msg(skill) for _, skill in sorted(self.loaded.items())]
         m.num_skills = len(m.skills)
         m.errors, m.num_errors = list(self.errors), len(self.errors)
         return m
@@ -210,10 +216,14 @@ class SkillProcess:
                 hook = "onStart"
                 apply_param_msgs(skill, t.params)
                 self.instances[t.instance] = skill
-                if skill.onStart() is False:
-                    return self._reply(skill, State.Failure, skill.message or f"{t.label}: onStart() returned False", -1)
+                skill._begin()
+                if skill.onStart() is False:  # (None is a start: skillbus skills need not return True)
+                    # startError(msg, code) set the message and a negative code
+                    return self._reply(skill, State.Failure, skill.message or f"{t.label}: onStart() returned False",
+                                       skill.code if skill.code < 0 else -1)
+                skill._started()
                 hook = "execute"
-                state = skill.execute()
+                state = self._execute(skill)
             elif skill is None:
                 return self._reply(None, State.Failure,
                                    f"skill process {self.name} has no running instance {t.instance} of {t.label}: "
@@ -221,7 +231,7 @@ class SkillProcess:
             elif t.action == skill_tick_t.EXECUTE:
                 hook = "execute"
                 apply_param_msgs(skill, t.params)
-                state = skill.execute()
+                state = self._execute(skill)
             elif t.action == skill_tick_t.PREEMPT:
                 hook = "onPreempt"
                 state = skill.onPreempt()
@@ -235,12 +245,25 @@ class SkillProcess:
             if not isinstance(state, State):
                 return self._reply(skill, State.Failure,
                                    f"{t.label}.{hook}() returned {state!r}; return self.step/success/fail(...)", -1)
+            skill.state = state
             return self._reply(skill, state, skill.message, skill.code)
         except Exception as e:  # a skill's bug fails the skill, never the process
             log.error("%s.%s failed:\n%s", t.label, hook, traceback.format_exc())
             if skill is not None and t.action != skill_tick_t.START:
                 self.instances.pop(t.instance, None)
             return self._reply(skill, State.Failure, f"{t.label}.{hook}() raised {type(e).__name__}: {e}", -1)
+
+    @staticmethod
+    def _execute(skill: PrimitiveBase) -> Any:
+        """One execute(), timed for the progress period; then, as SkiROS2's tick, the
+        element parameters it set go to the world model (_updateRoutine)."""
+        stamps = skill._element_stamps()
+        t0 = time.monotonic()
+        state = skill.execute()
+        skill._count_tick(time.monotonic() - t0)
+        if isinstance(state, State):
+            skill._updateRoutine(stamps)
+        return state
 
     def on_expand(self, t: skill_tick_t) -> skill_tree_t:
         try:
@@ -250,13 +273,15 @@ class SkillProcess:
             out = skill_tree_t()
             out.error = f"skill process {self.name} refused the expansion of {t.label!r}: {e}"
             return out
-        cls = self.classes.get(t.label)
-        if cls is None or not issubclass(cls, SkillBase):
+        skill = self.loaded.get(t.label)
+        if not isinstance(skill, SkillBase):
             out = skill_tree_t()
             out.error = f"{self.name} has no compound skill {t.label!r}"
             return out
         try:
-            skill = cls()
+            # The real instance (the one loaded and registered), with the description's
+            # parameters again and this run's values.
+            skill._resetParams()
             skill.wmi = self.wmi
             apply_param_msgs(skill, t.params)
             return tree_msg(skill.tree())

@@ -23,6 +23,8 @@ from skillbus.validate import BadValue, Rejects, integer
 from skillbus.waiting import poll_until
 from skillbus.world.convert import check_op_msg, element_from_msg, op, property_msg, relation_msg
 from skillbus.world.element import Element
+from skillbus.world.skiros2_queries import SkiROS2Queries
+from skillbus.world.sparql import SparqlQueries
 from skillbus.world.wire import ElementsPage, decode_elements, query_all
 
 __all__ = ["WorldModelError", "WorldModelInterface", "query_all"]
@@ -34,13 +36,14 @@ class WorldModelError(RuntimeError):
     """A request the world model refused; the message says why."""
 
 
-class WorldModelInterface:
+class WorldModelInterface(SparqlQueries, SkiROS2Queries):
     def __init__(self, bus: Bus, name: str = "wmi", participant: Any = None, timeout: float = 5.0) -> None:
         self.bus, self.participant, self.timeout = bus, participant, timeout
         self.rpc = RpcClient(bus, "WM", name)
         self._elements: dict[str, Element] = {}
         self._relations: set[Relation] = set()
         self._by_node: dict[str, set[Relation]] = {}
+        self._subproperty_cache: dict[tuple[str, str], bool] = {}  # (pred, ancestor): the server's answer
         self.version = -1
         self._txn_ids = 0
         self.results: dict[int, wm_commit_t] = {}  # lockstep: request id -> result
@@ -87,6 +90,7 @@ class WorldModelInterface:
                 continue
             self._elements = elements
             self._relations, self._by_node = set(), {}
+            self._subproperty_cache.clear()  # a scene load may bring class axioms
             for r in relations:
                 self._add_rel(r)
             self.version = first
@@ -399,12 +403,43 @@ class WorldModelInterface:
         eid = e if isinstance(e, str) else e.id
         self.commit([op(wm_op_t.REMOVE_ELEMENT, element=Element("", "", eid))])
 
-    def set_relation(self, subj: str, pred: str, obj: str, value: bool = True) -> None:
+    def set_relation(self, subj: str, pred: str, obj: str, value: bool = True) -> bool:
+        """Adds (`value` True) or removes the relation; True (SkiROS2's "ok"). Nothing is
+        written when the world model is already so; that is judged on the replica only
+        once it has caught up with the server (a scene loaded meanwhile by another
+        client, `skillbus wm load`, replaced the world the replica still shows)."""
         rel = (subj, pred, obj)
-        if value and rel not in self._relations:
-            self.commit([op(wm_op_t.ADD_RELATION, relation=rel)])
-        elif not value and rel in self._relations:
-            self.commit([op(wm_op_t.REMOVE_RELATION, relation=rel)])
+
+        def to_do() -> bool:
+            self._fresh()
+            return (rel in self._relations) != value
+
+        if not to_do():
+            self.sync()  # the replica may be behind the server: ask its version, catch up
+            if not to_do():
+                return True
+        try:
+            self.commit([op(wm_op_t.ADD_RELATION if value else wm_op_t.REMOVE_RELATION, relation=rel)])
+        except WorldModelError:
+            self.sync()  # (refused: the relation to remove is gone meanwhile?)
+            if to_do():
+                raise
+        return True
+
+    def write_element_changes(self, e: Element) -> None:
+        """Writes what changed in `e` since it was read (as update_element), if anything
+        did: at once, or under lockstep with this frame (commit_async)."""
+        if e.isAbstract():
+            raise WorldModelError(f"cannot update {e.printState()}: it has no id (add it first)")
+        if e.changed_since_loaded():
+            self.write(self._update_ops(e, relations=True))
+
+    def update_element_properties(self, e: Element, reasoner: str = "", context_id: str = "scene") -> Element:
+        """SkiROS2's name of update_properties: type, label and properties, not relations."""
+        if reasoner:
+            raise NotImplementedError(f"update_element_properties(reasoner={reasoner!r}): skillbus has no reasoner "
+                                      f"plug-ins (whose properties alone it would write)")
+        return self.update_properties(e)
 
     def write(self, ops: list[wm_op_t]) -> None:
         """Commits `ops`: at once, or under lockstep with this frame (commit_async)."""

@@ -113,6 +113,15 @@ class Element:
     def loaded(self) -> tuple[str, str, dict[str, Property], frozenset] | None:
         return self._loaded
 
+    def changed_since_loaded(self) -> bool:
+        """Whether type, label, properties or relations differ from what it carried when
+        it was read (True for an element made by hand)."""
+        if self._loaded is None:
+            return True
+        etype, label, props, rels = self._loaded
+        return ((self._type, self._label) != (etype, label) or self._properties != props
+                or frozenset(self._resolved_relations()) != rels)
+
     # -- properties -------------------------------------------------------
     @property
     def available_properties(self):

@@ -1,0 +1,27 @@
+"""A skill library written for SkiROS2 (skill_libs/skiros2_style_lib.py: only its import
+lines differ) runs and succeeds through the real processes: poses set with setData in one
+skill and read with getData in the next, a monitor that never ends under ParallelFs, and
+nested anonymous processors."""
+
+import sys
+
+from skillbus import paths
+from test_skills import LIBS, cli, mgr_binary
+
+
+def test_a_skiros2_library_runs_unchanged_and_succeeds(sandbox, tmp_path):
+    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
+                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
+                                   "--library", "skiros2_style_lib", "--world-model"], env={"PYTHONPATH": str(LIBS)})
+    proc.wait_for("registered", 60)
+    rc, out, err = cli(sandbox, "run", "Arrange", "-p", "Object=skiros:Cube-2", "--timeout", "60", timeout=90)
+    assert rc == 0, out + err
+    lines = [line.strip() for line in out.splitlines()]
+    assert lines[-1] == "task 1: Success: all succeeded", out
+    assert any(line.startswith("PoseReader Success: found at (0.25, -0.1, 0.6)") for line in lines), out
+    assert any(line.startswith("(ParallelFs) Success") for line in lines), out  # the monitor stopped, not failed
+    assert sum(1 for line in lines if line.startswith("Work Success: worked 3 ticks")) == 2, out
+    rc, tree, err = cli(sandbox, "wm", "get", "skiros:Cube-2")
+    assert rc == 0 and "0.25" in tree, tree + err  # the pose is the world model's now
