@@ -89,6 +89,9 @@ class WorldModelServer {
   std::vector<skillbus_msgs::wm_change_t> pending_changes_;
   std::vector<skillbus_msgs::wm_commit_t> pending_results_;
   std::string startup_report_;
+  std::string ontology_report_;  // what was loaded from --ontology
+  std::vector<Triple> ontology_triples_;  // as loaded from --ontology (the RPC ontology answers them)
+  std::vector<Triple> scene_extra_;  // the loaded scene's triples that are no elements (Scene::extra)
   long rejected_ = 0;
   long commits_ = 0;
 };
