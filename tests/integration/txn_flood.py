@@ -15,7 +15,7 @@ count = int(sys.argv[1])
 bus = open_bus()
 for i in range(count):
     t = wm_txn_t()
-    t.header.frame, t.header.sender, t.header.seq = -1, "flooder", i
+    t.header.frame, t.header.sender, t.header.seq = 0, "flooder", i
     t.client_id, t.request_id, t.expected_version = "flooder", i + 1, -1
     data = t.encode()
     bus.publish(channel("SB_WM_TXN"), data[:-6])  # (the header intact, the rest cut short)
