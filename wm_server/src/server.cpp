@@ -17,6 +17,7 @@
 #include "skillbus/wm/convert.hpp"
 #include "skillbus/wm/ontology_files.hpp"
 #include "skillbus/wm/scene.hpp"
+#include "skillbus/wm/sparql.hpp"
 #include "skillbus/wm/transforms.hpp"
 #include "skillbus_msgs/wm_value_t.hpp"
 
@@ -88,6 +89,22 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
   // The ontology the server judges by, as Turtle (its files' triples and the loaded
   // scene's axioms): the skill manager and the Python clients take it from here, so
   // every process of the system has one ontology.
+  // SPARQL (SkiROS2's query_ontology) over the ontology, the scene's other triples and the
+  // world's elements: wm_scene_t{turtle: the query} -> wm_scene_t{turtle: SPARQL 1.1 JSON
+  // results, report: the prefixes as JSON, for clients that print compact names}.
+  rpc_.add_method<wm_scene_t, wm_scene_t>("sparql", [this](const wm_scene_t& req) {
+    wm_scene_t out{};
+    try {
+      out.turtle = sparql_json(req.turtle, sparql_data(), prefixes_, opt_.max_reply_bytes - 4096);
+    } catch (const WmError& e) {
+      throw RpcBadRequest(e.what());
+    }
+    std::string px = "{";
+    for (const auto& [p, ns] : prefixes_.all()) px += (px.size() > 1 ? ",\"" : "\"") + p + "\":\"" + ns + "\"";
+    out.report = px + "}";
+    out.version = store_.version();
+    return out;
+  });
   rpc_.add_method<wm_scene_t, wm_scene_t>("ontology", [this](const wm_scene_t&) {
     std::vector<Triple> all = ontology_triples_;
     all.insert(all.end(), scene_extra_.begin(), scene_extra_.end());
@@ -350,6 +367,16 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method
   page.offset = m.offset;
   page.limit = m.limit;
   return elements_reply(store_.query(q, page), m.ids_only, method, relations);
+}
+
+const std::string& WorldModelServer::sparql_data() {
+  if (sparql_data_version_ != store_.version()) {
+    std::vector<Triple> axioms = ontology_triples_;
+    axioms.insert(axioms.end(), scene_extra_.begin(), scene_extra_.end());
+    sparql_data_ = write_turtle(axioms, prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
+    sparql_data_version_ = store_.version();
+  }
+  return sparql_data_;
 }
 
 void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {
