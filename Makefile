@@ -70,6 +70,7 @@ bench: build
 	$(PY) bench/lockstep_overhead.py
 	$(PY) bench/wm_query.py
 	$(PY) bench/wm_scale.py
+	$(PY) bench/sparql.py
 	$(PY) bench/skill_ticks.py
 	$(PY) bench/sim_physics.py
 	$(PY) bench/can_latency.py

@@ -59,12 +59,16 @@ void LcmBus::on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* u
   auto* sub = static_cast<Sub*>(user);
   // An exception must not unwind through LCM's C code; a failing handler is logged and
   // the dispatch loop goes on (servers never crash on input).
+  // Logged rate-limited (the first 5, then every 1000th, with the count): a sender that
+  // keeps sending what fails must not fill the log.
   try {
     sub->handler(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size);
   } catch (const std::exception& e) {
-    SB_ERROR("bus", "handler for " << channel << " failed: " << e.what());
+    if (++sub->failures <= 5 || sub->failures % 1000 == 0)
+      SB_ERROR("bus", "handler for " << channel << " failed (#" << sub->failures << "): " << e.what());
   } catch (...) {
-    SB_ERROR("bus", "handler for " << channel << " failed with a non-standard exception");
+    if (++sub->failures <= 5 || sub->failures % 1000 == 0)
+      SB_ERROR("bus", "handler for " << channel << " failed (#" << sub->failures << ") with a non-standard exception");
   }
 }
 

@@ -33,6 +33,7 @@ class LcmBus : public Bus {
     Handler handler;
     int lane = 0;
     lcm_subscription_t* lcm_sub = nullptr;
+    long failures = 0;  // handler failures, logged rate-limited
   };
   static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   lcm_t* lane(int i);  // opened on first use

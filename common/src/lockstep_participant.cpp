@@ -42,7 +42,11 @@ void LockstepParticipant::subscribe(const std::string& ch, MessageHandler handle
     StampedMessage m{c, {}, Bytes(d, d + n)};
     if (!peek_stamp(d, n, m.stamp)) return bad_.record(c, "no lockstep header (frame, sender, seq)", n);
     if (m.stamp.sender == cfg_.name) return;
-    handlers_[c](m);
+    try {
+      handlers_[c](m);
+    } catch (const std::exception& e) {  // counted, and logged rate-limited, per channel
+      bad_.record(c, std::string("refused by its handler: ") + e.what(), n);
+    }
   }));
 }
 

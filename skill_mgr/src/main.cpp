@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
       ->check(apps::positive());
   app.add_option("--tick-timeout-ms", tick_timeout_ms, "how long a skill process may take to answer a tick");
   apps::add_list_option(app, "--ontology", o.ontology_files,
-                        "OWL/Turtle files for its world copy (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
+                        "ontology files or folders (OWL in RDF/XML or Turtle) for its world copy (default: the "
+                        "world model server's ontology, read with the world)");
   app.add_option("--start", o.start_at_first_tick, "a task started at the first tick: TYPE or TYPE:LABEL");
   app.add_option("--robot", o.robot, "the element id of the agent this manager drives");
   app.add_option("--end-session-after-task", o.end_session_after_frames,
@@ -44,7 +45,6 @@ int main(int argc, char** argv) {
   o.tick_timeout = std::chrono::milliseconds(tick_timeout_ms);
   o.liveness_timeout = std::chrono::milliseconds(liveness_ms);
   if (o.liveness_timeout.count() <= 0) apps::usage_error(app, "--liveness-ms must be positive");
-  if (o.ontology_files.empty()) o.ontology_files.push_back(SKILLBUS_DEFAULT_ONTOLOGY);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<skills::Manager> mgr;
   apps::start_or_exit("skill_mgr", [&] {

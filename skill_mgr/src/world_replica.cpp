@@ -6,9 +6,11 @@
 #include <iterator>
 
 #include "skillbus/wm/convert.hpp"
+#include "skillbus/wm/ontology_files.hpp"
 #include "skillbus_msgs/wm_change_t.hpp"
 #include "skillbus_msgs/wm_elements_t.hpp"
 #include "skillbus_msgs/wm_query_t.hpp"
+#include "skillbus_msgs/wm_scene_t.hpp"
 
 namespace skillbus::skills {
 
@@ -17,12 +19,8 @@ using namespace skillbus_msgs;
 WorldReplica::WorldReplica(Bus& bus, LockstepParticipant& participant, const std::vector<std::string>& ontology_files,
                            bool wall_clock)
     : bus_(bus), client_(bus, "WM", "skill_mgr"), store_(ontology_), wall_clock_(wall_clock) {
-  for (const auto& f : ontology_files) {
-    std::ifstream in(f);
-    if (!in) throw std::runtime_error("cannot read ontology " + f);
-    ontology_.load_turtle(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()),
-                          prefixes_, f);
-  }
+  ontology_from_server_ = ontology_files.empty();
+  if (!ontology_from_server_) wm::load_ontology_files(ontology_, prefixes_, ontology_files);
   participant.subscribe(channel("SB_WM_CHANGES"), [this](const StampedMessage& m) { on_change(m); });
 }
 
@@ -58,6 +56,14 @@ bool WorldReplica::ensure(std::chrono::milliseconds timeout, std::string* why) {
   try {
     CallOptions opts;
     opts.timeout = timeout;
+    if (ontology_from_server_) {  // (a scene load may have brought classes: read it with the world)
+      const auto rep = client_.call<wm_scene_t>("ontology", wm_scene_t{}, opts);
+      wm::Prefixes px;
+      wm::Ontology fresh;
+      fresh.add_triples(wm::parse_turtle(rep.turtle, px, "the world model's ontology"), px);
+      ontology_ = std::move(fresh);  // (in place: store_ judges by this object)
+      prefixes_ = px;
+    }
     for (int attempt = 0; attempt < 5; ++attempt) {
       collecting_ = true;
       collected_.clear();

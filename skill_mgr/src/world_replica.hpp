@@ -20,7 +20,8 @@ namespace skillbus::skills {
 
 class WorldReplica {
  public:
-  // Subscribes to the change stream through `participant`.
+  // Subscribes to the change stream through `participant`. Without ontology files the
+  // ontology is the world model server's (RPC wm.ontology), read with each full resync.
   WorldReplica(Bus& bus, LockstepParticipant& participant, const std::vector<std::string>& ontology_files,
                bool wall_clock);
   // Makes sure the replica has been filled once (tries the server for `timeout`).
@@ -45,6 +46,7 @@ class WorldReplica {
   bool ready_ = false;
   bool stale_ = false;
   bool wall_clock_ = false;
+  bool ontology_from_server_ = false;
   bool collecting_ = false;                        // a resync is reading pages
   std::vector<skillbus_msgs::wm_change_t> collected_;  // the changes that arrived meanwhile
 };

@@ -943,4 +943,26 @@ RepairResult repair_data_dir(const std::string& dir) {
   }
 }
 
+void Journal::write_scene_extra(const std::string& turtle) {
+  if (turtle.empty() && ::access((dir_ + "/scene_extra.ttl").c_str(), F_OK) != 0) return;
+  replace_file_durably(dir_, "scene_extra.ttl", turtle);
+}
+
+std::string Journal::read_scene_extra() const {
+  const std::string path = dir_ + "/scene_extra.ttl";
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    if (errno == ENOENT) return "";
+    throw WmError(sys_error("cannot read " + path));
+  }
+  std::string out;
+  char buf[65536];
+  ssize_t n;
+  while ((n = ::read(fd, buf, sizeof buf)) > 0) out.append(buf, static_cast<size_t>(n));
+  const int err = errno;
+  ::close(fd);
+  if (n < 0) throw WmError("cannot read " + path + ": " + std::strerror(err));
+  return out;
+}
+
 }  // namespace skillbus::wm

@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
                  "the journal and snapshot directory (empty: start from --scene; else recover it)")
       ->type_name("DIR");
   apps::add_list_option(app, "--ontology", o.ontology_files,
-                        "OWL/Turtle files, loaded in order (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
+                        "ontology files or folders (OWL in RDF/XML or Turtle; a folder: every .owl, .ttl, .rdf in "
+                        "it and below), loaded in order (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
   app.add_option("--scene", o.scene_file, "a Turtle scene loaded when the data directory is empty")->type_name("FILE");
   app.add_option("--name", o.name, "its lockstep participant name");
   app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");

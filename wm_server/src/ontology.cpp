@@ -98,6 +98,8 @@ void Ontology::add_triples(const std::vector<Triple>& triples, const Prefixes& p
         restriction[t.s.value].second = px.compact(t.o.value);
       continue;
     }
+    if (p == owl + "imports" && t.o.kind == Term::Iri) imports_.insert(ontology_iri(t.o.value));
+    if (p == kRdfType && t.o.value == owl + "Ontology") ontologies_.insert(ontology_iri(t.s.value));
     if (p == kRdfType) {
       if (t.o.value == kOwlClass || t.o.value == rdfs + "Class" || t.o.value == owl + "class")
         classes.insert(px.compact(t.s.value));
@@ -133,6 +135,24 @@ void Ontology::add_triples(const std::vector<Triple>& triples, const Prefixes& p
 
 void Ontology::load_turtle(const std::string& text, Prefixes& prefixes, const std::string& source) {
   add_triples(parse_turtle(text, prefixes, source), prefixes);
+}
+
+void Ontology::load(const std::string& text, Prefixes& prefixes, const std::string& source,
+                    const std::string& base_iri) {
+  add_triples(parse_rdf(text, prefixes, source, base_iri), prefixes);
+}
+
+std::vector<std::string> Ontology::missing_imports() const {
+  std::vector<std::string> out;
+  for (const auto& i : imports_)
+    if (!ontologies_.count(i)) out.push_back(i);
+  return out;
+}
+
+std::string ontology_iri(const std::string& iri) {
+  std::string s = iri;
+  while (!s.empty() && (s.back() == '#' || s.back() == '/')) s.pop_back();
+  return s;
 }
 
 }  // namespace skillbus::wm

@@ -67,14 +67,19 @@ Scene read_scene(const std::string& turtle, Ontology& ontology, Prefixes& px, co
   for (const auto& i : individuals) elements[i].id = px.compact(i);
   Scene scene;
   for (const auto& t : triples) {
-    if (t.s.kind != Term::Iri || !individuals.count(t.s.value)) continue;
+    if (t.s.kind != Term::Iri || !individuals.count(t.s.value)) {
+      scene.extra.push_back(t);  // class axioms, the ontology header, templates: kept as they are
+      continue;
+    }
     Element& e = elements[t.s.value];
     const std::string key = px.compact(t.p.value);
     if (t.p.value == kRdfType) {
       if (t.o.value == kOwlNamedIndividual) continue;
-      if (!e.type.empty() && e.type != px.compact(t.o.value))
-        scene.notes.push_back(e.id + ": second type " + px.compact(t.o.value) + " ignored (kept " + e.type + ")");
-      else
+      if (!e.type.empty() && e.type != px.compact(t.o.value)) {
+        scene.notes.push_back(e.id + ": second type " + px.compact(t.o.value) + " kept aside (its type is " + e.type +
+                              ")");
+        scene.extra.push_back(t);
+      } else
         e.type = px.compact(t.o.value);
     } else if (t.p.value == kRdfsLabel && t.o.kind == Term::Literal) {
       e.label = t.o.value;
@@ -82,16 +87,31 @@ Scene read_scene(const std::string& turtle, Ontology& ontology, Prefixes& px, co
       e.properties[key].push_back(literal_value(t.o, source + ", " + e.id + " " + key));
     } else if (t.o.kind == Term::Iri && individuals.count(t.o.value)) {
       scene.relations.push_back(Relation{e.id, key, px.compact(t.o.value)});
-    } else {
-      scene.notes.push_back("skipped " + e.id + " " + key + " " + px.compact(t.o.value) +
-                            ": the object is not an individual of this scene");
+    } else {  // to an IRI that is no individual of this scene (a template, a class): kept as it is
+      scene.extra.push_back(t);
     }
   }
   for (auto& [iri, e] : elements) scene.elements.push_back(std::move(e));
   return scene;
 }
 
-std::string write_scene(const WorldStore& store, const Prefixes& px) {
+void check_scene_types(const Scene& scene, const Ontology& onto, const std::string& source) {
+  std::map<std::string, std::vector<std::string>> unknown;
+  for (const auto& e : scene.elements)
+    if (!e.type.empty() && !onto.is_class(e.type)) unknown[e.type].push_back(e.id);
+  if (unknown.empty()) return;
+  std::string list;
+  for (const auto& [type, ids] : unknown) {
+    list += (list.empty() ? "" : ", ") + type + " (" + ids[0];
+    if (ids.size() > 1) list += ids.size() == 2 ? ", " + ids[1] : " and " + std::to_string(ids.size() - 1) + " more";
+    list += ")";
+  }
+  throw WmError(source + ": " + std::to_string(unknown.size()) + " type(s) that are not concepts of the loaded "
+                "ontology: " + list + "; load the ontology that defines them (wm_server --ontology FILE..., or an "
+                "owl:imports of the scene)");
+}
+
+std::string write_scene(const WorldStore& store, const Prefixes& px, const std::vector<Triple>& extra) {
   std::vector<Triple> out;
   std::map<std::string, std::vector<const Relation*>> by_subject;
   const std::vector<Relation> relations = store.all_relations();
@@ -100,11 +120,12 @@ std::string write_scene(const WorldStore& store, const Prefixes& px) {
     const Term s = iri(px.expand(id));
     out.push_back({s, iri(kRdfType), iri(px.expand(e.type))});
     out.push_back({s, iri(kRdfType), iri(kOwlNamedIndividual)});
-    out.push_back({s, iri(kRdfsLabel), Term{Term::Literal, e.label, "", ""}});
+    out.push_back({s, iri(kRdfsLabel), Term{Term::Literal, e.label, "", ""}});  // (SkiROS2 writes "" too)
     for (const auto& [key, values] : e.properties)
       for (const auto& v : values) out.push_back({s, iri(px.expand(key)), literal_term(v)});
     for (const Relation* r : by_subject[id]) out.push_back({s, iri(px.expand(r->predicate)), iri(px.expand(r->object))});
   }
+  out.insert(out.end(), extra.begin(), extra.end());
   return write_turtle(out, px);
 }
 

@@ -15,7 +15,9 @@
 #include "skillbus/digest.hpp"
 #include "skillbus/files.hpp"
 #include "skillbus/wm/convert.hpp"
+#include "skillbus/wm/ontology_files.hpp"
 #include "skillbus/wm/scene.hpp"
+#include "skillbus/wm/sparql.hpp"
 #include "skillbus/wm/transforms.hpp"
 #include "skillbus_msgs/wm_value_t.hpp"
 
@@ -70,10 +72,47 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
       journal_(opt_.data_dir),
       participant_(bus, participant_config(opt_)),
       rpc_(bus, "WM", 4096, opt_.rpc_memory_bytes) {
-  for (const auto& f : opt_.ontology_files) ontology_.load_turtle(read_file(f), prefixes_, f);
+  OntologyLoad loaded = load_ontology_files(ontology_, prefixes_, opt_.ontology_files);
+  ontology_triples_ = std::move(loaded.triples);
+  ontology_report_ = std::to_string(loaded.files.size()) + " ontology file(s), " +
+                     std::to_string(ontology_.class_count()) + " concepts";
+  for (const auto& i : loaded.missing_imports)
+    SB_WARN(kLog, "the ontology imports " << i << ", which no --ontology file declares (give its file or folder)");
+  // The loaded scene's own axioms before the journal's records, which may use its classes.
+  if (const std::string extra = journal_.read_scene_extra(); !extra.empty()) {
+    scene_extra_ = parse_turtle(extra, prefixes_, journal_.dir() + "/scene_extra.ttl");
+    ontology_.add_triples(scene_extra_, prefixes_);
+  }
   recover();
 
   rpc_.add_method<wm_query_t, wm_elements_t>("get", [this](const wm_query_t& q) { return on_get(q); });
+  // The ontology the server judges by, as Turtle (its files' triples and the loaded
+  // scene's axioms): the skill manager and the Python clients take it from here, so
+  // every process of the system has one ontology.
+  // SPARQL (SkiROS2's query_ontology) over the ontology, the scene's other triples and the
+  // world's elements: wm_scene_t{turtle: the query} -> wm_scene_t{turtle: SPARQL 1.1 JSON
+  // results, report: the prefixes as JSON, for clients that print compact names}.
+  rpc_.add_method<wm_scene_t, wm_scene_t>("sparql", [this](const wm_scene_t& req) {
+    wm_scene_t out{};
+    try {
+      out.turtle = sparql_json(req.turtle, sparql_data(), prefixes_, opt_.max_reply_bytes - 4096);
+    } catch (const WmError& e) {
+      throw RpcBadRequest(e.what());
+    }
+    std::string px = "{";
+    for (const auto& [p, ns] : prefixes_.all()) px += (px.size() > 1 ? ",\"" : "\"") + p + "\":\"" + ns + "\"";
+    out.report = px + "}";
+    out.version = store_.version();
+    return out;
+  });
+  rpc_.add_method<wm_scene_t, wm_scene_t>("ontology", [this](const wm_scene_t&) {
+    std::vector<Triple> all = ontology_triples_;
+    all.insert(all.end(), scene_extra_.begin(), scene_extra_.end());
+    wm_scene_t out{};
+    out.turtle = write_turtle(all, prefixes_);
+    out.version = store_.version();
+    return out;
+  });
   rpc_.add_method<wm_query_t, wm_elements_t>("query", [this](const wm_query_t& q) {
     return on_query(q, "query", Relations::Touching);
   });
@@ -157,7 +196,7 @@ void WorldModelServer::recover() {
   if (replayed) report += (report.empty() ? "" : "; ") + std::string("replayed ") + std::to_string(replayed) + " journal records";
   if (!rec.note.empty()) report += "; " + rec.note;
   startup_report_ = "version " + std::to_string(store_.version()) + ", " + std::to_string(store_.elements().size()) +
-                    " elements" + (report.empty() ? "" : " (" + report + ")");
+                    " elements" + (report.empty() ? "" : " (" + report + ")") + "; " + ontology_report_;
 }
 
 void WorldModelServer::remember(const wm_commit_t& c) {
@@ -330,17 +369,30 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method
   return elements_reply(store_.query(q, page), m.ids_only, method, relations);
 }
 
+const std::string& WorldModelServer::sparql_data() {
+  if (sparql_data_version_ != store_.version()) {
+    std::vector<Triple> axioms = ontology_triples_;
+    axioms.insert(axioms.end(), scene_extra_.begin(), scene_extra_.end());
+    sparql_data_ = write_turtle(axioms, prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
+    sparql_data_version_ = store_.version();
+  }
+  return sparql_data_;
+}
+
 void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {
   Ontology onto = ontology_;  // the live ontology changes only if the whole scene loads
   Prefixes px = prefixes_;
   Scene scene = read_scene(text, onto, px, source);
+  check_scene_types(scene, onto, source);
   WorldStore check(onto);
   std::vector<Op> ops;
   for (const auto& e : scene.elements) ops.push_back(Op{Op::AddElement, e, {}});
   for (const auto& r : scene.relations) ops.push_back(Op{Op::AddRelation, {}, r});
   if (!ops.empty()) check.apply(ops);  // validates every element and relation
+  journal_.write_scene_extra(scene.extra.empty() ? "" : write_turtle(scene.extra, px));
   ontology_ = onto;
   prefixes_ = px;
+  scene_extra_ = std::move(scene.extra);
   store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
   for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
   snapshot(false);  // a scene load is made durable as a snapshot before the reply
@@ -372,7 +424,7 @@ wm_scene_t WorldModelServer::on_load_scene(const wm_scene_t& req) {
 
 wm_scene_t WorldModelServer::on_save_scene(const wm_scene_t& req) const {
   wm_scene_t out{};
-  out.turtle = write_scene(store_, prefixes_);
+  out.turtle = write_scene(store_, prefixes_, scene_extra_);
   out.version = store_.version();
   if (!req.path.empty()) {
     const std::string path = scene_path(req.path);

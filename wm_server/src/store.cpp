@@ -1,6 +1,7 @@
 #include "skillbus/wm/store.hpp"
 
 #include <algorithm>
+#include <set>
 
 namespace skillbus::wm {
 
@@ -64,6 +65,31 @@ void WorldStore::check_element(const Element& e) const {
     for (const auto& v : values)
       if (range != value_type_name(v))
         throw WmError("property " + key + " of " + e.id + " must be " + range + ", got " + value_type_name(v));
+  }
+}
+
+void WorldStore::check_containment(const std::vector<Op>& effect) const {
+  static const std::string kContain = "skiros:contain";
+  auto containers = [&](const std::string& id) {
+    std::vector<std::string> out;
+    for (const auto& r : relations_of(id))
+      if (r->object == id && ontology_.is_subproperty(r->predicate, kContain)) out.push_back(r->subject);
+    return out;
+  };
+  for (const Op& op : effect) {
+    if (op.kind != Op::AddRelation || !ontology_.is_subproperty(op.relation.predicate, kContain)) continue;
+    const std::string& child = op.relation.object;
+    const auto in = containers(child);
+    if (in.size() > 1)
+      throw WmError("element " + child + " would be in two containers, " + in[0] + " and " + in[1] +
+                    " (remove it from the old one in the same transaction)");
+    std::string path = child, cur = child;
+    std::set<std::string> seen{child};
+    for (auto up = containers(cur); up.size() == 1; up = containers(cur)) {
+      cur = up[0];
+      path = cur + " contains " + path;
+      if (!seen.insert(cur).second) throw WmError("containment cycle: " + path);
+    }
   }
 }
 
@@ -210,6 +236,7 @@ TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version
         throw WmError(where + e.what());
       }
     }
+    check_containment(result.effect);
   } catch (...) {
     for (auto it = undo_.rbegin(); it != undo_.rend(); ++it) (*it)();
     undo_.clear();

@@ -48,10 +48,13 @@ TEST(Transforms, ThroughAThreeLevelFrameTree) {
   EXPECT_THROW(transform(store, "skiros:Cube-3", "nowhere"), WmError);
 }
 
-TEST(Transforms, ACycleIsAnErrorNotAHang) {
+TEST(Transforms, ACycleIsRefusedByTheStoreSoNoPoseIsEverAsked) {
+  // (transforms.cpp still stops at a cycle; the store no longer lets one in)
   WorldStore store(ontology());
-  store.apply({add(element("skiros:LargeBox-1", "skiros:LargeBox")), add(element("skiros:LargeBox-2", "skiros:LargeBox")),
-               relate("skiros:LargeBox-1", "skiros:contain", "skiros:LargeBox-2"),
-               relate("skiros:LargeBox-2", "skiros:contain", "skiros:LargeBox-1")});
-  EXPECT_THROW(world_pose(store, "skiros:LargeBox-1"), WmError);
+  EXPECT_THROW(
+      store.apply({add(element("skiros:LargeBox-1", "skiros:LargeBox")), add(element("skiros:LargeBox-2", "skiros:LargeBox")),
+                   relate("skiros:LargeBox-1", "skiros:contain", "skiros:LargeBox-2"),
+                   relate("skiros:LargeBox-2", "skiros:contain", "skiros:LargeBox-1")}),
+      WmError);
+  EXPECT_EQ(store.version(), 0);
 }

@@ -180,6 +180,11 @@ class Journal {
   // before the appends are held back), to hold it there or to crash there.
   std::function<void(const char* step)> test_hook;
   const std::string& dir() const { return dir_; }
+  // The loaded scene's triples that are no elements (Scene::extra), as Turtle, in
+  // DIR/scene_extra.ttl: replaced durably by a scene load (before its snapshot), read at
+  // start ("" when there is none).
+  void write_scene_extra(const std::string& turtle);
+  std::string read_scene_extra() const;
 
  private:
   void start_journal(int64_t base_version);

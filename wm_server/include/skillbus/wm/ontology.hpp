@@ -31,6 +31,10 @@ class Ontology {
   // and restrictions from triples (compacted with `prefixes`).
   void add_triples(const std::vector<Triple>& triples, const Prefixes& prefixes);
   void load_turtle(const std::string& text, Prefixes& prefixes, const std::string& source);
+  // Turtle or RDF/XML (told apart by the text: OWL files are usually RDF/XML).
+  void load(const std::string& text, Prefixes& prefixes, const std::string& source, const std::string& base_iri);
+  // owl:imports of what was loaded that no loaded file declares as its owl:Ontology.
+  std::vector<std::string> missing_imports() const;
 
   bool is_class(const std::string& c) const { return parents_.count(c) > 0; }
   bool is_relation(const std::string& p) const { return super_props_.count(p) > 0; }
@@ -48,6 +52,12 @@ class Ontology {
   std::map<std::string, std::string> ranges_;
   std::vector<std::tuple<std::string, std::string, std::string>> abstract_;
   mutable std::map<std::string, std::set<std::string>> sub_cache_;
+  std::set<std::string> ontologies_;  // owl:Ontology IRIs loaded (ontology_iri form)
+  std::set<std::string> imports_;     // owl:imports of them
 };
+
+// An ontology's IRI without a trailing '#' or '/': "…/skiros.owl#" and "…/skiros.owl" are
+// the same ontology.
+std::string ontology_iri(const std::string& iri);
 
 }  // namespace skillbus::wm

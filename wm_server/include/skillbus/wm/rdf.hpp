@@ -1,4 +1,4 @@
-// Turtle in and out, on serd (no hand-written RDF parsing). Terms keep full IRIs;
+// Turtle in and out, on serd, and RDF/XML in, on Raptor (no hand-written RDF parsing). Terms keep full IRIs;
 // Prefixes compacts them to "prefix:local" for the world model and expands them back.
 #pragma once
 
@@ -44,6 +44,16 @@ extern const char* const kXsd;
 // Parses Turtle; prefixes it declares are added to `prefixes`. Throws WmError with
 // serd's message (line and column) on malformed input.
 std::vector<Triple> parse_turtle(const std::string& text, Prefixes& prefixes, const std::string& source = "input");
+
+// Parses RDF/XML with Raptor (no network, no files, no external entities); namespaces
+// with a prefix it declares are added to `prefixes` (a prefix already known keeps its
+// namespace). Relative IRIs resolve against `base_iri`.
+std::vector<Triple> parse_rdf_xml(const std::string& text, Prefixes& prefixes, const std::string& source,
+                                  const std::string& base_iri);
+// RDF/XML when the text starts like XML (<?xml, <!DOCTYPE, <rdf:RDF, <!--), else Turtle.
+bool looks_like_rdf_xml(const std::string& text);
+std::vector<Triple> parse_rdf(const std::string& text, Prefixes& prefixes, const std::string& source,
+                              const std::string& base_iri);
 
 // Writes triples as Turtle with the given prefixes, subjects grouped in input order.
 std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& prefixes);

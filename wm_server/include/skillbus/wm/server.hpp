@@ -89,6 +89,14 @@ class WorldModelServer {
   std::vector<skillbus_msgs::wm_change_t> pending_changes_;
   std::vector<skillbus_msgs::wm_commit_t> pending_results_;
   std::string startup_report_;
+  std::string ontology_report_;  // what was loaded from --ontology
+  std::vector<Triple> ontology_triples_;  // as loaded from --ontology (the RPC ontology answers them)
+  std::vector<Triple> scene_extra_;
+  // The graph SPARQL queries read (ontology, scene_extra_, elements) as Turtle, made again
+  // when the world's version has changed since.
+  const std::string& sparql_data();
+  std::string sparql_data_;
+  int64_t sparql_data_version_ = -1;  // the loaded scene's triples that are no elements (Scene::extra)
   long rejected_ = 0;
   long commits_ = 0;
 };

@@ -135,6 +135,10 @@ class WorldStore {
   using IdSet = std::set<std::string_view>;
 
   void check_element(const Element& e) const;
+  // After a transaction's operations: each element it put into a container (skiros:contain
+  // or a subproperty) has that one container and is not its own ancestor. The containment
+  // is the frame tree (transforms.hpp): a second container or a cycle has no pose.
+  void check_containment(const std::vector<Op>& effect) const;
   void index(const Element& e);
   void unindex(const Element& e);
   void put(ElementPtr e);

@@ -1,0 +1,46 @@
+"""One ontology for the whole system: the skill manager, given no ontology files, judges by
+the world model server's (its --ontology files, in RDF/XML or Turtle, and the loaded
+scene's own axioms), read with the world. Real wm_server, skill_mgr and skill process."""
+
+import sys
+
+from skillbus import paths
+from test_skills import LIBS, cli, mgr_binary
+
+KITCHEN_OWL = """<?xml version="1.0"?>
+<rdf:RDF xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#"
+         xmlns:rdfs="http://www.w3.org/2000/01/rdf-schema#"
+         xmlns:owl="http://www.w3.org/2002/07/owl#">
+  <owl:Class rdf:about="http://rvmi.aau.dk/ontologies/skiros.owl#Bread">
+    <rdfs:subClassOf rdf:resource="http://rvmi.aau.dk/ontologies/skiros.owl#Product"/>
+  </owl:Class>
+</rdf:RDF>
+"""
+
+# The demo world plus a bread (a class from kitchen.owl) and a soda, whose class the
+# scene itself declares.
+EXTRA = """
+skiros:Soda rdfs:subClassOf skiros:Product .
+skiros:Bread-20 a skiros:Bread , owl:NamedIndividual ; rdfs:label "bread" .
+skiros:Soda-21 a skiros:Soda , owl:NamedIndividual ; rdfs:label "soda" .
+"""
+
+
+def test_the_manager_judges_by_the_world_models_ontology(sandbox, tmp_path):
+    owl = tmp_path / "kitchen.owl"
+    owl.write_text(KITCHEN_OWL)
+    scene = tmp_path / "kitchen.ttl"
+    scene.write_text(paths.demo_scene().with_suffix("").with_suffix(".ttl").read_text() + EXTRA)
+    default = paths.REPO_ROOT / "wm_server" / "ontology" / "skiros.ttl"
+    wm = sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
+                              "--ontology", f"{default},{owl}", "--scene", str(scene)])
+    wm.wait_for("serving", 30)
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])  # no --ontology
+    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
+                                   "--library", "condition_skills"], env={"PYTHONPATH": str(LIBS)})
+    proc.wait_for("registered", 60)
+    for subject in ("skiros:Bread-20", "skiros:Soda-21"):  # Product by the file, by the scene
+        rc, out, err = cli(sandbox, "run", "CheckOnType", "-p", f"Subject={subject}", "--timeout", "30")
+        assert rc == 0 and "Success" in out, out + err
+    rc, out, err = cli(sandbox, "run", "CheckOnType", "-p", "Subject=skiros:Table-1", "--timeout", "30")
+    assert rc == 1 and "IsProduct" in out, out + err  # and still not everything is one
