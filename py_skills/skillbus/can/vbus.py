@@ -58,6 +58,7 @@ class VirtualSocketCanBus(can.BusABC):
         self._conn_lock = threading.Lock()  # one (re)connection at a time
         self._gone_since: float | None = None  # monotonic time the hub went away; None while connected
         self.hub_losses = 0  # times the hub went away under this bus (a reconnect does not undo it)
+        self.last_loss_at: float | None = None  # time.monotonic() of the last
         self._gave_up = False
         self._next_try = 0.0
         self._closed = False
@@ -128,7 +129,7 @@ class VirtualSocketCanBus(can.BusABC):
                 return
             self.sock = None
             self.hub_losses += 1
-            self._gone_since = time.monotonic()
+            self._gone_since = self.last_loss_at = time.monotonic()
             self._next_try = 0.0
             self._early.clear()
         try:
