@@ -350,7 +350,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         eid = result.ids[0]
         rel_ops = self._relation_ops(e, eid)
         if rel_ops:
-            self.commit(rel_ops)
+            self.commit(self._moving(rel_ops))
         e._id = eid
         return self.get_element(eid)
 
@@ -361,7 +361,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         removes nothing."""
         if e.isAbstract():
             raise WorldModelError(f"cannot update {e.printState()}: it has no id (add it first)")
-        self.commit(self._update_ops(e, relations=True))
+        self.commit(self._moving(self._update_ops(e, relations=True)))
         return self.get_element(e.id)
 
     def update_properties(self, e: Element) -> Element:
@@ -419,12 +419,36 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
             if not to_do():
                 return True
         try:
-            self.commit([op(wm_op_t.ADD_RELATION if value else wm_op_t.REMOVE_RELATION, relation=rel)])
+            self.commit(self._moving([op(wm_op_t.ADD_RELATION if value else wm_op_t.REMOVE_RELATION, relation=rel)]))
         except WorldModelError:
             self.sync()  # (refused: the relation to remove is gone meanwhile?)
             if to_do():
                 raise
         return True
+
+    def _is_containment(self, pred: str) -> bool:
+        return pred == "skiros:contain" or self.is_subproperty(pred, "skiros:contain")
+
+    def _moving(self, ops: list[wm_op_t]) -> list[wm_op_t]:
+        """`ops`, and for each element they put into a container (skiros:contain or below)
+        the removal of its other containments the replica shows, in the same transaction.
+        The world model keeps containment a tree (an element in two containers has no pose);
+        SkiROS2 code moves an element in two writes (update_element of the new container,
+        then of the element; set_relation, then the old relation's removal), so a write
+        that adds a container moves the element, and the later write finds nothing to do."""
+        added = [(m.relation.subject, m.relation.predicate, m.relation.object) for m in ops
+                 if m.kind == wm_op_t.ADD_RELATION and self._is_containment(m.relation.predicate)]
+        if not added:
+            return ops
+        removed = {(m.relation.subject, m.relation.predicate, m.relation.object) for m in ops
+                   if m.kind == wm_op_t.REMOVE_RELATION}
+        extra = []
+        for rel in added:
+            for r in sorted(self._by_node.get(rel[2], ())):
+                if r[2] == rel[2] and r != rel and r not in removed and self._is_containment(r[1]):
+                    extra.append(op(wm_op_t.REMOVE_RELATION, relation=r))
+                    removed.add(r)
+        return ops + extra
 
     def write_element_changes(self, e: Element) -> None:
         """Writes what changed in `e` since it was read (as update_element), if anything
