@@ -78,3 +78,18 @@ def test_fingers_as_fast_as_a_slowed_physics_are_not_behind():
 
     assert not run(lambda t: 0.08 - 0.05 * t)  # on the profile in physics time
     assert run(lambda t: 0.08)  # stuck: behind in physics time too
+
+
+def test_a_physics_that_stands_still_is_a_following_error():
+    """A paused (or hung) physics: its time does not move while the fingers should; as a
+    motor that does not turn, a following error (not an endless wait)."""
+    from skillbus.can.fingers import FROZEN_PHYSICS_S
+    f = SimFingers(lambda m: None)
+    f.on_state(0.08, 0.0, set(), 0.08, 5.0)
+    f.move_to(0, 50_000, 200)
+    t = 0.0
+    while t < FROZEN_PHYSICS_S + FOLLOWING_TIMEOUT_S + 0.1:
+        f.on_state(0.08, 0.0, set(), 0.0, 5.0)  # acknowledged, but time stands at 5.0 s
+        f.step(0.01)
+        t += 0.01
+    assert f.following_error()

@@ -74,6 +74,10 @@ class FingerModel:
 
 FOLLOWING_WINDOW_UM = 5_000      # 0x6065 semantics: the fingers may lag the profile this much
 FOLLOWING_TIMEOUT_S = 0.2
+# A physics whose time has not moved for this long (the device's own time) while the
+# fingers should move is a motor that does not turn: a following error too (a physics
+# that is only slow is not; see SimFingers.step).
+FROZEN_PHYSICS_S = 1.0
 AT_TARGET_UM = 500
 
 
@@ -113,6 +117,8 @@ class SimFingers:
         self.acknowledged = True
         self._sim_now: float | None = None    # the physics' time of its last state, s
         self._sim_start: float | None = None  # ... when it took the set-point of this move
+        self._sim_seen: float | None = None   # ... at the last step, and how long it has stood still
+        self._frozen_for = 0.0
 
     def on_state(self, width_m: float, force_n: float, touching: set[str], width_target_m: float | None = None,
                  sim_time_s: float | None = None) -> None:
@@ -175,9 +181,13 @@ class SimFingers:
         elapsed = self._elapsed
         if self._sim_start is not None and self._sim_now is not None:
             elapsed = max(0.0, self._sim_now - self._sim_start)
+        if self._sim_now is not None and self._sim_now == self._sim_seen:
+            self._frozen_for += dt
+        else:
+            self._sim_seen, self._frozen_for = self._sim_now, 0.0
         d = self.target - self._start
         planned = self._start + max(-abs(d), min(abs(d), self.velocity * elapsed)) * (1 if d >= 0 else -1)
-        behind = abs(planned - self.width) > FOLLOWING_WINDOW_UM
+        behind = abs(planned - self.width) > FOLLOWING_WINDOW_UM or self._frozen_for > FROZEN_PHYSICS_S
         self._lagging = self._lagging + dt if behind else 0.0
 
     def following_error(self) -> bool:
