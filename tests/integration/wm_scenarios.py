@@ -52,11 +52,14 @@ def api() -> None:
     wmi.update_element(new)
     assert wmi.get_element(new.id).getProperty("skiros:PositionX").value == 0.3
     assert wmi.get_relations(subj="skiros:Bin-5", obj=new.id) and not wmi.get_relations("skiros:Table-1", "", new.id)
-    # set_relation both ways
+    # set_relation both ways; into a container it moves the element (containment is a tree)
     wmi.set_relation("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2")
     assert wmi.get_element("skiros:Cube-2").hasRelation("skiros:Gripper-7", "skiros:contain", "-1")
-    wmi.set_relation("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2", False)
+    assert not wmi.get_relations("skiros:Table-1", "skiros:contain", "skiros:Cube-2")
+    wmi.set_relation("skiros:Table-1", "skiros:contain", "skiros:Cube-2")  # back onto the table
     assert not wmi.get_relations("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2")
+    wmi.set_relation("skiros:Gripper-7", "skiros:contain", "skiros:Cube-2", False)  # (nothing to remove)
+    assert wmi.get_relations("skiros:Table-1", "skiros:contain", "skiros:Cube-2")
     # transactions: all or nothing, and version conflicts
     before = (wmi.version, [e.printState(True) for e in wmi.get_elements()])
     expect_error(lambda: wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "ok")),
