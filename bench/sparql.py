@@ -30,7 +30,7 @@ from wm_query import ONTOLOGY, make_scene  # noqa: E402
 
 QUERIES = {
     "ontology: direct subclasses": "SELECT ?c WHERE { ?c rdfs:subClassOf skiros:Product }",
-    "world: elements of a type": "SELECT ?x WHERE { ?x a skiros:Cube }",
+    "world: elements of a type": "SELECT ?x WHERE { ?x a skiros:Cube } LIMIT 200",
     "world: what a table holds": "SELECT ?x WHERE { skiros:Table-3 skiros:contain ?x }",
     "world: join and filter": "SELECT ?x ?l WHERE { ?x a skiros:Starter ; rdfs:label ?l ; skiros:PositionX ?p . "
                               "FILTER(?p > 0.03) } LIMIT 100",
