@@ -198,31 +198,12 @@ class ConditionBase:
         return True
 
 
-class ConditionHasProperty(ConditionBase):
-    """The element in `subject_param` has `property` (with any value)."""
-    kind = "HasProperty"
-
-    def __init__(self, label: str, property: str, subject_param: str, desired_state: bool = True) -> None:
-        super().__init__(label, subject_param, desired_state)
-        self.owl = property
-        self._setDescription()
-
-    def _setDescription(self) -> None:
-        self._description = f"[{self.label}] {self.subject_key}-{self.owl} ({self.desired_state})"
-
-    def _on_params(self, ph: Any) -> bool:
-        e = self._element(ph, self.subject_key)
-        if e is None:
-            return False
-        if e.isAbstract():  # SkiROS2: an optional parameter need not have it; a required one cannot be judged
-            return ph.getParam(self.subject_key).paramType == ParamTypes.Optional
-        return e.hasProperty(self.owl, not_none=True) == self.desired_state
+class _PropertyCondition(ConditionBase):
+    """A condition about the subject element's properties: made true by editing the
+    element (_edit, per condition), written to the world model and undone from a copy."""
 
     def _edit(self, e: Element) -> None:
-        if self.desired_state and not e.hasProperty(self.owl):
-            e.setProperty(self.owl, "")
-        elif not self.desired_state and e.hasProperty(self.owl):
-            e.removeProperty(self.owl)
+        raise NotImplementedError
 
     def setTrue(self, ph: Any, wmi: Any) -> bool:
         self._params, self._wm = ph, wmi
@@ -243,6 +224,34 @@ class ConditionHasProperty(ConditionBase):
         if e is not None and e.isAbstract():
             self._edit(e)
 
+
+class ConditionHasProperty(_PropertyCondition):
+    """The element in `subject_param` has `property` (with any value)."""
+    kind = "HasProperty"
+
+    def __init__(self, label: str, property: str, subject_param: str, desired_state: bool = True) -> None:
+        super().__init__(label, subject_param, desired_state)
+        self.owl = property
+        self._setDescription()
+
+    def _setDescription(self) -> None:
+        self._description = f"[{self.label}] {self.subject_key}-{self.owl} ({self.desired_state})"
+
+    def _on_params(self, ph: Any) -> bool:
+        e = self._element(ph, self.subject_key)
+        if e is None:
+            return False
+        if e.isAbstract():  # SkiROS2: an optional parameter need not have it; a required one cannot be judged
+            return ph.getParam(self.subject_key).paramType == ParamTypes.Optional
+        return e.hasProperty(self.owl, not_none=True) == self.desired_state
+
+    def _edit(self, e: Element) -> None:
+        # setTrue adds the property (desired) or removes it (not desired)
+        if self.desired_state and not e.hasProperty(self.owl):
+            e.setProperty(self.owl, "")
+        elif not self.desired_state and e.hasProperty(self.owl):
+            e.removeProperty(self.owl)
+
     def toElement(self) -> Element:
         e = super().toElement()
         e.setProperty("skiros:appliedOnType", self.owl)
@@ -250,7 +259,7 @@ class ConditionHasProperty(ConditionBase):
         return e
 
 
-class ConditionProperty(ConditionBase):
+class ConditionProperty(_PropertyCondition):
     """`property` of the element in `subject_param` compares to `value` with `operator`
     (one of =, !=, >, >=, <, <=; SkiROS2 has no !=)."""
     kind = "Property"
@@ -285,33 +294,14 @@ class ConditionProperty(ConditionBase):
             return False
 
     def _edit(self, e: Element) -> None:
+        # setTrue adds the value to the property (desired) or removes it (not desired); as in
+        # SkiROS2 this is exact for "=" only
         if self.desired_state:
             if not e.hasProperty(self.owl, self.value):
                 e.appendProperty(self.owl, self.value)
         else:
             while e.hasProperty(self.owl, self.value):
                 e.getProperty(self.owl).removeValue(self.value)
-
-    def setTrue(self, ph: Any, wmi: Any) -> bool:
-        """Adds the value to the property (desired) or removes it (not desired). As in
-        SkiROS2 this is exact for "=" only."""
-        self._params, self._wm = ph, wmi
-        e = self._concrete(ph, self.subject_key)
-        if e is None:
-            return False
-        self._has_cache, self._cache = True, copy.deepcopy(e)
-        self._edit(e)
-        ph.specify(self.subject_key, e)
-        wmi.update_element(e)
-        return True
-
-    def revert(self, ph: Any, wmi: Any) -> bool:
-        return self._restore(ph, wmi)
-
-    def setDesiredState(self, ph: Any) -> None:
-        e = self._element(ph, self.subject_key)
-        if e is not None and e.isAbstract():
-            self._edit(e)
 
     def toElement(self) -> Element:
         e = super().toElement()
