@@ -74,7 +74,8 @@ def main_channels(argv: list[str]) -> int:
 
 WM_METHODS = {"get": "wm_query_t", "query": "wm_query_t", "snapshot": "wm_query_t", "last_request": "wm_commit_t",
               "commit": "wm_txn_t", "load_scene": "wm_scene_t", "save_scene": "wm_scene_t",
-              "transform": "wm_transform_t", "may_relate": "wm_relation_t"}
+              "transform": "wm_transform_t", "may_relate": "wm_relation_t", "ontology": "wm_scene_t",
+              "hierarchy": "wm_scene_t", "sparql": "wm_scene_t", "add_axioms": "wm_scene_t", "lock": "wm_lock_t"}
 WM_REPLIES = {"get": "wm_elements_t", "query": "wm_elements_t", "snapshot": "wm_elements_t", "commit": "wm_commit_t",
               "last_request": "wm_commit_t"}
 SKILL_METHODS = {"register": "skill_register_t", "processors": "skill_start_t", "list": "skill_start_t",

@@ -1,6 +1,7 @@
 """One ontology for the whole system: the skill manager, given no ontology files, judges by
 the world model server's (its --ontology files, in RDF/XML or Turtle, and the loaded
-scene's own axioms), read with the world. Real wm_server, skill_mgr and skill process."""
+scene's own axioms), read with the world, and a class a client adds while the server runs
+(SkiROS2's add_class). Real wm_server, skill_mgr and skill process."""
 
 import sys
 
@@ -44,3 +45,20 @@ def test_the_manager_judges_by_the_world_models_ontology(sandbox, tmp_path):
         assert rc == 0 and "Success" in out, out + err
     rc, out, err = cli(sandbox, "run", "CheckOnType", "-p", "Subject=skiros:Table-1", "--timeout", "30")
     assert rc == 1 and "IsProduct" in out, out + err  # and still not everything is one
+
+    # a class added while everything runs: the manager reads the ontology again with the world
+    add = sandbox.start("add", [sys.executable, "-c", ADD_MUFFIN])
+    assert sandbox.wait(add, 60) == 0, add.stderr()
+    muffin = add.stdout().strip().splitlines()[-1]
+    assert muffin.startswith("skiros:Muffin-"), add.stdout()
+    rc, out, err = cli(sandbox, "run", "CheckOnType", "-p", f"Subject={muffin}", "--timeout", "30")
+    assert rc == 0 and "Success" in out, out + err
+
+
+ADD_MUFFIN = """
+from skillbus.bus import open_bus
+from skillbus.world import Element, WorldModelInterface
+wmi = WorldModelInterface(open_bus(), "add-muffin")
+assert wmi.add_class("skiros:Muffin", "skiros:Bread")
+print(wmi.add_element(Element("skiros:Muffin", "muffin")).id)
+"""

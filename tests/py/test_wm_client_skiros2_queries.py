@@ -1,8 +1,9 @@
 """SkiROS2's ontology and world questions on the world-model client (get_sub_properties,
-get_sub_classes, get_individuals, get_type(s), get_triples, get_branch, check_relation,
-instanciate, what raises NotImplementedError), and set_relation after the world was
+get_sub_classes, get_super_class, get_individuals, get_type(s), get_triples, get_branch,
+check_relation, get_template_element, instanciate), and set_relation after the world was
 replaced behind the replica's back. No server: the replica is filled by hand, the
-server's answers (query, commit, its version, a resync) are played here."""
+server's answers (its hierarchy, query, commit, its version, a resync) are played here;
+tests/integration/test_skiros2_ontology_api.py asks a live server."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from skillbus.bus import open_bus
 from skillbus.msgs import wm_change_t, wm_op_t
 from skillbus.world import Element
 from skillbus.world.client import WorldModelError, WorldModelInterface
+from skillbus.world.ontology_view import OntologyView
 
 SUBPROPERTIES = {("skiros:contain", "skiros:spatiallyRelated"), ("skiros:at", "skiros:spatiallyRelated")}
 SUBCLASSES = {("skiros:Cube", "skiros:Product"), ("skiros:Cube", "skiros:PhysicalObject"),
@@ -20,6 +22,22 @@ SUBCLASSES = {("skiros:Cube", "skiros:Product"), ("skiros:Cube", "skiros:Physica
               ("skiros:Product", "skiros:PhysicalObject"), ("skiros:Location", "skiros:PhysicalObject"),
               ("skiros:Gripper", "skiros:PhysicalObject")}
 CONCEPTS = {c for pair in SUBCLASSES for c in pair}
+# Only direct superclasses go in the hierarchy (the server's answer)
+DIRECT = {("skiros:Cube", "skiros:Product"), ("skiros:Table", "skiros:Location"), ("skiros:Bin", "skiros:Location"),
+          ("skiros:Product", "skiros:PhysicalObject"), ("skiros:Location", "skiros:PhysicalObject"),
+          ("skiros:Gripper", "skiros:PhysicalObject")}
+TEMPLATES = {
+    "skiros:bin_template": [["rdf:type", "owl:NamedIndividual", "", ""], ["rdf:type", "skiros:Bin", "", ""],
+                            ["skiros:Weight", "1.5", "xsd:double", ""], ["skiros:hasA", "skiros:lid_template", "", ""]],
+    "skiros:lid_template": [["rdf:type", "skiros:Product", "", ""], ["skiros:partOf", "skiros:bin_template", "", ""]],
+}
+
+
+def hierarchy() -> OntologyView:
+    classes = {c: [up for (x, up) in DIRECT if x == c] for c in CONCEPTS}
+    relations = {"skiros:spatiallyRelated": [], "skiros:hasTemplate": [], "skiros:hasA": [], "skiros:partOf": [],
+                 **{p: [up] for (p, up) in SUBPROPERTIES}}
+    return OntologyView.from_json({"classes": classes, "relations": relations, "individuals": TEMPLATES})
 
 
 class Server:
@@ -98,7 +116,7 @@ def wmi(monkeypatch, server):
         self._relations, self._by_node = set(), {}
         for r in server.relations:
             self._add_rel(r)
-        self._subproperty_cache.clear()
+        self._ontology_cache = hierarchy()
         self.version, self._stale = server.version, False
 
     monkeypatch.setattr(WorldModelInterface, "resync", resync)
@@ -109,37 +127,61 @@ def wmi(monkeypatch, server):
     return w
 
 
-# -- the ontology, as far as the world uses it ------------------------------------------------
-def test_sub_properties_are_those_the_world_uses_below_the_parent(wmi):
+# -- the ontology ---------------------------------------------------------------------------------
+def test_sub_properties_recursive_and_direct(wmi):
     assert wmi.get_sub_properties("skiros:spatiallyRelated") == ["skiros:spatiallyRelated", "skiros:at",
                                                                  "skiros:contain"]
     assert wmi.get_sub_properties("skiros:contain") == ["skiros:contain"]
+    assert wmi.get_sub_properties("skiros:spatiallyRelated", recursive=False) == ["skiros:at", "skiros:contain"]
+    assert wmi.get_sub_properties("skiros:nearby") == []
     assert wmi.is_subproperty("skiros:contain", "skiros:spatiallyRelated")
     assert not wmi.is_subproperty("skiros:hasTemplate", "skiros:spatiallyRelated")
-    with pytest.raises(NotImplementedError, match="direct subproperties"):
-        wmi.get_sub_properties("skiros:spatiallyRelated", recursive=False)
 
 
-def test_sub_classes_individuals_and_types(wmi):
+def test_sub_classes_super_class_individuals_and_types(wmi):
     assert wmi.get_sub_classes("skiros:Location") == ["skiros:Location", "skiros:Bin", "skiros:Table"]
-    assert wmi.get_sub_classes("skiros:Product") == ["skiros:Product", "skiros:Cube"]
-    assert wmi.get_sub_classes("skiros:Unicorn") == []
-    assert wmi.get_individuals("skiros:Location") == ["skiros:Bin-5", "skiros:Table-1"]
+    assert wmi.get_sub_classes("skiros:PhysicalObject") == [
+        "skiros:PhysicalObject", "skiros:Gripper", "skiros:Location", "skiros:Product", "skiros:Bin", "skiros:Cube",
+        "skiros:Table"]  # level by level
+    assert wmi.get_sub_classes("skiros:PhysicalObject", recursive=False) == [
+        "skiros:Gripper", "skiros:Location", "skiros:Product"]
+    assert wmi.get_sub_classes("skiros:Unicorn") == [] and wmi.get_sub_classes("skiros:Unicorn", False) == []
+    assert wmi.get_super_class("skiros:Cube") == "skiros:Product"
+    for cls, why in (("skiros:PhysicalObject", "has no superclass"), ("skiros:Unicorn", "no class")):
+        with pytest.raises(IndexError, match=why):
+            wmi.get_super_class(cls)
+    # the world's elements and the ontology's individuals
+    assert wmi.get_individuals("skiros:Location") == ["skiros:Bin-5", "skiros:Table-1", "skiros:bin_template"]
     assert wmi.get_individuals("skiros:Location", recursive=False) == []
+    assert wmi.get_individuals("skiros:Unicorn") == []
     assert wmi.get_types("skiros:Cube") == ["skiros:Cube-2", "skiros:Cube-3"]
+    assert wmi.get_types("skiros:Product") == ["skiros:lid_template"]
     assert wmi.get_type("skiros:Cube-2") == ["skiros:Cube"] and wmi.get_type("skiros:Cube-9") == []
+    assert wmi.get_type("skiros:bin_template") == ["owl:NamedIndividual", "skiros:Bin"]
+    assert wmi.is_instance_of("skiros:Cube-2", "skiros:PhysicalObject")
+    assert not wmi.is_instance_of("skiros:Cube-2", "skiros:Location")
+    assert not wmi.is_instance_of("skiros:Cube-9", "skiros:Cube")
 
 
-def test_what_the_server_cannot_answer_says_why(wmi):
-    for call, why in ((lambda: wmi.get_super_class("skiros:Cube"), "lists its ontology"),
-                      (lambda: wmi.add_class("skiros:Mug", "skiros:Product"), "cannot add ontology classes"),
-                      (lambda: wmi.get_template_element("skiros:test_robot"), "keeps no individuals"),
-                      (lambda: wmi.instanciate("skiros:test_robot"), "keeps no individuals"),
-                      (lambda: wmi.lock(), "expected_version"), (lambda: wmi.unlock(), "no lock"),
-                      (lambda: wmi.get_sub_classes("skiros:Location", False), "direct subclasses")):
-        with pytest.raises(NotImplementedError, match=why):
-            call()
+def test_templates_are_elements_made_from_the_ontologys_individuals(wmi):
+    e = wmi.get_template_element("skiros:bin_template")
+    assert (e.id, e.type, e.label) == ("", "skiros:Bin", "skiros:bin_template")
+    assert e.getProperty("skiros:Weight").value == 1.5
+    assert e.getProperty("skiros:Template").value == "skiros:bin_template"
+    assert sorted((r["src"], r["type"], r["dst"]) for r in e.getRelations()) == [
+        ("-1", "skiros:hasA", "skiros:lid_template"), ("skiros:lid_template", "skiros:partOf", "-1")]
+    with pytest.raises(WorldModelError, match="no individual"):
+        wmi.get_template_element("skiros:Bin-5")  # an element of the world, not of the ontology
     assert wmi.get_reasoner("skiros:contain") is None and wmi.get_reasoner_relations(None, ":pX", None) is None
+
+
+def test_add_class_refuses_an_unknown_parent_before_asking_the_server(wmi):
+    wmi._call = lambda *a, **k: pytest.fail("asked the server")
+    with pytest.raises(WorldModelError, match="skiros:Kettle is no class"):
+        wmi.add_class("skiros:Teapot", "skiros:Kettle")
+    assert wmi.add_class("skiros:Cube", "skiros:Product")  # already so: nothing to add
+    with pytest.raises(ValueError, match="no prefixed name"):
+        wmi.add_class("Teapot", "skiros:Product")
 
 
 # -- the world --------------------------------------------------------------------------------
@@ -178,16 +220,31 @@ def test_check_relation(wmi):
 
 def test_instanciate_adds_an_element_template_with_the_given_relations(wmi):
     added = []
-    wmi.add_element = lambda e: added.append(e) or e
+
+    def add_element(e):
+        e._id = f"skiros:New-{len(added)}"
+        added.append(e)
+        return e
+
+    wmi.add_element = add_element
     t = Element("skiros:Cube", "blue", "skiros:Cube-2")
     t.addRelation("skiros:Table-1", "skiros:contain", "-1")
     e = wmi.instanciate(t, relations=[{"src": "skiros:Bin-5", "type": "skiros:contain", "dst": "-1", "state": True,
                                        "abstract": False}])
-    assert added == [e] and e.id == "" and e.label == "blue" and t.id == "skiros:Cube-2"
+    assert added == [e] and e.label == "blue" and t.id == "skiros:Cube-2"
     assert [(r["src"], r["dst"]) for r in e.getRelations()] == [("skiros:Bin-5", "-1")]
-    t.addRelation("-1", "skiros:hasA", "skiros:Gripper-7")
-    with pytest.raises(NotImplementedError, match="recursive"):
-        wmi.instanciate(t, recursive=True)
+    # recursive: the bin's lid (hasA) is made and related to it; the lid's partOf back to the
+    # bin template is no hasA or contain, and the bin template is made once anyway
+    added.clear()
+    b = wmi.instanciate("skiros:bin_template", recursive=True)
+    assert [(x.type, x.label) for x in added] == [("skiros:Bin", "skiros:bin_template"),
+                                                 ("skiros:Product", "skiros:lid_template")]
+    lid = added[1]
+    assert [(r["src"], r["type"], r["dst"]) for r in lid.getRelations()] == [("skiros:New-0", "skiros:hasA", "-1")]
+    assert ("-1", "skiros:hasA", "skiros:New-1") in [(r["src"], r["type"], r["dst"]) for r in b.getRelations()]
+    added.clear()
+    wmi.instanciate("skiros:bin_template", recursive=True, relation_filter=[])  # any relation: partOf too
+    assert len(added) == 2  # the lid's partOf names the bin template, already made in this call
 
 
 # -- set_relation decides on the server's world, not on a replica that lags ------------------------

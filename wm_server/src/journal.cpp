@@ -943,13 +943,13 @@ RepairResult repair_data_dir(const std::string& dir) {
   }
 }
 
-void Journal::write_scene_extra(const std::string& turtle) {
-  if (turtle.empty() && ::access((dir_ + "/scene_extra.ttl").c_str(), F_OK) != 0) return;
-  replace_file_durably(dir_, "scene_extra.ttl", turtle);
+void Journal::write_side_file(const char* name, const std::string& turtle) {
+  if (turtle.empty() && ::access((dir_ + "/" + name).c_str(), F_OK) != 0) return;
+  replace_file_durably(dir_, name, turtle);
 }
 
-std::string Journal::read_scene_extra() const {
-  const std::string path = dir_ + "/scene_extra.ttl";
+std::string Journal::read_side_file(const char* name) const {
+  const std::string path = dir_ + "/" + name;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     if (errno == ENOENT) return "";
@@ -964,5 +964,10 @@ std::string Journal::read_scene_extra() const {
   if (n < 0) throw WmError("cannot read " + path + ": " + std::strerror(err));
   return out;
 }
+
+void Journal::write_scene_extra(const std::string& turtle) { write_side_file("scene_extra.ttl", turtle); }
+std::string Journal::read_scene_extra() const { return read_side_file("scene_extra.ttl"); }
+void Journal::write_scene_imports(const std::string& turtle) { write_side_file("scene_imports.ttl", turtle); }
+std::string Journal::read_scene_imports() const { return read_side_file("scene_imports.ttl"); }
 
 }  // namespace skillbus::wm

@@ -25,6 +25,9 @@ int main(int argc, char** argv) {
   apps::add_list_option(app, "--ontology", o.ontology_files,
                         "ontology files or folders (OWL in RDF/XML or Turtle; a folder: every .owl, .ttl, .rdf in "
                         "it and below), loaded in order (default: " SKILLBUS_DEFAULT_ONTOLOGY ")");
+  apps::add_list_option(app, "--ontology-library", o.ontology_library,
+                        "ontology files or folders not loaded at start: one is loaded when a loaded ontology or a "
+                        "scene imports (owl:imports) the ontology IRI it declares");
   app.add_option("--scene", o.scene_file, "a Turtle scene loaded when the data directory is empty")->type_name("FILE");
   app.add_option("--name", o.name, "its lockstep participant name");
   app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");

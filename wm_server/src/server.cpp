@@ -72,13 +72,22 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
       journal_(opt_.data_dir),
       participant_(bus, participant_config(opt_)),
       rpc_(bus, "WM", 4096, opt_.rpc_memory_bytes) {
+  library_ = OntologyLibrary(opt_.ontology_library);
   OntologyLoad loaded = load_ontology_files(ontology_, prefixes_, opt_.ontology_files);
   ontology_triples_ = std::move(loaded.triples);
-  ontology_report_ = std::to_string(loaded.files.size()) + " ontology file(s), " +
+  OntologyLoad imported = library_.resolve(ontology_, prefixes_);
+  ontology_triples_.insert(ontology_triples_.end(), imported.triples.begin(), imported.triples.end());
+  ontology_report_ = std::to_string(loaded.files.size() + imported.files.size()) + " ontology file(s), " +
                      std::to_string(ontology_.class_count()) + " concepts";
-  for (const auto& i : loaded.missing_imports)
-    SB_WARN(kLog, "the ontology imports " << i << ", which no --ontology file declares (give its file or folder)");
-  // The loaded scene's own axioms before the journal's records, which may use its classes.
+  for (const auto& i : imported.missing_imports)
+    SB_WARN(kLog, "the ontology imports " << i << ", which neither an --ontology file nor the --ontology-library "
+                                          "declares (give its file or folder)");
+  // The ontologies the loaded scene imported, then its own axioms, before the journal's
+  // records, which may use their classes.
+  if (const std::string imports = journal_.read_scene_imports(); !imports.empty()) {
+    scene_imports_ = parse_turtle(imports, prefixes_, journal_.dir() + "/scene_imports.ttl");
+    ontology_.add_triples(scene_imports_, prefixes_);
+  }
   if (const std::string extra = journal_.read_scene_extra(); !extra.empty()) {
     scene_extra_ = parse_turtle(extra, prefixes_, journal_.dir() + "/scene_extra.ttl");
     ontology_.add_triples(scene_extra_, prefixes_);
@@ -86,33 +95,7 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
   recover();
 
   rpc_.add_method<wm_query_t, wm_elements_t>("get", [this](const wm_query_t& q) { return on_get(q); });
-  // The ontology the server judges by, as Turtle (its files' triples and the loaded
-  // scene's axioms): the skill manager and the Python clients take it from here, so
-  // every process of the system has one ontology.
-  // SPARQL (SkiROS2's query_ontology) over the ontology, the scene's other triples and the
-  // world's elements: wm_scene_t{turtle: the query} -> wm_scene_t{turtle: SPARQL 1.1 JSON
-  // results, report: the prefixes as JSON, for clients that print compact names}.
-  rpc_.add_method<wm_scene_t, wm_scene_t>("sparql", [this](const wm_scene_t& req) {
-    wm_scene_t out{};
-    try {
-      out.turtle = sparql_json(req.turtle, sparql_data(), prefixes_, opt_.max_reply_bytes - 4096);
-    } catch (const WmError& e) {
-      throw RpcBadRequest(e.what());
-    }
-    std::string px = "{";
-    for (const auto& [p, ns] : prefixes_.all()) px += (px.size() > 1 ? ",\"" : "\"") + p + "\":\"" + ns + "\"";
-    out.report = px + "}";
-    out.version = store_.version();
-    return out;
-  });
-  rpc_.add_method<wm_scene_t, wm_scene_t>("ontology", [this](const wm_scene_t&) {
-    std::vector<Triple> all = ontology_triples_;
-    all.insert(all.end(), scene_extra_.begin(), scene_extra_.end());
-    wm_scene_t out{};
-    out.turtle = write_turtle(all, prefixes_);
-    out.version = store_.version();
-    return out;
-  });
+  add_ontology_methods();
   rpc_.add_method<wm_query_t, wm_elements_t>("query", [this](const wm_query_t& q) {
     return on_query(q, "query", Relations::Touching);
   });
@@ -371,9 +354,7 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method
 
 const std::string& WorldModelServer::sparql_data() {
   if (sparql_data_version_ != store_.version()) {
-    std::vector<Triple> axioms = ontology_triples_;
-    axioms.insert(axioms.end(), scene_extra_.begin(), scene_extra_.end());
-    sparql_data_ = write_turtle(axioms, prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
+    sparql_data_ = write_turtle(all_axioms(), prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
     sparql_data_version_ = store_.version();
   }
   return sparql_data_;
@@ -383,16 +364,22 @@ void WorldModelServer::load_scene_text(const std::string& text, const std::strin
   Ontology onto = ontology_;  // the live ontology changes only if the whole scene loads
   Prefixes px = prefixes_;
   Scene scene = read_scene(text, onto, px, source);
+  const OntologyLoad imported = library_.resolve(onto, px);  // the scene's owl:imports, from the library
   check_scene_types(scene, onto, source);
   WorldStore check(onto);
   std::vector<Op> ops;
   for (const auto& e : scene.elements) ops.push_back(Op{Op::AddElement, e, {}});
   for (const auto& r : scene.relations) ops.push_back(Op{Op::AddRelation, {}, r});
   if (!ops.empty()) check.apply(ops);  // validates every element and relation
+  journal_.write_scene_imports(imported.triples.empty() ? "" : write_turtle(imported.triples, px));
   journal_.write_scene_extra(scene.extra.empty() ? "" : write_turtle(scene.extra, px));
   ontology_ = onto;
   prefixes_ = px;
   scene_extra_ = std::move(scene.extra);
+  scene_imports_ = imported.triples;
+  for (const auto& f : imported.files) scene.notes.push_back("imported the ontology " + f);
+  for (const auto& i : imported.missing_imports)
+    scene.notes.push_back("imports " + i + ", which neither the server's ontology nor its library declares");
   store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
   for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
   snapshot(false);  // a scene load is made durable as a snapshot before the reply

@@ -36,6 +36,13 @@ bool names_a_service(const std::string& query) {
   return std::regex_search(query, service);
 }
 
+// A property path (rdfs:subClassOf*, rdf:type/rdfs:subClassOf, ^p): Rasqal parses SPARQL
+// 1.1 but has no property paths, so such a query fails with a bare syntax error.
+bool has_property_path(const std::string& query) {
+  static const std::regex path(R"([A-Za-z0-9_>][*+][\s.;}]|[A-Za-z0-9_>]/[A-Za-z<]|\s\^[A-Za-z<])");
+  return std::regex_search(query, path);
+}
+
 }  // namespace
 
 std::string sparql_json(const std::string& query, const std::string& data_turtle, const Prefixes& prefixes,
@@ -62,7 +69,12 @@ std::string sparql_json(const std::string& query, const std::string& data_turtle
       raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world")), raptor_free_uri);
   if (!q || !base) throw WmError("SPARQL: cannot make a query");
   if (rasqal_query_prepare(q.get(), reinterpret_cast<const unsigned char*>(text.c_str()), base.get()) != 0)
-    throw WmError("SPARQL: " + (st.error.empty() ? std::string("the query does not parse") : st.error));
+    throw WmError("SPARQL: " + (st.error.empty() ? std::string("the query does not parse") : st.error) +
+                  (has_property_path(query)
+                       ? " (the server's SPARQL engine, Rasqal, has no property paths such as rdfs:subClassOf* or "
+                         "rdf:type/rdfs:subClassOf: the client's get_sub_classes, get_individuals and "
+                         "get_sub_properties answer those questions)"
+                       : ""));
   raptor_sequence* graphs = rasqal_query_get_data_graph_sequence(q.get());
   if (graphs && raptor_sequence_size(graphs) > 0)
     throw WmError("SPARQL: FROM and FROM NAMED are not allowed: a query reads the world model only");

@@ -23,6 +23,7 @@ from skillbus.validate import BadValue, Rejects, integer
 from skillbus.waiting import poll_until
 from skillbus.world.convert import check_op_msg, element_from_msg, op, property_msg, relation_msg
 from skillbus.world.element import Element
+from skillbus.world.ontology_view import OntologyView
 from skillbus.world.skiros2_queries import SkiROS2Queries
 from skillbus.world.sparql import SparqlQueries
 from skillbus.world.wire import ElementsPage, decode_elements, query_all
@@ -43,7 +44,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         self._elements: dict[str, Element] = {}
         self._relations: set[Relation] = set()
         self._by_node: dict[str, set[Relation]] = {}
-        self._subproperty_cache: dict[tuple[str, str], bool] = {}  # (pred, ancestor): the server's answer
+        self._ontology_cache: OntologyView | None = None  # the server's hierarchy and templates (ontology_view)
         self.version = -1
         self._txn_ids = 0
         self.results: dict[int, wm_commit_t] = {}  # lockstep: request id -> result
@@ -90,7 +91,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
                 continue
             self._elements = elements
             self._relations, self._by_node = set(), {}
-            self._subproperty_cache.clear()  # a scene load may bring class axioms
+            self._ontology_cache = None  # a scene load or add_class may bring classes
             for r in relations:
                 self._add_rel(r)
             self.version = first
@@ -247,39 +248,20 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
     def has_relation(self, subj: str, pred: str, obj: str) -> bool:
         """Whether `subj` `pred` `obj` holds, a subproperty of `pred` counting (as in the
         skill manager's condition check); "" or "-1" is any element on that side (not on
-        both). The replica answers unless a relation between the two is there under
-        another predicate: then the server's ontology says if that one is a subproperty."""
+        both). The replica answers, with the server's relation-type hierarchy."""
         subj, obj = _any(subj), _any(obj)
         if not subj and not obj:
             raise ValueError("has_relation needs a subject or an object")
         self._fresh()
         near = [r for r in self._by_node.get(subj or obj, ()) if subj in ("", r[0]) and obj in ("", r[2])]
-        if not near:
-            return False
-        if not pred or any(r[1] == pred for r in near):
-            return True
-        # Ask for the element at one end with a relation pattern: "" is the element itself,
-        # "*" any (skillbus.wm Query).
-        q = _query(ids=[subj or obj])
-        q.relations = [relation_msg("", pred, obj or "*") if subj else relation_msg("*", pred, "")]
-        q.num_relations, q.ids_only = 1, True
-        return bool(self.query(q))
+        return any(not pred or self.is_subproperty(r[1], pred) for r in near)
 
     def is_instance_of(self, eid: str, concept: str) -> bool:
-        """Whether element `eid`'s type is `concept` or a subclass of it (the server's
-        ontology; an unknown concept has no instances but those typed with it)."""
+        """Whether element `eid`'s type is `concept` or a subclass of it (the replica, with
+        the server's class hierarchy; an unknown concept has no instances)."""
         self._fresh()
         e = self._elements.get(eid)
-        if e is None:
-            return False
-        if e.type == concept:
-            return True
-        q = _query(ids=[eid], type_=concept)
-        q.ids_only = True
-        try:
-            return bool(self.query(q))
-        except WorldModelError:  # the server refuses a query for a concept it does not know
-            return False
+        return e is not None and (e.type == concept or self.is_subclass(e.type, concept))
 
     def resolve_elements(self, e: Element) -> list[Element]:
         """Elements matching `e`: its type (with subclasses, asked of the server's

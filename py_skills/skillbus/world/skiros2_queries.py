@@ -1,27 +1,32 @@
 """SkiROS2's ontology and world questions on the world-model client (its
-OntologyInterface and WorldModelInterface method names), answered from the replica and
-the world model server's queries (wm.query).
+OntologyInterface and WorldModelInterface method names), answered from the replica and the
+server's ontology (world/ontology_view.py: the class and relation-type hierarchy the
+server judges by, and the ontology's individuals, SkiROS2's templates, read once per
+replica):
 
-The server answers SPARQL (world/sparql.py) but changes no ontology; so:
-
-* ``get_sub_classes`` and ``get_sub_properties`` name the class (property) itself and
-  those of its subclasses (subproperties) that the world *uses*: the types of its
-  elements, the predicates of its relations (the server says which are below). That is
-  what code that filters the world's elements or relations by them needs.
-* ``query_ontology`` is SPARQL on the server (world/sparql.py).
-* ``get_super_class``, ``add_class``, ``get_template_element`` (the
-  ontology's individuals), ``lock`` / ``unlock`` raise NotImplementedError saying why.
+* ``get_sub_classes``, ``get_super_class``, ``get_sub_properties``, ``is_subproperty``:
+  the hierarchy; ``get_individuals``, ``get_type(s)``: the world's elements and the
+  ontology's individuals.
+* ``get_template_element`` builds an Element from an individual of the ontology;
+  ``instanciate`` adds one (and, recursive, those its relations name).
+* ``add_class`` adds a class while the server runs (RPC wm.add_axioms); ``lock`` /
+  ``unlock`` are the server's advisory lock (wm.lock); ``query_ontology`` is SPARQL
+  (world/sparql.py).
 * There are no reasoner plug-ins: ``get_reasoner`` is None for every predicate.
 """
 
 from __future__ import annotations
 
 import copy
+import logging
+import time
 from typing import Any
 
-from skillbus.msgs import wm_query_t
-from skillbus.world.convert import relation_msg
+from skillbus.msgs import wm_lock_t, wm_scene_t
 from skillbus.world.element import Element
+from skillbus.world.ontology_view import OntologyView
+
+log = logging.getLogger("skillbus.world")
 
 # SkiROS2's default relation filter of get_branch: its super-property of every relation
 # between things of a scene. skillbus's ontology has no such property: where the server
@@ -30,7 +35,16 @@ from skillbus.world.element import Element
 SCENE_PROPERTY = "skiros:sceneProperty"
 NOT_IN_SCENE = frozenset({"skiros:hasTemplate"})
 
-NO_ONTOLOGY_LIST = "the world model server has no RPC that lists its ontology (wm.query answers about elements)"
+
+def _literal(text: str, datatype: str) -> Any:
+    """A literal of the ontology as the Python value a Property holds."""
+    if datatype in ("xsd:int", "xsd:integer", "xsd:long", "xsd:short"):
+        return int(text)
+    if datatype in ("xsd:double", "xsd:float", "xsd:decimal"):
+        return float(text)
+    if datatype == "xsd:boolean":
+        return text.strip().lower() in ("true", "1")
+    return text
 
 
 class SkiROS2Queries:
@@ -39,78 +53,78 @@ class SkiROS2Queries:
     _elements: dict[str, Element]
     _relations: set[tuple[str, str, str]]
     _by_node: dict[str, set[tuple[str, str, str]]]
-    _subproperty_cache: dict[tuple[str, str], bool]
+    _ontology_cache: OntologyView | None
+
+    # -- the ontology ------------------------------------------------------------------------------
+    def ontology_view(self) -> OntologyView:
+        """The server's class and relation-type hierarchy and its ontology's individuals,
+        read once and kept until the replica reads the world again (RPC wm.hierarchy)."""
+        if self._ontology_cache is None:
+            rep = self._call("hierarchy", wm_scene_t(), wm_scene_t)  # type: ignore[attr-defined]
+            self._ontology_cache = OntologyView.from_json(rep.turtle)
+        return self._ontology_cache
 
     # -- classes and individuals -----------------------------------------------------------
-    def _of_type(self, concept: str, exact: bool = False) -> list[Element] | None:
-        """The world's elements of `concept` (with its subclasses unless `exact`); None if
-        the server does not know the concept."""
-        from skillbus.world.client import WorldModelError
-        q = wm_query_t()
-        q.type, q.exact_type, q.ids_only = concept, exact, True
-        try:
-            return self.query(q)
-        except WorldModelError:
-            return None
-
     def get_individuals(self, parent_class: str, recursive: bool = True) -> list[str]:
-        """The ids of the world's elements of `parent_class` (with its subclasses if
-        `recursive`). The server keeps no individuals in its ontology: these are all."""
-        return [e.id for e in self._of_type(parent_class, exact=not recursive) or []]
+        """The world's elements and the ontology's individuals (templates) of
+        `parent_class` (with its subclasses if `recursive`), sorted."""
+        view = self.ontology_view()
+        types = set(view.below("classes", parent_class) if recursive else [parent_class])
+        self._fresh()
+        found = {eid for eid, e in self._elements.items() if e.type in types}
+        found |= {iri for iri in view.individuals if types & set(view.types_of_individual(iri))}
+        return sorted(found)
 
     def get_type(self, uri: str) -> list[str]:
-        """The type of element `uri`, as a list ([]: no such element)."""
+        """The type of element `uri`, or the rdf:type statements of individual `uri` of the
+        ontology (with owl:NamedIndividual, as SkiROS2 answers); [] for neither."""
         self._fresh()
         e = self._elements.get(uri)
-        return [e.type] if e is not None else []
+        if e is not None:
+            return [e.type]
+        return self.ontology_view().types_of_individual(uri)
 
     def get_types(self, uri: str) -> list[str]:
-        """The ids of the elements whose type is exactly `uri`."""
-        return [e.id for e in self._of_type(uri, exact=True) or []]
+        """The ids of the elements, and the ontology's individuals, whose type is exactly `uri`."""
+        self._fresh()
+        view = self.ontology_view()
+        return sorted({eid for eid, e in self._elements.items() if e.type == uri} |
+                      {iri for iri in view.individuals if uri in view.types_of_individual(iri)})
 
     def get_sub_classes(self, parent_class: str, recursive: bool = True) -> list[str]:
-        """`parent_class` and those of its subclasses that elements of the world have ([]
-        if the server does not know the class). See the module's docstring."""
-        if not recursive:
-            raise NotImplementedError(f"get_sub_classes(recursive=False): {NO_ONTOLOGY_LIST}, so the direct "
-                                      f"subclasses cannot be told from the others")
-        found = self._of_type(parent_class)
-        if found is None:
-            return []
-        return [parent_class] + sorted({e.type for e in found} - {parent_class})
+        """Recursive: `parent_class` and every class below it (SkiROS2's
+        ``rdfs:subClassOf*``), `parent_class` first; else its direct subclasses. [] for a
+        class the server's ontology does not know."""
+        view = self.ontology_view()
+        return view.below("classes", parent_class) if recursive else view.children("classes", parent_class)
 
     def get_super_class(self, child_class: str) -> str:
-        raise NotImplementedError(f"get_super_class({child_class!r}): {NO_ONTOLOGY_LIST}")
+        """The direct superclass of `child_class` (the first by name when there are
+        several). A class with none (or unknown) logs an error and raises IndexError, as
+        SkiROS2's does."""
+        parents = self.ontology_view().parents("classes", child_class)
+        if not parents:
+            why = "has no superclass" if self.ontology_view().knows("classes", child_class) else \
+                "is no class of the world model's ontology"
+            log.error("[get_super_class] %s %s", child_class, why)
+            raise IndexError(f"get_super_class: {child_class} {why}")
+        return parents[0]
+
+    def is_subclass(self, concept: str, ancestor: str) -> bool:
+        """Whether class `concept` is `ancestor` or below it in the server's ontology."""
+        return concept == ancestor or self.ontology_view().is_below("classes", concept, ancestor)
 
     # -- relation types ----------------------------------------------------------------------
     def get_sub_properties(self, parent_property: str, recursive: bool = True) -> list[str]:
-        """`parent_property` and those of its subproperties that relations of the world
-        use (the server says which predicates are below it). See the module's docstring."""
-        if not recursive:
-            raise NotImplementedError(f"get_sub_properties(recursive=False): {NO_ONTOLOGY_LIST}, so the direct "
-                                      f"subproperties cannot be told from the others")
-        self._fresh()
-        used = sorted({p for (_, p, _) in self._relations} - {parent_property})
-        return [parent_property] + [p for p in used if self.is_subproperty(p, parent_property)]
+        """Recursive: `parent_property` and every relation type below it (SkiROS2's
+        ``rdfs:subPropertyOf*``), `parent_property` first; else its direct subproperties.
+        [] for a relation type the server's ontology does not know."""
+        view = self.ontology_view()
+        return view.below("relations", parent_property) if recursive else view.children("relations", parent_property)
 
     def is_subproperty(self, pred: str, ancestor: str) -> bool:
-        """Whether relation type `pred` is `ancestor` or below it, for a `pred` the world
-        uses (the server is asked with one relation of that type as the witness)."""
-        if pred == ancestor:
-            return True
-        key = (pred, ancestor)
-        if key not in self._subproperty_cache:
-            self._fresh()
-            witness = _witness(self._relations, self._by_node, pred)
-            if witness is None:
-                return False  # not used in the world: no relation to ask about
-            s, _, o = witness
-            q = wm_query_t()
-            q.ids, q.num_ids = [s], 1
-            q.relations, q.num_relations = [relation_msg("", ancestor, o)], 1
-            q.ids_only = True
-            self._subproperty_cache[key] = bool(self.query(q))
-        return self._subproperty_cache[key]
+        """Whether relation type `pred` is `ancestor` or below it in the server's ontology."""
+        return pred == ancestor or self.ontology_view().is_below("relations", pred, ancestor)
 
     def _predicates_under(self, relation_filter: str) -> set[str]:
         """The predicates of the world that `relation_filter` covers ("": all)."""
@@ -118,10 +132,9 @@ class SkiROS2Queries:
         used = {p for (_, p, _) in self._relations}
         if not relation_filter:
             return used
-        below = {p for p in used if self.is_subproperty(p, relation_filter)}
-        if not below and relation_filter == SCENE_PROPERTY:
+        if relation_filter == SCENE_PROPERTY and not self.ontology_view().knows("relations", SCENE_PROPERTY):
             return used - NOT_IN_SCENE
-        return below
+        return {p for p in used if self.is_subproperty(p, relation_filter)}
 
     # -- the world -------------------------------------------------------------------------------
     def get_triples(self, subj: str | None = None, pred: str | None = None, obj: str | None = None) -> list[str]:
@@ -183,26 +196,61 @@ class SkiROS2Queries:
 
     # -- templates -------------------------------------------------------------------------------
     def get_template_element(self, uri: str, context_id: str = "scene") -> Element:
-        raise NotImplementedError(f"get_template_element({uri!r}): the world model server keeps no individuals "
-                                  f"of its ontology (it reads classes, relation types and restrictions only); "
-                                  f"build the Element and pass it to instanciate() or add_element()")
+        """An Element made from individual `uri` of the ontology (not in the world): its
+        type, its literals as properties, its relations to other IRIs (subject "-1"), the
+        relations of the ontology's other individuals to it (object "-1", but
+        skiros:hasTemplate), label `uri` and the property skiros:Template `uri`, as
+        SkiROS2's. Raises WorldModelError for an IRI that is no individual."""
+        from skillbus.world.client import WorldModelError
+        view = self.ontology_view()
+        rows = view.individuals.get(uri)
+        if rows is None:
+            raise WorldModelError(f"get_template_element: {uri} is no individual (owl:NamedIndividual) of the world "
+                                  f"model's ontology")
+        e = Element()
+        for pred, obj, datatype, _lang in rows:
+            if pred == "rdf:type":
+                if obj != "owl:NamedIndividual":
+                    e._type = obj
+            elif pred == "rdfs:label" and datatype:
+                e._label = obj
+            elif datatype:
+                e.appendProperty(pred, _literal(obj, datatype))
+            else:
+                e.addRelation("-1", pred, obj)
+        for other, other_rows in sorted(view.individuals.items()):
+            for pred, obj, datatype, _lang in other_rows:
+                if not datatype and obj == uri and pred != "skiros:hasTemplate":
+                    e.addRelation(other, pred, "-1")
+        e._label = uri
+        e.setProperty("skiros:Template", uri)
+        return e
 
     def instanciate(self, uri: str | Element, recursive: bool = False, relations: list | None = None,
                     relation_filter: list | None = None, antiloop_bind: set | None = None,
                     context_id: str = "scene") -> Element:
-        """Adds an element made from a template, with `relations` instead of the
-        template's, and returns it. The template must be an Element (the server keeps no
-        template individuals: get_template_element). `recursive` would instanciate the
-        templates the relations name, which needs those individuals too."""
+        """Adds an element made from a template (an individual's IRI, or an Element) with
+        `relations` instead of the template's, and returns it. `recursive`: each template
+        its relations of `relation_filter` (default skiros:hasA, skiros:contain; [] any)
+        name from it is instanciated too, related to the new element so; a template is
+        instanciated once per call (a loop of templates ends)."""
         template = self.get_template_element(uri) if isinstance(uri, str) else copy.deepcopy(uri)
-        if recursive:
-            filters = ["skiros:hasA", "skiros:contain"] if relation_filter is None else relation_filter
-            if any(r["src"] == "-1" and (not filters or r["type"] in filters) for r in template.getRelations()):
-                raise NotImplementedError("instanciate(recursive=True): the templates its relations name are "
-                                          "individuals of the ontology, which the world model server does not keep")
+        filters = ["skiros:hasA", "skiros:contain"] if relation_filter is None else relation_filter
+        seen = set() if antiloop_bind is None else antiloop_bind
+        if template.hasProperty("skiros:Template"):
+            seen.add(template.getProperty("skiros:Template").value)
+        own = [dict(r) for r in template.getRelations()]
         template._relations = [dict(r) for r in (relations or [])]
         template._id = ""
-        return self.add_element(template)
+        added = self.add_element(template)
+        if recursive:
+            for r in own:
+                if r["src"] != "-1" or (filters and r["type"] not in filters) or r["dst"] in seen:
+                    continue
+                link = dict(r, src=added.id, dst="-1")
+                child = self.instanciate(r["dst"], True, [link], filters, seen, context_id)
+                added.addRelation("-1", r["type"], child.id)
+        return added
 
     # -- reasoners, locking, the ontology itself --------------------------------------------------
     def get_reasoner(self, pred: str) -> Any:
@@ -214,30 +262,54 @@ class SkiROS2Queries:
         """None: no reasoner computes `pred` (skillbus has no reasoner plug-ins)."""
         return None
 
-    def lock(self) -> bool:
-        raise NotImplementedError("lock(): the world model server has no lock; a transaction that must see the "
-                                  "world unchanged passes expected_version to commit() and is refused otherwise")
+    def lock(self, timeout: float | None = 60.0) -> bool:
+        """Takes the world model server's advisory lock, waiting while another client
+        holds it (SkiROS2's lock: nothing else waits for it; clients that want exclusive
+        access agree to take it). True once taken (taking it again is fine); TimeoutError
+        naming the holder after `timeout` seconds (None: wait for ever, as SkiROS2). A
+        server restart frees it."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        req = wm_lock_t()
+        req.holder, req.lock = self.rpc.client_id, True  # type: ignore[attr-defined]
+        while True:
+            rep = self._call("lock", req, wm_lock_t)  # type: ignore[attr-defined]
+            if rep.ok:
+                return True
+            if deadline is not None and time.monotonic() >= deadline:
+                raise TimeoutError(f"lock: the world model is still locked by {rep.holder} after {timeout} s")
+            time.sleep(0.05)
 
     def unlock(self) -> bool:
-        raise NotImplementedError("unlock(): the world model server has no lock (see lock())")
+        """Frees the advisory lock, whoever holds it (as SkiROS2's: so a holder that died
+        blocks no one for ever); False when it was not locked."""
+        req = wm_lock_t()
+        req.holder, req.lock = self.rpc.client_id, False  # type: ignore[attr-defined]
+        return bool(self._call("lock", req, wm_lock_t).ok)  # type: ignore[attr-defined]
 
     def add_class(self, class_uri: str, parent_uri: str, context: str = "") -> bool:
-        raise NotImplementedError(f"add_class({class_uri!r}, {parent_uri!r}): the world model server cannot add "
-                                  f"ontology classes while it runs (its ontology comes from its --ontology files, "
-                                  f"and from the class axioms of a scene that `skillbus wm load` replaces the "
-                                  f"world with)")
+        """Adds class `class_uri` below `parent_uri` (a class the ontology knows) to the
+        world model's ontology while it runs: it is kept with the loaded scene's axioms
+        (a save carries it, a restart keeps it; the next scene load replaces it, as the
+        scene's own), and every replica, the skill manager's too, reads the world again
+        with it. True; raises WorldModelError naming what is wrong (SkiROS2 returns False)."""
+        from skillbus.world.client import WorldModelError
+        view = self.ontology_view()
+        if not view.knows("classes", parent_uri):
+            raise WorldModelError(f"add_class({class_uri!r}): {parent_uri} is no class of the world model's ontology")
+        if parent_uri in view.parents("classes", class_uri):
+            return True
+        req = wm_scene_t()
+        req.turtle = f"{_term(class_uri)} a owl:Class ; rdfs:subClassOf {_term(parent_uri)} .\n"
+        rep = self._call("add_axioms", req, wm_scene_t)  # type: ignore[attr-defined]
+        self._ontology_cache = None
+        self.sync(rep.version)  # type: ignore[attr-defined]
+        return True
 
 
-
-def _witness(relations: set, by_node: dict, pred: str) -> tuple[str, str, str] | None:
-    """A relation of type `pred` whose two ends have no other relation between them, so
-    that a question about "some relation between them below X" is about this one (else
-    any relation of that type)."""
-    first = None
-    for (s, p, o) in sorted(relations):
-        if p != pred:
-            continue
-        first = first or (s, p, o)
-        if all(r == (s, p, o) for r in by_node.get(s, ()) if r[0] == s and r[2] == o):
-            return (s, p, o)
-    return first
+def _term(name: str) -> str:
+    """A class name as Turtle: a full IRI in <>, a prefixed name as it is."""
+    if "://" in name:
+        return name if name.startswith("<") else f"<{name}>"
+    if ":" not in name or any(c.isspace() for c in name):
+        raise ValueError(f"{name!r} is no prefixed name (prefix:Name) or IRI")
+    return name

@@ -185,8 +185,15 @@ class Journal {
   // start ("" when there is none).
   void write_scene_extra(const std::string& turtle);
   std::string read_scene_extra() const;
+  // The ontologies the loaded scene imported from the server's ontology library, as
+  // Turtle, in DIR/scene_imports.ttl: written like scene_extra.ttl (the library's files
+  // may change or go; the world keeps the concepts it was loaded with).
+  void write_scene_imports(const std::string& turtle);
+  std::string read_scene_imports() const;
 
  private:
+  void write_side_file(const char* name, const std::string& turtle);
+  std::string read_side_file(const char* name) const;
   void start_journal(int64_t base_version);
   void write_snapshot_file(const SnapshotData& snapshot) const;
   void rotate_journal(int64_t base_version, uint64_t tail_from, long records_before);

@@ -45,6 +45,10 @@ class Ontology {
   // "float", "int", "string", "bool", or "" when the ontology does not say.
   std::string data_range(const std::string& property) const;
   size_t class_count() const { return parents_.size(); }
+  // Every class with its direct superclasses; every relation type with its direct
+  // superproperties (the hierarchy the world model judges by).
+  const std::map<std::string, std::set<std::string>>& class_parents() const { return parents_; }
+  const std::map<std::string, std::set<std::string>>& relation_parents() const { return super_props_; }
 
  private:
   std::map<std::string, std::set<std::string>> parents_;      // class -> direct superclasses

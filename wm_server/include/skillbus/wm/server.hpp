@@ -10,12 +10,14 @@
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
 #include "skillbus/wm/journal.hpp"
+#include "skillbus/wm/ontology_files.hpp"
 #include "skillbus/wm/ontology.hpp"
 #include "skillbus/wm/rdf.hpp"
 #include "skillbus/wm/store.hpp"
 #include "skillbus_msgs/wm_change_t.hpp"
 #include "skillbus_msgs/wm_commit_t.hpp"
 #include "skillbus_msgs/wm_elements_t.hpp"
+#include "skillbus_msgs/wm_lock_t.hpp"
 #include "skillbus_msgs/wm_query_t.hpp"
 #include "skillbus_msgs/wm_scene_t.hpp"
 #include "skillbus_msgs/wm_transform_t.hpp"
@@ -26,6 +28,7 @@ namespace skillbus::wm {
 struct ServerOptions {
   std::string data_dir = "wm_data";
   std::vector<std::string> ontology_files;  // Turtle/OWL files, loaded in order
+  std::vector<std::string> ontology_library;  // files found by the IRI they declare when something imports it
   std::string scene_file;                   // loaded at start when the data directory is empty
   std::string name = "wm";                  // lockstep participant name
   bool wall_clock = false;
@@ -74,6 +77,14 @@ class WorldModelServer {
   void remember(const skillbus_msgs::wm_commit_t& c);
   void snapshot(bool in_background);
   void load_scene_text(const std::string& text, const std::string& source, std::string* report);
+  // The ontology's RPCs (server_ontology.cpp): ontology, sparql, add_axioms, lock.
+  void add_ontology_methods();
+  skillbus_msgs::wm_scene_t on_add_axioms(const skillbus_msgs::wm_scene_t& req);
+  skillbus_msgs::wm_lock_t on_lock(const skillbus_msgs::wm_lock_t& req);
+  std::vector<Triple> all_axioms() const;  // the ontology's files, the scene's imports and axioms
+  // Replicas read the world again (and the skill manager the ontology): a change that
+  // says "reset" at a new version, made durable by a snapshot before the reply.
+  void announce_reset();
 
   Bus& bus_;
   ServerOptions opt_;
@@ -92,6 +103,9 @@ class WorldModelServer {
   std::string ontology_report_;  // what was loaded from --ontology
   std::vector<Triple> ontology_triples_;  // as loaded from --ontology (the RPC ontology answers them)
   std::vector<Triple> scene_extra_;
+  OntologyLibrary library_;
+  std::vector<Triple> scene_imports_;  // the ontologies the loaded scene imported from library_
+  std::string lock_holder_;            // wm.lock ("" free); not kept across a restart
   // The graph SPARQL queries read (ontology, scene_extra_, elements) as Turtle, made again
   // when the world's version has changed since.
   const std::string& sparql_data();
