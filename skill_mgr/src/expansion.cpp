@@ -29,6 +29,12 @@ std::string unknown_keys(const skillbus_msgs::skill_description_t& d, const skil
              n.remap_from[r] + " (it has: " + keys + ")";
   for (const auto& sp : n.specify)
     if (!has(sp.key)) return "specify " + sp.key + ": " + d.type + " has no parameter " + sp.key + " (it has: " + keys + ")";
+  for (const auto* conds : {&n.pre, &n.hold, &n.post})
+    for (const auto& c : *conds)
+      for (const auto* key : {&c.subject, &c.object})
+        if (!key->empty() && !has(*key))
+          return "condition " + c.label + " of the node: " + d.type + " has no parameter " + *key + " (it has: " + keys +
+                 ")";
   return "";
 }
 
@@ -70,6 +76,9 @@ std::string build_expansion(TaskContext& ctx, const Implementation& owner, const
       scopes[i] = scopes[n.parent]->child(std::move(remap), std::move(specify));
       std::unique_ptr<Node> node;
       if (n.type.empty()) {
+        if (!n.pre.empty() || !n.hold.empty() || !n.post.empty())
+          return where + "node " + std::to_string(i) + " is a group (" + n.processor +
+                 "): only a skill node carries conditions of its own";
         auto group = std::make_unique<CompoundNode>("", "", make_processor(n.processor, hooks_for(ctx, owner, scopes[i])));
         groups[i] = group.get();
         node = std::move(group);
@@ -84,7 +93,7 @@ std::string build_expansion(TaskContext& ctx, const Implementation& owner, const
         // (SkiROS2 does): a typo in a tree is an error that names it.
         const std::string bad = unknown_keys(impls.front().description, n);
         if (!bad.empty()) return where + bad;
-        node = make_placeholder_node(ctx, n.type, n.label, scopes[i]);
+        node = make_placeholder_node(ctx, n.type, n.label, scopes[i], &n);
       }
       if (n.parent == 0)
         out.top.push_back(std::move(node));

@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "registry.hpp"
+#include "skillbus_msgs/skill_tree_node_t.hpp"
 #include "task_context.hpp"
 #include "tree/node.hpp"
 
@@ -20,8 +21,10 @@ class Scope;
 // The node for an implementation (primitive or compound).
 std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& impl, std::shared_ptr<Scope> scope);
 // The node for a placeholder of `type` (and `label`): that implementation, or Alternatives
-// among several; null when none is registered.
+// among several; null when none is registered. `own` (the tree node's own conditions, if
+// any) joins each implementation's pre-, hold- and post-conditions.
 std::unique_ptr<Node> make_placeholder_node(TaskContext& ctx, const std::string& type, const std::string& label,
-                                            std::shared_ptr<Scope> scope);
+                                            std::shared_ptr<Scope> scope,
+                                            const skillbus_msgs::skill_tree_node_t* own = nullptr);
 
 }  // namespace skillbus::skills

@@ -1,7 +1,8 @@
 """A skill library written for SkiROS2 (skill_libs/skiros2_style_lib.py: only its import
 lines differ) runs and succeeds through the real processes: poses set with setData in one
-skill and read with getData in the next, a monitor that never ends under ParallelFs, and
-nested anonymous processors."""
+skill and read with getData in the next, a monitor that never ends under ParallelFs,
+nested anonymous processors, and a node's own pre-condition (self.skill(...,
+preconditions=[...])), which holds or stops the node naming it."""
 
 import sys
 
@@ -25,3 +26,11 @@ def test_a_skiros2_library_runs_unchanged_and_succeeds(sandbox, tmp_path):
     assert sum(1 for line in lines if line.startswith("Work Success: worked 3 ticks")) == 2, out
     rc, tree, err = cli(sandbox, "wm", "get", "skiros:Cube-2")
     assert rc == 0 and "0.25" in tree, tree + err  # the pose is the world model's now
+
+    # a node's own pre-condition, named by the remapped key: holds for a cube...
+    rc, out, err = cli(sandbox, "run", "GuardedRead", "-p", "Target=skiros:Cube-2", "--timeout", "60", timeout=90)
+    assert rc == 0 and "PoseReader Success" in out, out + err
+    # ...and stops the node, naming it, when the cube is no cylinder
+    rc, out, err = cli(sandbox, "run", "GuardedRead", "-p", "Target=skiros:Cube-2", "-p", "Strict=true",
+                       "--timeout", "60", timeout=90)
+    assert rc == 1 and "TargetIsA" in out, out + err

@@ -160,9 +160,34 @@ def test_skill_takes_skiros2_type_names_and_specify_after_remap():
     group = c.skill(ParallelFf())(c.skill("Count"), c.skill("Count"))
     assert group.type == "" and group.processor.spec() == "ParallelFf" and len(group.children) == 2
     assert group.children[0].parent is group and group.last() is group.children[1]
-    with pytest.raises(NotImplementedError, match="carry no conditions"):
+    with pytest.raises(TypeError, match="must be a condition"):
         c.skill("Count", "", {}, {}, [object()])
     assert c.skill("Count", "", preconditions=[]).type == "Count"
+
+
+def test_node_conditions_are_the_nodes_own_in_the_skills_keys():
+    from skillbus.skill import ConditionIsSpecified, ConditionRelation
+    from skillbus.skill.convert import tree_msg
+    c = _compound()
+    # SkiROS2 code names a remapped key by its new name; the manager wants the skill's own
+    by_new = ConditionRelation("Held", "skiros:contain", "Gripper", "Limit", True)
+    node = c.skill("Count", "", {"Until": "Limit"}, {}, [by_new])
+    node.addHoldCondition(ConditionIsSpecified("Set", "Until", True))
+    node.addPostCondition(ConditionIsSpecified("Still", "Until", True))
+    (pre,), (hold,), (post,) = node.conditions["pre"], node.conditions["hold"], node.conditions["post"]
+    assert (pre.subject_key, pre.object_key) == ("Gripper", "Until") and by_new.object_key == "Limit"  # a copy
+    assert hold.subject_key == "Until" and post.label == "Still"
+    root = SkillWrapper("Outer")
+    root(node)
+    n = tree_msg(root).nodes[1]
+    assert (n.num_pre, n.num_hold, n.num_post) == (1, 1, 1)
+    assert (n.pre[0].kind, n.pre[0].subject, n.pre[0].object, n.pre[0].label) == ("Relation", "Gripper", "Until",
+                                                                                "Held")
+    assert tree_msg(root).nodes[0].num_pre == 0
+    with pytest.raises(NotImplementedError, match="only a skill node"):
+        c.skill(ParallelFf()).addPreCondition(by_new)
+    with pytest.raises(NotImplementedError, match="latch"):
+        root.addChild(c.skill("Count"), latch=True)
 
 
 def test_wrapper_remap_chains_and_ignores_a_second_remap():

@@ -147,6 +147,9 @@ def tree_msg(root: SkillWrapper) -> skill_tree_t:
         n.num_remaps = len(n.remap_from)
         n.specify = [specify_msg(k, v) for k, v in node.specified.items()]
         n.num_specify = len(n.specify)
+        n.pre, n.hold, n.post = (condition_msgs(node.conditions["pre"]), condition_msgs(node.conditions["hold"]),
+                                 condition_msgs(node.conditions["post"]))
+        n.num_pre, n.num_hold, n.num_post = len(n.pre), len(n.hold), len(n.post)
         t.nodes.append(n)
         me = len(t.nodes) - 1
         for c in node.children:

@@ -41,7 +41,7 @@ from skillbus.msgs import skill_state_t
 from skillbus.skill.description import SkillDescription
 from skillbus.skill.params import ParamHandler
 from skillbus.skill.processors import Processor
-from skillbus.skill.wrapper import NO_NODE_CONDITIONS, SkillWrapper
+from skillbus.skill.wrapper import SkillWrapper
 from skillbus.world.element import Element
 
 __all__ = ["PrimitiveBase", "SkillBase", "SkillCore", "SkillWrapper", "State"]
@@ -361,9 +361,8 @@ class SkillBase(SkillCore):
         """A node for the tree: a skill type (SkiROS2's forms "Pick", ":Pick",
         "skiros:Pick" all name Pick) with an implementation label ("" any), or a processor
         (an anonymous group: ``self.skill(ParallelFf())(child1, child2)``). Remaps apply
-        first, then `specify`, which names a remapped parameter by its new name (SkiROS2)."""
-        if preconditions:
-            raise NotImplementedError(f"self.skill(..., preconditions=...): {NO_NODE_CONDITIONS}")
+        first, then `specify`, which names a remapped parameter by its new name (SkiROS2),
+        then `preconditions`: conditions of this node only (addPreCondition)."""
         if isinstance(stype, Processor):
             node = self.getNode(stype)
         elif isinstance(stype, str) and stype:
@@ -374,6 +373,8 @@ class SkillBase(SkillCore):
             node.remap(k, v)
         for k, v in (specify or {}).items():
             node.specifyParamDefault(k, v)
+        for c in preconditions or []:
+            node.addPreCondition(c)
         return node
 
     def getSkill(self, ptype: str, plabel: str = "") -> SkillWrapper:

@@ -4,7 +4,8 @@ type, resolved to an implementation when the tree starts, or an anonymous group 
 processor. Calling it adds children: ``node(child1, child2)``.
 
 The skill manager executes the tree; a node carries to it its type and label, its
-processor, its remaps (the child's key -> the key one level up) and its fixed values.
+processor, its remaps (the child's key -> the key one level up), its fixed values and
+conditions of its own (checked with the skill's, in the skill's own keys).
 
     >>> n = SkillWrapper("Pick", "", remap={"Object": "Target"}, specify={"Target": "cube"})
     >>> n.remaps, n.specified    # specify names the key after the remap, as in SkiROS2
@@ -21,8 +22,8 @@ from skillbus.skill.processors import Processor, SerialStar
 
 log = logging.getLogger("skillbus.skill")
 
-NO_NODE_CONDITIONS = ("the skill manager's tree nodes carry no conditions of their own (skill_tree_node_t has "
-                      "none): put the condition in the skill's description")
+NO_LATCH = ("the skill manager does not copy a sibling's post-conditions (SkiROS2's latch): add them to the node "
+            "with addPreCondition, or to the skill's description")
 
 
 class SkillWrapper:
@@ -34,6 +35,7 @@ class SkillWrapper:
         self.processor: Processor = processor or SerialStar()  # SkiROS2's default (its code, not its wiki)
         self.children: list[SkillWrapper] = []
         self._parent: SkillWrapper | None = None
+        self.conditions: dict[str, list] = {"pre": [], "hold": [], "post": []}  # the node's own, in its own keys
         for k, v in (remap or {}).items():
             self.remap(k, v)
         for k, v in (specify or {}).items():
@@ -80,10 +82,32 @@ class SkillWrapper:
 
     specifyParam = specifyParamDefault  # (SkiROS2's differ only in keeping it as the default)
 
-    def addPreCondition(self, condition: Any, modify_description: bool = False) -> None:
-        raise NotImplementedError(f"addPreCondition on a tree node: {NO_NODE_CONDITIONS}")
+    def _add_condition(self, kind: str, condition: Any) -> None:
+        """A condition of this node only (the skill's description keeps its own). Its keys
+        name the skill's parameters, by their own names or, as SkiROS2 code does after a
+        remap, by the remapped names; the manager checks it with the skill's conditions."""
+        from skillbus.skill.conditions import ConditionBase
+        if not self.type:
+            raise NotImplementedError(f"a {kind}-condition on a group ({self.processor.spec()}): only a skill node "
+                                      f"carries conditions of its own; put it on the skills under the group")
+        if not isinstance(condition, ConditionBase):
+            raise TypeError(f"a {kind}-condition must be a condition (ConditionProperty, ...), got {condition!r}")
+        own = copy.deepcopy(condition)
+        for key, target in self._remaps.items():
+            if key != target:
+                own.remap(target, key)
+        self.conditions[kind].append(own)
 
-    addHoldCondition = addPostCondition = addPreCondition
+    def addPreCondition(self, condition: Any, modify_description: bool = False) -> None:
+        """A pre-condition of this node (`modify_description` has no meaning here: the
+        description belongs to the skill's process)."""
+        self._add_condition("pre", condition)
+
+    def addHoldCondition(self, condition: Any, modify_description: bool = False) -> None:
+        self._add_condition("hold", condition)
+
+    def addPostCondition(self, condition: Any, modify_description: bool = False) -> None:
+        self._add_condition("post", condition)
 
     # -- structure ---------------------------------------------------------------------
     def setProcessor(self, processor: Processor) -> None:
@@ -94,7 +118,7 @@ class SkillWrapper:
     def addChild(self, child: "SkillWrapper", latch: bool = False) -> "SkillWrapper":
         if latch:
             raise NotImplementedError(f"addChild(latch=True) (the previous child's post-conditions as pre-conditions): "
-                                      f"{NO_NODE_CONDITIONS}")
+                                      f"{NO_LATCH}")
         if not isinstance(child, SkillWrapper):
             raise TypeError(f"a child of {self.type or self.processor.spec()} must come from self.skill(...), "
                             f"got {child!r}")

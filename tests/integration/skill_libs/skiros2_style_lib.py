@@ -6,11 +6,13 @@ changed (from skiros2_skill.core.skill / skiros2_common.core.* to skillbus.skill
   with getData from its own parameter (the change reaches it through the world model);
 - watch_forever never ends: under ParallelFs it is stopped when its sibling ends;
 - arrange nests anonymous processors: SerialStar( SerialStar(writer, reader),
-  ParallelFs(watch_forever, Sequential(work, work)) ).
+  ParallelFs(watch_forever, Sequential(work, work)) );
+- guarded_read gives a node a pre-condition of its own (self.skill(..., preconditions=[...]))
+  named, as SkiROS2 code does, by the remapped key; with Strict it asks for a cylinder.
 Used by test_skiros2_style.py."""
 
 from skillbus.skill import ParallelFs, ParamTypes, PrimitiveBase, Sequential, SerialStar, SkillBase, SkillDescription
-from skillbus.skill import Element
+from skillbus.skill import ConditionOnType, Element
 
 TARGET = (0.25, -0.1, 0.6)
 
@@ -38,6 +40,12 @@ class Work(SkillDescription):
 class Arrange(SkillDescription):
     def createDescription(self):
         self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+
+
+class GuardedRead(SkillDescription):
+    def createDescription(self):
+        self.addParam("Target", Element("skiros:Product"), ParamTypes.Required)
+        self.addParam("Strict", False, ParamTypes.Optional)
 
 
 class pose_writer(PrimitiveBase):
@@ -107,4 +115,16 @@ class arrange(SkillBase):
                     self.skill("Work", ""),
                 ),
             ),
+        )
+
+
+class guarded_read(SkillBase):
+    def createDescription(self):
+        self.setDescription(GuardedRead(), self.__class__.__name__)
+
+    def expand(self, skill):
+        wanted = "skiros:Cylinder" if self.params["Strict"].value else "skiros:Cube"
+        skill(
+            self.skill("PoseReader", "", remap={"Object": "Target"},
+                       preconditions=[ConditionOnType("TargetIsA", "Target", wanted)]),
         )
