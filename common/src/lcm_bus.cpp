@@ -3,7 +3,9 @@
 #include <poll.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cstring>
+#include <fstream>
 #include <regex>
 
 #include "skillbus/log.hpp"
@@ -29,7 +31,37 @@ std::string lcm_lane1_url(const std::string& url) {
   return "udpm://" + addr + ":" + std::to_string(port + 1) + m[3].str();
 }
 
-LcmBus::LcmBus(const std::string& url) : url_(url), lane_urls_{url, lcm_lane1_url(url)} {
+std::string lcm_url_with_receive_buffer(const std::string& url, long rmem_max) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  const long size = rmem_max > 0 ? std::min(kLcmReceiveBuffer, rmem_max) : kLcmReceiveBuffer;
+  return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=" + std::to_string(size);
+}
+
+long kernel_receive_buffer_cap() {
+  std::ifstream f("/proc/sys/net/core/rmem_max");
+  long v = -1;
+  return (f >> v) ? v : -1;
+}
+
+namespace {
+
+std::string receive_buffer_url(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  const long cap = kernel_receive_buffer_cap();
+  static bool warned = false;
+  if (cap > 0 && cap < kLcmReceiveBuffer && !warned) {
+    warned = true;
+    SB_WARN("bus", "the kernel caps a socket's UDP receive buffer at " << cap << " bytes (net.core.rmem_max), under the "
+                   << kLcmReceiveBuffer << " skillbus asks for: a large reply or a burst can be lost; raise it with "
+                   << "`sudo sysctl -w net.core.rmem_max=" << kLcmReceiveBuffer << "`");
+  }
+  return lcm_url_with_receive_buffer(url, cap);
+}
+
+}  // namespace
+
+LcmBus::LcmBus(const std::string& url)
+    : url_(url), lane_urls_{receive_buffer_url(url), receive_buffer_url(lcm_lane1_url(url))} {
   lane(0);  // fail early, with a clear message, on a bad URL or a missing multicast route
 }
 

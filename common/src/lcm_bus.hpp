@@ -51,4 +51,16 @@ int lcm_lane_of(const std::string& channel);
 // URL of lane 1 for a udpm:// URL (port+1), or "" when the URL has a single lane.
 std::string lcm_lane1_url(const std::string& url);
 
+// Every udpm:// socket asks for a large receive buffer unless the URL names one
+// (recv_buf_size=): with the kernel's default (about 208 KB) a reply of a few UDP
+// fragments, or a burst that arrives while the process is busy, overflows it and is lost
+// whole. The kernel caps the request at net.core.rmem_max: a cap below the request is
+// warned about once per process, naming the sysctl.
+constexpr long kLcmReceiveBuffer = 4L << 20;
+// `url` with recv_buf_size=min(kLcmReceiveBuffer, `rmem_max`) added, for udpm:// URLs
+// that do not set it (rmem_max <= 0: unknown, the request as it is).
+std::string lcm_url_with_receive_buffer(const std::string& url, long rmem_max);
+// net.core.rmem_max, or -1 when it cannot be read.
+long kernel_receive_buffer_cap();
+
 }  // namespace skillbus

@@ -30,6 +30,12 @@ import lcm
 Handler = Callable[[str, bytes], None]
 DEFAULT_URL = "udpm://239.255.76.67:7667?ttl=0"
 DEFAULT_QUEUE_CAPACITY = 10000  # LCM's default of 30 silently drops bursts
+# Bytes of socket receive buffer every udpm:// socket asks for unless the URL names one
+# (recv_buf_size=): with the kernel's default (about 208 KB) a reply of a few UDP
+# fragments, or a burst that arrives while the process is busy, overflows it and is lost
+# whole. The kernel caps it at net.core.rmem_max (warned about once). As common/src/lcm_bus.cpp.
+RECEIVE_BUFFER = 4 << 20
+RMEM_MAX = "/proc/sys/net/core/rmem_max"
 
 log = logging.getLogger("bus")
 
@@ -145,6 +151,48 @@ def route_interface(address: int, table: str = "/proc/net/route") -> str:
     return ""
 
 
+def with_receive_buffer(url: str, rmem_max: int | None) -> str:
+    """`url` with recv_buf_size=min(RECEIVE_BUFFER, rmem_max) for a udpm:// URL that does
+    not set it (rmem_max None: unknown, the request as it is).
+
+    >>> with_receive_buffer("udpm://239.255.76.67:7667?ttl=0", 8 << 20)
+    'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
+    >>> with_receive_buffer("udpm://239.1.2.3", 1000000), with_receive_buffer("memq://", None)
+    ('udpm://239.1.2.3?recv_buf_size=1000000', 'memq://')
+    >>> with_receive_buffer("udpm://239.1.2.3?recv_buf_size=9", 1 << 30)
+    'udpm://239.1.2.3?recv_buf_size=9'
+    """
+    if not url.startswith("udpm://") or "recv_buf_size=" in url:
+        return url
+    size = RECEIVE_BUFFER if not rmem_max or rmem_max <= 0 else min(RECEIVE_BUFFER, rmem_max)
+    return url + ("&" if "?" in url else "?") + f"recv_buf_size={size}"
+
+
+def kernel_receive_buffer_cap(path: str = RMEM_MAX) -> int | None:
+    try:
+        return int(open(path).read())
+    except (OSError, ValueError):
+        return None
+
+
+_warned_cap = False
+
+
+def receive_buffer_url(url: str) -> str:
+    """with_receive_buffer with the kernel's cap, warning once per process when the cap is
+    below RECEIVE_BUFFER."""
+    global _warned_cap
+    if not url.startswith("udpm://") or "recv_buf_size=" in url:
+        return url
+    cap = kernel_receive_buffer_cap()
+    if cap is not None and cap < RECEIVE_BUFFER and not _warned_cap:
+        _warned_cap = True
+        log.warning("the kernel caps a socket's UDP receive buffer at %d bytes (net.core.rmem_max), under the %d "
+                    "skillbus asks for: a large reply or a burst can be lost; raise it with "
+                    "`sudo sysctl -w net.core.rmem_max=%d`", cap, RECEIVE_BUFFER, RECEIVE_BUFFER)
+    return with_receive_buffer(url, cap)
+
+
 def lane_of(channel: str) -> int:
     """Lane 1 for many-to-one channels (names ending in _ACK or _JOIN), else lane 0."""
     return 1 if channel.endswith(("_ACK", "_JOIN")) else 0
@@ -169,7 +217,8 @@ class LcmBus(Bus):
 
     def __init__(self, url: str) -> None:
         self._url = url
-        self._lane_urls = [url, lane1_url(url)]
+        lane1 = lane1_url(url)
+        self._lane_urls = [receive_buffer_url(url), receive_buffer_url(lane1) if lane1 else ""]
         self._lanes: list[lcm.LCM | None] = [None, None]
         self._lane_subs = [0, 0]
         self._subs: dict[int, tuple[int, lcm.LCMSubscription]] = {}

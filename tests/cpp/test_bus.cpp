@@ -91,6 +91,7 @@ TEST(FaultyBus, DropsEveryNthPublish) {
 namespace skillbus {
 int lcm_lane_of(const std::string& channel);
 std::string lcm_lane1_url(const std::string& url);
+std::string lcm_url_with_receive_buffer(const std::string& url, long rmem_max);
 }  // namespace skillbus
 
 TEST(LcmLanes, ManyToOneChannelsUsePortPlusOne) {
@@ -100,6 +101,15 @@ TEST(LcmLanes, ManyToOneChannelsUsePortPlusOne) {
   EXPECT_EQ(lcm_lane1_url("udpm://239.255.76.67:7667?ttl=0"), "udpm://239.255.76.67:7668?ttl=0");
   EXPECT_EQ(lcm_lane1_url("udpm://239.1.2.3"), "udpm://239.1.2.3:7668");
   EXPECT_EQ(lcm_lane1_url("memq://"), "");
+}
+
+TEST(LcmUrl, AsksForALargeReceiveBufferUnlessTheUrlNamesOne) {
+  EXPECT_EQ(lcm_url_with_receive_buffer("udpm://239.255.76.67:7667?ttl=0", 8L << 20),
+            "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304");
+  EXPECT_EQ(lcm_url_with_receive_buffer("udpm://239.1.2.3", 1000000), "udpm://239.1.2.3?recv_buf_size=1000000");
+  EXPECT_EQ(lcm_url_with_receive_buffer("udpm://239.1.2.3", -1), "udpm://239.1.2.3?recv_buf_size=4194304");
+  EXPECT_EQ(lcm_url_with_receive_buffer("udpm://239.1.2.3?recv_buf_size=9", 1 << 30), "udpm://239.1.2.3?recv_buf_size=9");
+  EXPECT_EQ(lcm_url_with_receive_buffer("memq://", 1 << 30), "memq://");
 }
 
 TEST(LcmLanes, MemqHasOneLaneSoAcksStillArrive) {
