@@ -69,6 +69,7 @@ demo: build
 bench: build
 	$(PY) bench/lockstep_overhead.py
 	$(PY) bench/wm_query.py
+	$(PY) bench/wm_resolve.py
 	$(PY) bench/wm_scale.py
 	$(PY) bench/sparql.py
 	$(PY) bench/skill_ticks.py

@@ -113,7 +113,7 @@ def server():
 def wmi(monkeypatch, server):
     def resync(self):
         self._elements = {k: e.clone() for k, e in server.elements.items()}
-        self._relations, self._by_node = set(), {}
+        self._relations, self._by_node, self._rel_cache = set(), {}, {}
         for r in server.relations:
             self._add_rel(r)
         self._ontology_cache = hierarchy()

@@ -13,6 +13,7 @@ resync from a snapshot. Writes are transactions:
 
 from __future__ import annotations
 
+import bisect
 from typing import Any
 
 from skillbus.bus import Bus, channel
@@ -21,7 +22,7 @@ from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elemen
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError
 from skillbus.validate import BadValue, Rejects, integer
 from skillbus.waiting import poll_until
-from skillbus.world.convert import check_op_msg, element_from_msg, op, property_msg, relation_msg
+from skillbus.world.convert import check_op_msg, element_from_msg, op, relation_msg
 from skillbus.world.element import Element
 from skillbus.world.ontology_view import OntologyView
 from skillbus.world.skiros2_queries import SkiROS2Queries
@@ -44,6 +45,10 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         self._elements: dict[str, Element] = {}
         self._relations: set[Relation] = set()
         self._by_node: dict[str, set[Relation]] = {}
+        # node -> its relations sorted (a deterministic order: a set's depends on the
+        # process's string hashing), made when first read and kept sorted as they change:
+        # an element with 10,000 relations is not sorted again at every read
+        self._rel_cache: dict[str, tuple[Relation, ...]] = {}
         self._ontology_cache: OntologyView | None = None  # the server's hierarchy and templates (ontology_view)
         self.version = -1
         self._txn_ids = 0
@@ -90,7 +95,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
                 last_error = f"changes {first + 1}..{last} of the world did not all arrive"
                 continue
             self._elements = elements
-            self._relations, self._by_node = set(), {}
+            self._relations, self._by_node, self._rel_cache = set(), {}, {}
             self._ontology_cache = None  # a scene load or add_class may bring classes
             for r in relations:
                 self._add_rel(r)
@@ -136,14 +141,33 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
             self.resync()
 
     def _add_rel(self, r: Relation) -> None:
+        if r in self._relations:
+            return
         self._relations.add(r)
-        self._by_node.setdefault(r[0], set()).add(r)
-        self._by_node.setdefault(r[2], set()).add(r)
+        for n in {r[0], r[2]}:
+            self._by_node.setdefault(n, set()).add(r)
+            cached = self._rel_cache.get(n)
+            if cached is not None:
+                i = bisect.bisect_left(cached, r)
+                self._rel_cache[n] = cached[:i] + (r,) + cached[i:]
 
     def _remove_rel(self, r: Relation) -> None:
+        if r not in self._relations:
+            return
         self._relations.discard(r)
-        for n in (r[0], r[2]):
+        for n in {r[0], r[2]}:
             self._by_node.get(n, set()).discard(r)
+            cached = self._rel_cache.get(n)
+            if cached is not None:
+                i = bisect.bisect_left(cached, r)
+                self._rel_cache[n] = cached[:i] + cached[i + 1:]
+
+    def _relations_of(self, eid: str) -> tuple[Relation, ...]:
+        """The relations touching `eid`, sorted."""
+        got = self._rel_cache.get(eid)
+        if got is None:
+            got = self._rel_cache[eid] = tuple(sorted(self._by_node.get(eid, ())))
+        return got
 
     def _on_change(self, data: bytes) -> None:
         ch = decode(wm_change_t, data)
@@ -210,11 +234,9 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
 
     # -- reads (replica) ----------------------------------------------------
     def _with_relations(self, e: Element) -> Element:
-        out = e.clone()
-        for (s, p, o) in sorted(self._by_node.get(e.id, ())):
-            out.addRelation(s, p, o)
-        out.mark_loaded()
-        return out
+        """A reader's copy of replica element `e` with the relations touching it, loaded
+        as it is (Element._reader_copy: its parts are copied as they are first read)."""
+        return Element._reader_copy(e, self._relations_of(e.id))
 
     def with_relations(self, e: Element) -> Element:
         """`e` (e.g. a skill's element parameter, which carries properties only) with the
@@ -264,20 +286,42 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         return e is not None and (e.type == concept or self.is_subclass(e.type, concept))
 
     def resolve_elements(self, e: Element) -> list[Element]:
-        """Elements matching `e`: its type (with subclasses, asked of the server's
-        ontology), its label if set, its properties that have values, and its relations
-        ("-1" stands for the candidate)."""
-        q = _query(type_=e.type if e.type not in ("", "Unknown") else "", label=e.label)
-        q.properties = [property_msg(p) for p in e.properties if p.values]
-        q.num_properties = len(q.properties)
-        for r in e.getRelations():
-            q.relations.append(relation_msg("" if r["src"] == "-1" else r["src"], r["type"],
-                                            "" if r["dst"] == "-1" else r["dst"]))
-        q.num_relations = len(q.relations)
-        q.ids_only = True  # the elements themselves come from the replica
-        found = self.query(q)
+        """The world's elements matching `e`, in id order, answered from the replica as the
+        server's query answers (the same rules, tests/integration/test_wm_resolve.py): its
+        type with its subclasses (the server's hierarchy; an unknown type raises
+        WorldModelError), its label if set, every value of its properties that have values
+        (of the same type), and its relations ("-1" or "" stands for the candidate, "*" for
+        any element; a subproperty of the predicate counts)."""
         self._fresh()
-        return [self._with_relations(self._elements[m.id]) if m.id in self._elements else m for m in found]
+        etype = e.type if e.type not in ("", "Unknown") else ""
+        types: set[str] | None = None
+        if etype:
+            view = self.ontology_view()
+            if not view.knows("classes", etype):
+                raise WorldModelError(f"unknown type '{etype}' in query")
+            types = set(view.below("classes", etype))
+        label = e.label
+        wanted = [(p.key, [(type(v), v) for v in p.values]) for p in e.properties if p.values]
+        patterns = [(r["src"], r["type"], r["dst"]) for r in e.getRelations()]
+        out = []
+        for eid in sorted(self._elements):
+            cand = self._elements[eid]
+            if (types is not None and cand._type not in types) or (label and cand._label != label):
+                continue
+            if wanted and not _has_values(cand, wanted):
+                continue
+            if patterns and not all(self._holds(eid, pat) for pat in patterns):
+                continue
+            out.append(self._with_relations(cand))
+        return out
+
+    def _holds(self, eid: str, pattern: tuple[str, str, str]) -> bool:
+        """Whether a relation of the pattern touches `eid` ("-1" or "": `eid`; "*": any)."""
+        s, p, o = pattern
+        s = eid if s in ("-1", "") else s
+        o = eid if o in ("-1", "") else o
+        return any((s == "*" or r[0] == s) and (o == "*" or r[2] == o) and
+                   (p in ("", "*") or self.is_subproperty(r[1], p)) for r in self._by_node.get(eid, ()))
 
     def query(self, q: wm_query_t) -> list[Element]:
         """The elements matching `q` (RPC wm.query), in id order, read in pages, so that a
@@ -510,6 +554,20 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
             return self.rpc.call(method, req, rep_type, timeout=timeout or self.timeout)
         except RpcRemoteError as e:
             raise WorldModelError(str(e)) from None
+
+
+def _has_values(e: Element, wanted: list[tuple[str, list[tuple[type, Any]]]]) -> bool:
+    """Whether `e` has each property of `wanted` with each of its values (a value of
+    another type is another value: 1 is not 1.0, as in the server)."""
+    props = e._properties
+    for key, values in wanted:
+        p = props.get(key)
+        if p is None:
+            return False
+        have = p._values
+        if not all(any(type(h) is t and h == v for h in have) for t, v in values):
+            return False
+    return True
 
 
 def _any(end: str) -> str:

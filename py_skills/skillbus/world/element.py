@@ -25,6 +25,9 @@ _DATATYPES = {"xsd:double": float, "xsd:float": float, "xsd:int": int, "xsd:inte
               "xsd:boolean": bool, "xsd:string": str}
 
 
+_new_object = object.__new__
+
+
 class Element:
     """A world-model element: type (a concept), label, id (empty while abstract),
     properties and relations. ``"-1"`` as a relation's subject or object means this element."""
@@ -47,6 +50,34 @@ class Element:
         return e
 
     _property_from_wire = staticmethod(Property._from_wire)
+
+    @classmethod
+    def _reader_copy(cls, src: "Element", relations: tuple) -> "Element":
+        """A copy of a replica's element for a reader, paid for as it is read: its
+        properties are copied from `src`'s when first touched, its relation dicts made
+        from `relations` ((s, p, o), sorted) when first touched, and what it was loaded as
+        (mark_loaded) when first asked. `src`'s properties may be shared until then because
+        the replica never changes an element in place (a change replaces it)."""
+        e = _new_object(cls)
+        e.__dict__.update(_type=src._type, _label=src._label, _id=src._id,
+                          _shared=(src._properties, relations, src._type, src._label))
+        return e
+
+    def __getattr__(self, name: str) -> Any:
+        # Called only for an attribute not set: the parts of a reader copy not made yet.
+        shared = self.__dict__.get("_shared")
+        if shared is not None:
+            if name == "_properties":
+                value: Any = {k: p._copy() for k, p in shared[0].items()}  # (values are immutable)
+            elif name == "_relations":
+                value = [{"src": s, "type": p, "dst": o, "state": True, "abstract": False} for (s, p, o) in shared[1]]
+            elif name == "_loaded":
+                value = (shared[2], shared[3], shared[0], frozenset(shared[1]))
+            else:
+                raise AttributeError(name)
+            self.__dict__[name] = value
+            return value
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     # -- identity ---------------------------------------------------------
     @property
@@ -224,7 +255,7 @@ class Element:
             raise ValueError(f"relation subject and object must be ids, got {type(subj).__name__} and "
                              f"{type(obj).__name__}")
         rel = {"src": subj, "type": predicate, "dst": obj, "state": value, "abstract": abstract}
-        if rel not in self._relations:
+        if rel not in self._relations:  # (a scan: fine for a few; the replica builds its copies without it)
             self._relations.append(rel)
 
     def setRelation(self, subj: str, predicate: str, obj: str) -> None:

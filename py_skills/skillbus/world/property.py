@@ -24,6 +24,9 @@ from typing import Any
 PRINT_LIMIT = 500  # printState cuts the value list after this many characters (as SkiROS2)
 
 
+_new_object = object.__new__
+
+
 class Property:
     """A key with a list of values of one type (``value`` is the first).
 
@@ -49,6 +52,14 @@ class Property:
         p = cls.__new__(cls)
         p._key, p._values = key, values
         p._type = type(values[0]) if values else None
+        return p
+
+    def _copy(self) -> "Property":
+        """A copy with a list of its own (the values themselves are immutable)."""
+        p = _new_object(type(self))
+        d = p.__dict__
+        d.update(self.__dict__)
+        d["_values"] = self._values[:]
         return p
 
     # -- what a subclass checks ------------------------------------------------------

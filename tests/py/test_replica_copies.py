@@ -1,0 +1,65 @@
+"""What the world-model client hands a reader: copies of the replica's elements that are
+made as they are read (Element._reader_copy) yet behave as full copies, and the
+relations of an element kept sorted as they change (no sort of 10,000 at every read)."""
+
+from __future__ import annotations
+
+import copy
+import pickle
+
+import pytest
+
+from skillbus.bus import open_bus
+from skillbus.world import Element
+from skillbus.world.client import WorldModelInterface
+
+
+@pytest.fixture
+def wmi(monkeypatch):
+    monkeypatch.setattr(WorldModelInterface, "resync", lambda self: None)
+    w = WorldModelInterface(open_bus("memq://"), "test")
+    cube = Element("skiros:Cube", "red", "skiros:Cube-2")
+    cube.setProperty("skiros:Size", [0.05, 0.05, 0.05])
+    w._elements = {"skiros:Cube-2": cube, "skiros:Table-1": Element("skiros:Table", "table", "skiros:Table-1")}
+    w._add_rel(("skiros:Table-1", "skiros:contain", "skiros:Cube-2"))
+    return w
+
+
+def test_a_reader_copy_is_a_copy(wmi):
+    a = wmi.get_element("skiros:Cube-2")
+    assert "_properties" not in a.__dict__ and "_relations" not in a.__dict__  # nothing copied yet
+    a.getProperty("skiros:Size").setValue(0.1, 0)
+    a.addRelation("-1", "skiros:contain", "skiros:Table-1")
+    b = wmi.get_element("skiros:Cube-2")
+    assert b.getProperty("skiros:Size").values == [0.05, 0.05, 0.05]
+    assert b.getRelations() == [{"src": "skiros:Table-1", "type": "skiros:contain", "dst": "skiros:Cube-2",
+                                 "state": True, "abstract": False}]
+    assert wmi._elements["skiros:Cube-2"].getProperty("skiros:Size").values == [0.05, 0.05, 0.05]
+    assert a.changed_since_loaded() and not b.changed_since_loaded()
+    assert a.loaded()[2]["skiros:Size"].values == [0.05, 0.05, 0.05]  # what it was read as
+    b.label = "blue"
+    assert b.changed_since_loaded() and b.loaded()[1] == "red"
+
+
+def test_a_reader_copy_copies_pickles_and_compares_as_an_element(wmi):
+    a = wmi.get_element("skiros:Cube-2")
+    for c in (copy.deepcopy(a), pickle.loads(pickle.dumps(a)), a.clone()):
+        assert c == a and c is not a
+        c.getProperty("skiros:Size").setValue(1.0, 0)
+        assert a.getProperty("skiros:Size").value == 0.05
+    with pytest.raises(AttributeError):
+        a.no_such_attribute  # noqa: B018
+
+
+def test_relations_stay_sorted_as_they_change(wmi):
+    for i in (5, 1, 9, 3):
+        wmi._elements[f"skiros:Cube-{i}0"] = Element("skiros:Cube", "", f"skiros:Cube-{i}0")
+        wmi._add_rel(("skiros:Table-1", "skiros:contain", f"skiros:Cube-{i}0"))
+        if i == 1:
+            wmi.get_element("skiros:Table-1")  # the cache is made here, then kept up
+    wmi._add_rel(("skiros:Table-1", "skiros:contain", "skiros:Cube-50"))  # twice: once
+    wmi._remove_rel(("skiros:Table-1", "skiros:contain", "skiros:Cube-90"))
+    wmi._remove_rel(("skiros:Table-1", "skiros:contain", "skiros:Cube-77"))  # not there: nothing
+    got = [r["dst"] for r in wmi.get_element("skiros:Table-1").getRelations()]
+    assert got == ["skiros:Cube-10", "skiros:Cube-2", "skiros:Cube-30", "skiros:Cube-50"]
+    assert got == sorted(r[2] for r in wmi._by_node["skiros:Table-1"])
