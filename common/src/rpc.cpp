@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <random>
 
 #include "skillbus_msgs/rpc_reply_t.hpp"
@@ -45,6 +46,28 @@ RpcServer::~RpcServer() { bus_.unsubscribe(sub_); }
 
 void RpcServer::add_raw_method(const std::string& name, RawMethod method) { methods_[name] = std::move(method); }
 
+int32_t RpcServer::Answer::chunks() const {
+  return payload.size() <= kRpcChunkBytes ? 1 : static_cast<int32_t>((payload.size() + kRpcChunkBytes - 1) / kRpcChunkBytes);
+}
+
+void RpcServer::send_chunk(const Answer& a, int32_t chunk) {
+  rpc_reply_t rep{};
+  rep.client_id = a.client_id;
+  rep.request_id = a.request_id;
+  rep.method = a.method;
+  rep.status = a.status;
+  rep.error = a.error;
+  rep.chunk = chunk;
+  rep.chunks = a.chunks();
+  const size_t from = static_cast<size_t>(chunk) * kRpcChunkBytes;
+  const size_t to = std::min(a.payload.size(), from + kRpcChunkBytes);
+  if (from < to) rep.payload.assign(a.payload.begin() + static_cast<std::ptrdiff_t>(from),
+                                    a.payload.begin() + static_cast<std::ptrdiff_t>(to));
+  rep.payload_size = static_cast<int32_t>(rep.payload.size());
+  const Bytes buf = encode_msg(rep);
+  bus_.publish(rep_channel_, buf.data(), buf.size());
+}
+
 void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t size) {
   rpc_request_t req;
   if (!decode_msg(data, size, req)) {
@@ -53,51 +76,64 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
   }
   const std::string key = req.client_id + '\n' + std::to_string(req.request_id);
   if (auto it = answered_.find(key); it != answered_.end()) {
-    ++duplicates_;  // a retry: answer again from memory, do not run the method twice
-    bus_.publish(rep_channel_, it->second.data(), it->second.size());
+    const Answer& a = it->second;
+    if (req.chunk == 0) {
+      ++duplicates_;  // a retry: answer again from memory, do not run the method twice
+    } else if (req.chunk > 0 && req.chunk < a.chunks()) {
+      ++pulled_;  // the client asks for the next part of a large reply
+    } else {
+      bad_.record(ch, "chunk " + std::to_string(req.chunk) + " of a reply in " + std::to_string(a.chunks()), size);
+      return;
+    }
+    send_chunk(a, req.chunk);
+    return;
+  }
+  Answer a;
+  a.client_id = req.client_id;
+  a.request_id = req.request_id;
+  a.method = req.method;
+  a.status = rpc_reply_t::OK;
+  if (req.chunk != 0) {  // a part of a reply this server no longer has (or never had)
+    a.status = rpc_reply_t::ERROR;
+    a.error = area_ + "." + req.method + ": the reply is no longer remembered (larger replies than the server keeps, "
+              "or the call is too old): call again";
+    send_chunk(a, 0);
     return;
   }
   if (req.deadline_ns != 0 && realtime_ns() > req.deadline_ns) {
     ++expired_;  // the client has given up; running it now would surprise it
     return;
   }
-  rpc_reply_t rep{};
-  rep.client_id = req.client_id;
-  rep.request_id = req.request_id;
-  rep.method = req.method;
-  rep.status = rpc_reply_t::OK;
   auto m = methods_.find(req.method);
   if (m == methods_.end()) {
-    rep.status = rpc_reply_t::UNKNOWN_METHOD;
-    rep.error = "unknown method '" + req.method + "' on " + area_;
+    a.status = rpc_reply_t::UNKNOWN_METHOD;
+    a.error = "unknown method '" + req.method + "' on " + area_;
   } else {
     try {
-      Bytes out = m->second(req.payload.data(), req.payload.size());
-      rep.payload.assign(out.begin(), out.end());
+      a.payload = m->second(req.payload.data(), req.payload.size());
     } catch (const RpcBadRequest& e) {
-      rep.status = rpc_reply_t::BAD_REQUEST;
-      rep.error = e.what();
+      a.status = rpc_reply_t::BAD_REQUEST;
+      a.error = e.what();
     } catch (const std::exception& e) {
-      rep.status = rpc_reply_t::ERROR;
-      rep.error = area_ + "." + req.method + " failed: " + e.what();
+      a.status = rpc_reply_t::ERROR;
+      a.error = area_ + "." + req.method + " failed: " + e.what();
     }
   }
-  rep.payload_size = static_cast<int32_t>(rep.payload.size());
   ++served_;
-  Bytes buf = encode_msg(rep);
-  bus_.publish(rep_channel_, buf.data(), buf.size());
-  remember(key, std::move(buf));
+  send_chunk(a, 0);
+  remember(key, std::move(a));
 }
 
-void RpcServer::remember(const std::string& key, Bytes reply) {
-  remembered_bytes_ += reply.size();
-  answered_[key] = std::move(reply);
+void RpcServer::remember(const std::string& key, Answer answer) {
+  remembered_bytes_ += answer.payload.size() + answer.error.size() + 64;
+  answered_[key] = std::move(answer);
   order_.push_back(key);
   // Bounded by count and by bytes: pages of a large world would otherwise keep megabytes
-  // of replies that a retry within a call's timeout is the only use for.
+  // of replies that a retry within a call's timeout is the only use for. (The newest is
+  // kept whatever its size: its client may still be pulling its chunks.)
   while (order_.size() > memory_ || (remembered_bytes_ > memory_bytes_ && order_.size() > 1)) {
     auto it = answered_.find(order_.front());
-    remembered_bytes_ -= it->second.size();
+    remembered_bytes_ -= it->second.payload.size() + it->second.error.size() + 64;
     answered_.erase(it);
     order_.pop_front();
   }
@@ -126,10 +162,42 @@ void RpcClient::on_reply(const std::string& ch, const uint8_t* data, size_t size
   if (rep.client_id != client_id_) return;
   auto it = pending_.find(rep.request_id);
   if (it == pending_.end() || it->second.done) return;
-  it->second.done = true;
-  it->second.status = rep.status;
-  it->second.error = rep.error;
-  it->second.payload.assign(rep.payload.begin(), rep.payload.end());
+  Pending& p = it->second;
+  if (rep.chunks <= 1 || rep.status != rpc_reply_t::OK) {  // the whole reply
+    p.done = true;
+    p.status = rep.status;
+    p.error = rep.error;
+    p.payload.assign(rep.payload.begin(), rep.payload.end());
+    return;
+  }
+  // A part of a large reply. Parts of another size of reply (a forged one) are ignored;
+  // so is an empty part (every part of a chunked reply has bytes).
+  if (p.parts.empty()) p.parts.resize(static_cast<size_t>(rep.chunks));
+  if (static_cast<size_t>(rep.chunks) != p.parts.size() || rep.chunk < 0 || rep.chunk >= rep.chunks ||
+      rep.payload.empty() || !p.parts[static_cast<size_t>(rep.chunk)].empty())
+    return;
+  p.parts[static_cast<size_t>(rep.chunk)].assign(rep.payload.begin(), rep.payload.end());
+  if (++p.have < rep.chunks) return;
+  for (const auto& part : p.parts) p.payload.insert(p.payload.end(), part.begin(), part.end());
+  p.parts.clear();
+  p.status = rep.status;
+  p.done = true;
+}
+
+void RpcClient::pull_missing(const std::string& method, int64_t request_id, int64_t deadline_ns, const Pending& p) {
+  rpc_request_t pull{};
+  pull.client_id = client_id_;
+  pull.request_id = request_id;
+  pull.deadline_ns = deadline_ns;
+  pull.method = method;
+  int asked = 0;
+  for (size_t k = 1; k < p.parts.size() && asked < kRpcPullWindow; ++k) {
+    if (!p.parts[k].empty()) continue;
+    pull.chunk = static_cast<int32_t>(k);
+    const Bytes buf = encode_msg(pull);
+    bus_.publish(req_channel_, buf.data(), buf.size());
+    ++asked;
+  }
 }
 
 Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const CallOptions& opts) {
@@ -152,6 +220,19 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
   while (!done()) {
     const auto now = clock::now();
     if (now >= deadline) break;
+    if (!pending_[rid].parts.empty()) {
+      // A large reply has begun: ask for the parts still missing, a window at a time, and
+      // again after a retry interval for those that did not come.
+      const int32_t had = pending_[rid].have;
+      pull_missing(method, rid, req.deadline_ns, pending_[rid]);
+      const auto again = std::min(deadline, now + opts.retry_interval);
+      while (!done() && pending_[rid].have - had < kRpcPullWindow) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(again - clock::now());
+        if (left.count() <= 0) break;
+        bus_.handle(left);
+      }
+      continue;
+    }
     bus_.publish(req_channel_, buf.data(), buf.size());
     if (attempts++ > 0) ++retries_;
     // Back off (x2 per attempt, to 1 s) so that a reply lost to an overrun receiver is
@@ -159,7 +240,7 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
     const auto backoff = std::min<std::chrono::milliseconds>(std::chrono::milliseconds(1000),
                                                              opts.retry_interval * (1 << std::min(attempts - 1, 10)));
     const auto resend_at = std::min(deadline, now + backoff);
-    while (!done()) {
+    while (!done() && pending_[rid].parts.empty()) {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(resend_at - clock::now());
       if (left.count() <= 0) break;
       bus_.handle(left);
@@ -167,6 +248,12 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
   }
   Pending result = std::move(pending_[rid]);
   pending_.erase(rid);
+  if (!result.done && !result.parts.empty()) {
+    const double secs = std::chrono::duration<double>(opts.timeout).count();
+    throw RpcTimeout("rpc " + area_ + "." + method + ": " + std::to_string(result.have) + " of the " +
+                     std::to_string(result.parts.size()) + " parts of its reply came on " + rpc_reply_channel(area_) +
+                     " within " + std::to_string(secs).substr(0, 5) + " s");
+  }
   if (!result.done) {
     const double secs = std::chrono::duration<double>(opts.timeout).count();
     throw RpcTimeout("rpc " + area_ + "." + method + ": no reply on " + rpc_reply_channel(area_) + " within " +

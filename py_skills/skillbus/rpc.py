@@ -8,6 +8,8 @@ A server of area "WM" takes ``rpc_request_t`` on ``SB_WM_REQ`` and answers with
 * The server remembers the replies of its last ``memory`` calls and answers a retry from
   that memory without running the method again: a retried write takes effect once.
 * Failures come back as typed replies and are raised as :class:`RpcRemoteError`.
+* A reply larger than ``CHUNK_BYTES`` comes in chunks: the first with the answer, the
+  others when the client asks for them, ``PULL_WINDOW`` at a time (docs/rpc.md).
 
 Example::
 
@@ -30,6 +32,8 @@ from skillbus.msgs import decode, rpc_reply_t, rpc_request_t
 
 OK, ERROR, UNKNOWN_METHOD, BAD_REQUEST = (rpc_reply_t.OK, rpc_reply_t.ERROR,
                                           rpc_reply_t.UNKNOWN_METHOD, rpc_reply_t.BAD_REQUEST)
+CHUNK_BYTES = 48 * 1024  # the largest reply payload in one message (one LCM datagram): as common/.../rpc.hpp
+PULL_WINDOW = 16         # chunks of a large reply asked for at a time
 
 
 def request_channel(area: str) -> str:
@@ -135,6 +139,17 @@ class RpcServer:
             return rep.encode()
         self.methods[name] = raw
 
+    def _send_chunk(self, answer: rpc_reply_t, chunk: int) -> None:
+        """Part `chunk` of a remembered answer (its payload whole) on the reply channel."""
+        payload = answer.payload
+        rep = rpc_reply_t()
+        rep.client_id, rep.request_id, rep.method = answer.client_id, answer.request_id, answer.method
+        rep.status, rep.error = answer.status, answer.error
+        rep.chunk, rep.chunks = chunk, _chunks(len(payload))
+        rep.payload = payload[chunk * CHUNK_BYTES:(chunk + 1) * CHUNK_BYTES]
+        rep.payload_size = len(rep.payload)
+        self.bus.publish(self.rep_channel, rep.encode())
+
     def _on_request(self, ch: str, data: bytes) -> None:
         req = decode(rpc_request_t, data)
         if req is None:
@@ -143,14 +158,24 @@ class RpcServer:
         key = (req.client_id, req.request_id)
         cached = self._answered.get(key)
         if cached is not None:
-            self.duplicates += 1  # a retry: answer from memory, do not run the method again
-            self.bus.publish(self.rep_channel, cached)
+            if req.chunk == 0:
+                self.duplicates += 1  # a retry: answer from memory, do not run the method again
+            elif not 0 < req.chunk < _chunks(len(cached.payload)):
+                self.bad_input.record(ch, f"chunk {req.chunk} of a reply in {_chunks(len(cached.payload))}", len(data))
+                return
+            self._send_chunk(cached, req.chunk)
+            return
+        rep = rpc_reply_t()
+        rep.client_id, rep.request_id, rep.method, rep.status = req.client_id, req.request_id, req.method, OK
+        if req.chunk != 0:  # a part of a reply this server no longer has
+            rep.status = ERROR
+            rep.error = (f"{self.area}.{req.method}: the reply is no longer remembered (larger replies than the "
+                         f"server keeps, or the call is too old): call again")
+            self._send_chunk(rep, 0)
             return
         if req.deadline_ns and time.time_ns() > req.deadline_ns:
             self.expired += 1  # the client has given up
             return
-        rep = rpc_reply_t()
-        rep.client_id, rep.request_id, rep.method, rep.status = req.client_id, req.request_id, req.method, OK
         method = self.methods.get(req.method)
         if method is None:
             rep.status, rep.error = UNKNOWN_METHOD, f"unknown method '{req.method}' on {self.area}"
@@ -167,15 +192,33 @@ class RpcServer:
                 rep.status, rep.error = BAD_REQUEST, str(e)
             except Exception as e:  # a failing method is an ERROR reply, never silence
                 rep.status, rep.error = ERROR, f"{self.area}.{req.method} failed: {e}"
-        rep.payload_size = len(rep.payload)
         self.served += 1
-        buf = rep.encode()
-        self.bus.publish(self.rep_channel, buf)
-        self._answered[key] = buf
-        self._answered_bytes += len(buf)
+        self._send_chunk(rep, 0)
+        self._answered[key] = rep
+        self._answered_bytes += len(rep.payload) + 64
         while len(self._answered) > self.memory or (self._answered_bytes > self.memory_bytes and len(self._answered) > 1):
             _, old = self._answered.popitem(last=False)
-            self._answered_bytes -= len(old)
+            self._answered_bytes -= len(old.payload) + 64
+
+
+def _chunks(size: int) -> int:
+    """How many chunks a reply payload of `size` bytes is sent in.
+
+    >>> _chunks(0), _chunks(CHUNK_BYTES), _chunks(CHUNK_BYTES + 1)
+    (1, 1, 2)
+    """
+    return max(1, -(-size // CHUNK_BYTES))
+
+
+class _Parts:
+    """The chunks of a large reply received so far."""
+
+    def __init__(self, chunks: int) -> None:
+        self.parts: list[bytes | None] = [None] * chunks
+        self.have = 0
+
+    def missing(self, limit: int) -> list[int]:
+        return [k for k, p in enumerate(self.parts) if p is None][:limit]
 
 
 class RpcClient:
@@ -202,8 +245,37 @@ class RpcClient:
         if rep is None:
             self.bad_input.record(ch, "not an rpc_reply_t", len(data))
             return
-        if rep.client_id == self.client_id and self._pending.get(rep.request_id, 0) is None:
+        if rep.client_id != self.client_id or rep.request_id not in self._pending:
+            return
+        got = self._pending[rep.request_id]
+        if got is not None and not isinstance(got, _Parts):
+            return  # (answered already)
+        if rep.chunks <= 1 or rep.status != OK:
             self._pending[rep.request_id] = rep
+            return
+        # A part of a large reply; parts of another size of reply (a forged one), empty
+        # parts and parts already here are ignored.
+        if got is None:
+            got = self._pending[rep.request_id] = _Parts(rep.chunks)
+        if len(got.parts) != rep.chunks or not 0 <= rep.chunk < rep.chunks or not rep.payload or \
+                got.parts[rep.chunk] is not None:
+            return
+        got.parts[rep.chunk] = bytes(rep.payload)
+        got.have += 1
+        if got.have == rep.chunks:
+            rep.payload = b"".join(got.parts)  # type: ignore[arg-type]
+            rep.payload_size, rep.chunk, rep.chunks = len(rep.payload), 0, 1
+            self._pending[rep.request_id] = rep
+
+    def _pull(self, method: str, request_id: int, deadline_ns: int, parts: _Parts) -> int:
+        """Asks for the first PULL_WINDOW chunks still missing; how many it asked for."""
+        pull = rpc_request_t()
+        pull.client_id, pull.request_id, pull.deadline_ns, pull.method = self.client_id, request_id, deadline_ns, method
+        asked = parts.missing(PULL_WINDOW)
+        for k in asked:
+            pull.chunk = k
+            self.bus.publish(self.req_channel, pull.encode())
+        return len(asked)
 
     def call_raw(self, method: str, payload: bytes, timeout: float = 2.0,
                  retry_interval: float = 0.1) -> bytes:
@@ -217,11 +289,27 @@ class RpcClient:
         self._pending[rid] = None
         deadline = time.monotonic() + timeout
         attempts = 0
+        def waiting() -> bool:
+            return self._pending[rid] is None or isinstance(self._pending[rid], _Parts)
+
         try:
-            while self._pending[rid] is None:
+            while waiting():
                 now = time.monotonic()
                 if now >= deadline:
                     break
+                parts = self._pending[rid]
+                if isinstance(parts, _Parts):
+                    # A large reply has begun: ask for the parts still missing, a window at a
+                    # time, and again after a retry interval for those that did not come.
+                    had = parts.have
+                    self._pull(method, rid, req.deadline_ns, parts)
+                    again = min(deadline, now + retry_interval)
+                    while waiting() and parts.have - had < PULL_WINDOW:
+                        left = again - time.monotonic()
+                        if left <= 0:
+                            break
+                        self.bus.handle(left)
+                    continue
                 self.bus.publish(self.req_channel, buf)
                 if attempts:
                     self.retries += 1
@@ -229,13 +317,16 @@ class RpcClient:
                 # Back off (x2 per attempt, to 1 s) so that a reply lost to an overrun
                 # receiver is not followed by a flood of resent large replies.
                 resend_at = min(deadline, now + min(1.0, retry_interval * 2 ** (attempts - 1)))
-                while self._pending[rid] is None:
+                while self._pending[rid] is None:  # (until the answer, or its first part)
                     left = resend_at - time.monotonic()
                     if left <= 0:
                         break
                     self.bus.handle(left)
         finally:
             rep = self._pending.pop(rid)
+        if isinstance(rep, _Parts):
+            raise RpcTimeout(f"rpc {self.area}.{method}: {rep.have} of the {len(rep.parts)} parts of its reply came "
+                             f"on {reply_channel(self.area)} within {timeout:.1f} s", self.area, timeout)
         if rep is None:
             raise RpcTimeout(f"rpc {self.area}.{method}: no reply on {reply_channel(self.area)} "
                              f"within {timeout:.1f} s ({attempts} attempts)", self.area, timeout)

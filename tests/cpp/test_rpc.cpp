@@ -127,3 +127,28 @@ TEST(Rpc, GarbageOnTheRequestChannelIsCountedNotFatal) {
   EXPECT_EQ(client.call<rpc_counter_t>("add", CounterFixture::add("a", 2)).value, 2);
   EXPECT_EQ(f.server.bad_input().total(), 6);
 }
+
+TEST(Rpc, ALargeReplyArrivesInChunksWhenEveryThirdMessageIsDropped) {
+  auto bus = std::make_unique<DropEveryNthBus>(open_bus("memq://"), 3);
+  RpcServer server(*bus, "big");
+  int runs = 0;
+  std::string big;
+  for (int i = 0; i < 1'000'000; ++i) big.push_back(static_cast<char>('A' + i % 26));
+  server.add_method<rpc_counter_t, rpc_counter_t>("echo", [&runs, &big](const rpc_counter_t& r) {
+    ++runs;  // a small request, a 1 MB reply
+    rpc_counter_t out = r;
+    out.key = big;
+    return out;
+  });
+  RpcClient client(*bus, "big", "test");
+  rpc_counter_t req{};
+  req.amount = 7;
+  CallOptions opts;
+  opts.retry_interval = 5ms;
+  opts.timeout = 10s;
+  const auto rep = client.call<rpc_counter_t>("echo", req, opts);
+  EXPECT_EQ(rep.key, big);
+  EXPECT_EQ(rep.amount, 7);
+  EXPECT_EQ(runs, 1);
+  EXPECT_GE(server.chunks_pulled(), 20);  // 21 chunks after the first, some asked twice
+}

@@ -106,7 +106,7 @@ def test_server_memory_is_bounded_in_bytes():
     for i in range(300):
         client.call("add", req("k" * 100_000, i), rpc_counter_t)
     assert server._answered_bytes <= 1 << 20 and 5 <= len(server._answered) <= 11
-    assert server._answered_bytes == sum(len(b) for b in server._answered.values())
+    assert server._answered_bytes == sum(len(a.payload) + 64 for a in server._answered.values())
 
 
 def test_deferred_requests_are_bounded():
@@ -123,3 +123,56 @@ def test_deferred_requests_are_bounded():
         with pytest.raises(RpcTimeout):
             client.call("later", req("a", i), rpc_counter_t, timeout=0.05)
     assert len(server._deferred) == 5
+
+
+class OneDatagramBus(DropEveryNthBus):
+    """As UDP with a busy receiver: a message larger than one datagram never arrives
+    (LCM loses a whole message with any of its fragments), and every third is lost."""
+
+    def publish(self, channel, data):
+        if len(data) > 60_000:
+            self.dropped += 1
+            return
+        super().publish(channel, data)
+
+
+def test_a_large_reply_arrives_in_chunks_through_a_lossy_bus():
+    """A 1 MB reply is 22 chunks of one datagram each: the first comes with the answer, the
+    client asks for the rest a window at a time and again for those lost (every third
+    message in each direction here), and the method runs once."""
+    from skillbus.rpc import CHUNK_BYTES
+    bus = OneDatagramBus(open_bus("memq://"), 3)
+    runs = []
+
+    def big(r):  # a small request, a 1 MB reply
+        runs.append(1)
+        return req("".join(chr(65 + i % 26) for i in range(1_000_000)), r.amount)
+
+    server = RpcServer(bus, "counter")
+    server.add_method("big", big, rpc_counter_t, rpc_counter_t)
+    client = RpcClient(bus, "counter", "t")
+    rep = client.call("big", req("", 7), rpc_counter_t, retry_interval=0.005, timeout=10)
+    assert len(rep.key) == 1_000_000 and rep.key[:3] == "ABC" and rep.amount == 7 and runs == [1]
+    assert len(server._answered[(client.client_id, 1)].payload) > 20 * CHUNK_BYTES
+
+
+def test_chunk_requests_out_of_range_or_for_forgotten_replies():
+    from skillbus.msgs import rpc_request_t
+    bus = open_bus("memq://")
+    server, _ = counter_server(bus)
+    client = RpcClient(bus, "counter", "t")
+    client.call("add", req("a", 1), rpc_counter_t)
+    got = []
+    bus.subscribe(server.rep_channel, lambda ch, data: got.append(data))
+    pull = rpc_request_t()
+    pull.client_id, pull.request_id, pull.method, pull.chunk = client.client_id, 1, "add", 3  # a 1-chunk reply
+    bus.publish(server.req_channel, pull.encode())
+    while bus.handle(0.02):
+        pass
+    assert got == [] and server.bad_input.total == 1
+    pull.request_id = 99  # never called: an error reply, not silence, and no method run
+    bus.publish(server.req_channel, pull.encode())
+    while bus.handle(0.02):
+        pass
+    rep = rpc_reply_t.decode(got[-1])
+    assert rep.status == rpc_reply_t.ERROR and "no longer remembered" in rep.error and server.served == 1

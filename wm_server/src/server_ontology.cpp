@@ -83,7 +83,8 @@ void WorldModelServer::add_ontology_methods() {
   rpc_.add_method<wm_scene_t, wm_scene_t>("sparql", [this](const wm_scene_t& req) {
     wm_scene_t out{};
     try {
-      out.turtle = sparql_json(req.turtle, sparql_data(), prefixes_, opt_.max_reply_bytes - 4096);
+      // (a large result comes in chunks, docs/rpc.md; the server's reply memory bounds it)
+      out.turtle = sparql_json(req.turtle, sparql_data(), prefixes_, opt_.rpc_memory_bytes / 2);
     } catch (const WmError& e) {
       throw RpcBadRequest(e.what());
     }

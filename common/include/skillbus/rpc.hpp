@@ -6,7 +6,10 @@
 //  * the server remembers the replies of the last `memory` calls and answers a retry
 //    from that memory without running the method again, so a write happens once;
 //  * failures come back as typed replies (ERROR, UNKNOWN_METHOD, BAD_REQUEST) that the
-//    client raises as RpcRemoteError with the server's message.
+//    client raises as RpcRemoteError with the server's message;
+//  * a reply larger than kRpcChunkBytes is sent in chunks of that size: the first with
+//    the call's answer, the others when the client asks for them, a window at a time
+//    (flow control: the client pulls no faster than it reads), each asked again if lost.
 // Timeouts use the steady clock: they detect faults, they never steer behaviour.
 #pragma once
 
@@ -17,11 +20,18 @@
 #include <map>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 #include "skillbus/bus.hpp"
 #include "skillbus/log.hpp"
 
 namespace skillbus {
+
+// The largest reply payload sent in one message: one UDP datagram of LCM, so that one
+// lost datagram loses one chunk, which is asked for again, not the whole reply.
+constexpr size_t kRpcChunkBytes = 48 * 1024;
+// Chunks of a large reply a client asks for at a time.
+constexpr int kRpcPullWindow = 16;
 
 std::string rpc_request_channel(const std::string& area);  // "SB_<AREA>_REQ" (namespaced)
 std::string rpc_reply_channel(const std::string& area);    // "SB_<AREA>_REP" (namespaced)
@@ -67,12 +77,22 @@ class RpcServer {
 
   long served() const { return served_; }
   long duplicates() const { return duplicates_; }
+  long chunks_pulled() const { return pulled_; }
   long expired() const { return expired_; }
   const BadInputCounter& bad_input() const { return bad_; }
 
  private:
+  // A method's answer: the reply without its payload, and the payload, sent in chunks.
+  struct Answer {
+    std::string client_id, method, error;
+    int64_t request_id = 0;
+    int8_t status = 0;
+    Bytes payload;
+    int32_t chunks() const;
+  };
   void on_request(const std::string& ch, const uint8_t* data, size_t size);
-  void remember(const std::string& key, Bytes reply);
+  void send_chunk(const Answer& a, int32_t chunk);
+  void remember(const std::string& key, Answer answer);
 
   Bus& bus_;
   std::string area_, req_channel_, rep_channel_;
@@ -81,8 +101,8 @@ class RpcServer {
   int sub_ = -1;
   std::map<std::string, RawMethod> methods_;
   std::list<std::string> order_;  // oldest first
-  std::unordered_map<std::string, Bytes> answered_;
-  long served_ = 0, duplicates_ = 0, expired_ = 0;
+  std::unordered_map<std::string, Answer> answered_;
+  long served_ = 0, duplicates_ = 0, expired_ = 0, pulled_ = 0;
   BadInputCounter bad_;
 };
 
@@ -113,18 +133,22 @@ class RpcClient {
   long retries() const { return retries_; }
 
  private:
-  void on_reply(const std::string& ch, const uint8_t* data, size_t size);
-
-  Bus& bus_;
-  std::string area_, req_channel_, client_id_;
-  int sub_ = -1;
-  int64_t next_request_id_ = 1;
   struct Pending {
     bool done = false;
     int8_t status = 0;
     std::string error;
     Bytes payload;
+    std::vector<Bytes> parts;  // a reply in chunks: those received (empty: not yet)
+    int32_t have = 0;
   };
+  void on_reply(const std::string& ch, const uint8_t* data, size_t size);
+  // Asks for the first kRpcPullWindow chunks of `p`'s reply still missing.
+  void pull_missing(const std::string& method, int64_t request_id, int64_t deadline_ns, const Pending& p);
+
+  Bus& bus_;
+  std::string area_, req_channel_, client_id_;
+  int sub_ = -1;
+  int64_t next_request_id_ = 1;
   // By request id: a call made from a handler that runs while another call waits must
   // not take its reply.
   std::map<int64_t, Pending> pending_;
