@@ -134,12 +134,12 @@ class SkillProcess:
         m.errors, m.num_errors = list(self.errors), len(self.errors)
         return m
 
-    def check_processors(self, client: RpcClient) -> list[str]:
+    def check_processors(self, client: RpcClient, timeout: float = 2.0) -> list[str]:
         """The processor classes (skillbus.skill.processors and the libraries' own) that the
         manager's tree engine does not know: a tree naming one would fail at expansion."""
         from skillbus.msgs import skill_processors_t, skill_start_t
         from skillbus.skill.processors import all_processors
-        known = client.call("processors", skill_start_t(), skill_processors_t, timeout=2.0)
+        known = client.call("processors", skill_start_t(), skill_processors_t, timeout=timeout)
         names = set(known.names)
         return [f"processor {name} ({cls.__module__}) is not known to the skill manager "
                 f"(it knows: {', '.join(sorted(names))})"
@@ -149,13 +149,17 @@ class SkillProcess:
         """Announces the skills to the manager; retries until it answers. Raises
         WaitTimeout (naming the manager's channel and the last error) after `timeout`."""
         client = RpcClient(self.bus, "SKILL", self.name)
+        deadline = time.monotonic() + timeout
+
+        def left() -> float:  # each call within what is left of `timeout` (a 2 s call outlasted a shorter one)
+            return min(2.0, max(0.05, deadline - time.monotonic()))
 
         def attempt() -> skill_register_t:
-            for e in self.check_processors(client):
+            for e in self.check_processors(client, left()):
                 if e not in self.errors:
                     log.error("%s", e)
                     self.errors.append(e)
-            return client.call("register", self.registration(), skill_register_t, timeout=2.0)
+            return client.call("register", self.registration(), skill_register_t, timeout=left())
 
         try:
             reply = wait_until(attempt, timeout, f"registration with the skill manager on {request_channel('SKILL')}",
