@@ -100,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     from skillbus.bus import BusError
     from skillbus.rpc import RpcTimeout
     try:
-        return dispatch(args)
+        return profiled(dispatch, args)
     except RpcTimeout as e:  # a server that does not answer: one line naming it, not a traceback
         print(f"error: {e.no_answer()}", file=sys.stderr)
         return 1
@@ -115,6 +115,26 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:  # Ctrl-C in a command that has nothing to clean up: no traceback
         print("interrupted", file=sys.stderr)
         return 130
+
+
+PROFILE_ENV = "SKILLBUS_PROFILE_DIR"
+
+
+def profiled(fn, args: argparse.Namespace) -> int:
+    """fn(args), under cProfile when $SKILLBUS_PROFILE_DIR names a folder: the statistics go
+    to DIR/<command>-<identity or pid>.prof when the command ends (docs/benchmarks.md, "Where
+    the demo's time goes"; read them with `python -m pstats`)."""
+    folder = os.environ.get(PROFILE_ENV)
+    if not folder:
+        return fn(args)
+    import cProfile
+    prof = cProfile.Profile()
+    try:
+        return prof.runcall(fn, args)
+    finally:
+        os.makedirs(folder, exist_ok=True)
+        who = os.environ.get("SKILLBUS_IDENTITY") or str(os.getpid())
+        prof.dump_stats(os.path.join(folder, f"{args.command}-{who}.prof"))
 
 
 def dispatch(args: argparse.Namespace) -> int:

@@ -156,7 +156,7 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)
     progs = programs(run_dir)
-    progs.append(Program("logger", [str(Path(sys.executable).parent / "lcm-logger"), "-f", str(run_dir / "demo.lcmlog")]))
+    progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
     conf = launch.write_config(run_dir, progs, lockstep=True)
     watcher = None if quiet else Watcher().start()
     t0 = time.monotonic()

@@ -49,5 +49,16 @@ def binary(name: str) -> Path:
     return path
 
 
+def lcm_logger() -> Path:
+    """The lcm-logger program of the lcm wheel itself: its console script is a Python
+    process that runs this one as a child (two processes, and an interpreter's start, for
+    one logger)."""
+    import lcm
+    exe = Path(getattr(lcm, "LCM_BIN_DIR", Path(lcm.__file__).resolve().parents[1] / "bin")) / "lcm-logger"
+    if not exe.is_file():
+        raise FileNotFoundError(f"{exe} does not exist: the lcm wheel is not installed as expected")
+    return exe
+
+
 def types_jar() -> Path:
     return build_dir() / "gen" / "skillbus_msgs.jar"
