@@ -123,12 +123,15 @@ PROFILE_ENV = "SKILLBUS_PROFILE_DIR"
 def profiled(fn, args: argparse.Namespace) -> int:
     """fn(args), under cProfile when $SKILLBUS_PROFILE_DIR names a folder: the statistics go
     to DIR/<command>-<identity or pid>.prof when the command ends (docs/benchmarks.md, "Where
-    the demo's time goes"; read them with `python -m pstats`)."""
+    the demo's time goes"; read them with `python -m pstats`). The times are the process's
+    CPU time, not the wall clock: on a loaded machine a call that wakes another process
+    (a publish) is often preempted by it, which the wall clock would blame on the call."""
     folder = os.environ.get(PROFILE_ENV)
     if not folder:
         return fn(args)
     import cProfile
-    prof = cProfile.Profile()
+    import time
+    prof = cProfile.Profile(time.process_time)
     try:
         return prof.runcall(fn, args)
     finally:

@@ -41,6 +41,21 @@ def test_a_reader_copy_is_a_copy(wmi):
     assert b.changed_since_loaded() and b.loaded()[1] == "red"
 
 
+def test_get_property_copies_one_property_and_keeps_handing_out_that_one(wmi):
+    wmi._elements["skiros:Cube-2"].setProperty("skiros:Mass", 0.2)
+    a = wmi.get_element("skiros:Cube-2")
+    size = a.getProperty("skiros:Size")
+    assert "_properties" not in a.__dict__ and a.getProperty("skiros:Size") is size
+    assert a.hasProperty("skiros:Mass", 0.2) and not a.hasProperty("skiros:Nothing")
+    size.setValue(0.5, 0)
+    assert a.hasProperty("skiros:Size", 0.5)  # what was handed out is the element's
+    assert any(p is size for p in a.properties)  # kept when all are copied
+    assert a.getProperty("skiros:Size").value == 0.5 and a.changed_since_loaded()
+    assert wmi._elements["skiros:Cube-2"].getProperty("skiros:Size").value == 0.05
+    with pytest.raises(KeyError):
+        wmi.get_element("skiros:Cube-2").getProperty("skiros:Nothing")
+
+
 def test_a_reader_copy_copies_pickles_and_compares_as_an_element(wmi):
     a = wmi.get_element("skiros:Cube-2")
     for c in (copy.deepcopy(a), pickle.loads(pickle.dumps(a)), a.clone()):

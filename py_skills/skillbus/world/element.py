@@ -12,7 +12,6 @@ skill code ports by changing imports.
 
 from __future__ import annotations
 
-import copy
 import logging
 from typing import Any, Iterable
 
@@ -26,6 +25,11 @@ _DATATYPES = {"xsd:double": float, "xsd:float": float, "xsd:int": int, "xsd:inte
 
 
 _new_object = object.__new__
+
+
+def _copy_properties(props: dict[str, Property]) -> dict[str, Property]:
+    """The properties, each with a list of values of its own (values are immutable)."""
+    return {k: p._copy() for k, p in props.items()}
 
 
 class Element:
@@ -53,8 +57,9 @@ class Element:
 
     @classmethod
     def _reader_copy(cls, src: "Element", relations: tuple) -> "Element":
-        """A copy of a replica's element for a reader, paid for as it is read: its
-        properties are copied from `src`'s when first touched, its relation dicts made
+        """A copy of a replica's element for a reader, paid for as it is read: a property is
+        copied from `src`'s when getProperty first returns it (hasProperty reads `src`'s),
+        all of them when anything else first touches them, its relation dicts are made
         from `relations` ((s, p, o), sorted) when first touched, and what it was loaded as
         (mark_loaded) when first asked. `src`'s properties may be shared until then because
         the replica never changes an element in place (a change replaces it)."""
@@ -67,8 +72,9 @@ class Element:
         # Called only for an attribute not set: the parts of a reader copy not made yet.
         shared = self.__dict__.get("_shared")
         if shared is not None:
-            if name == "_properties":
-                value: Any = {k: p._copy() for k, p in shared[0].items()}  # (values are immutable)
+            if name == "_properties":  # (keeping those getProperty has handed out already)
+                handed = self.__dict__.pop("_handed", {})
+                value: Any = {k: handed.get(k) or p._copy() for k, p in shared[0].items()}
             elif name == "_relations":
                 value = [{"src": s, "type": p, "dst": o, "state": True, "abstract": False} for (s, p, o) in shared[1]]
             elif name == "_loaded":
@@ -132,13 +138,21 @@ class Element:
     __hash__ = None  # type: ignore[assignment]  # mutable, compared by value
 
     def clone(self) -> "Element":
-        return copy.deepcopy(self)
+        """A copy that shares nothing that can change (as copy.deepcopy, at a fraction of
+        its cost: values are immutable, so each property copies its list only)."""
+        e = _new_object(type(self))
+        d = e.__dict__
+        props = self._properties  # (a reader copy's: all copied now)
+        d.update(self.__dict__)  # (what it was loaded as is never changed in place: shared)
+        d["_properties"] = _copy_properties(props)
+        d["_relations"] = [dict(r) for r in self._relations]
+        return e
 
     def mark_loaded(self) -> None:
         """Remembers type, label, properties and relations as they are now: what the world
         model holds. ``WorldModelInterface.update_element`` then writes only the
         differences, so a property or relation this copy never carried is never erased."""
-        self._loaded = (self._type, self._label, copy.deepcopy(self._properties),
+        self._loaded = (self._type, self._label, _copy_properties(self._properties),
                         frozenset(self._resolved_relations()))
 
     def loaded(self) -> tuple[str, str, dict[str, Property], frozenset] | None:
@@ -163,16 +177,35 @@ class Element:
     def properties(self) -> list[Property]:
         return list(self._properties.values())
 
+    def _unread(self) -> dict[str, Property] | None:
+        """A reader copy whose properties are not all copied yet: the replica's (to read,
+        never to hand out); else None."""
+        d = self.__dict__
+        return d["_shared"][0] if "_properties" not in d and "_shared" in d else None
+
     def hasProperty(self, key: str, value: Any = None, not_none: bool = False) -> bool:
         """Whether the element has the property; with `value`, whether that is among its
         values; with `not_none`, whether it has a value at all."""
-        if key not in self._properties:
+        props = self._unread()
+        if props is not None:
+            handed = self.__dict__.get("_handed")
+            p = (handed or {}).get(key) or props.get(key)
+        else:
+            p = self._properties.get(key)
+        if p is None:
             return False
         if value is not None:
-            return self._properties[key].find(value) != -1
-        return not not_none or self._properties[key].isSpecified()
+            return p.find(value) != -1
+        return not not_none or p.isSpecified()
 
     def getProperty(self, key: str) -> Property:
+        props = self._unread()
+        if props is not None and key in props:  # a reader copy: copy this one only
+            handed = self.__dict__.setdefault("_handed", {})
+            p = handed.get(key)
+            if p is None:
+                p = handed[key] = props[key]._copy()
+            return p
         if key not in self._properties:
             raise KeyError(f"{self.printState()} has no property {key}")
         return self._properties[key]

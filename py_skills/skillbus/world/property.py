@@ -18,6 +18,8 @@ is one too, with a stricter type check.
 
 from __future__ import annotations
 
+import copy
+
 import ast
 from typing import Any
 
@@ -25,6 +27,7 @@ PRINT_LIMIT = 500  # printState cuts the value list after this many characters (
 
 
 _new_object = object.__new__
+_IMMUTABLE = frozenset((str, int, float, bool))
 
 
 class Property:
@@ -55,11 +58,17 @@ class Property:
         return p
 
     def _copy(self) -> "Property":
-        """A copy with a list of its own (the values themselves are immutable)."""
-        p = _new_object(type(self))
-        d = p.__dict__
-        d.update(self.__dict__)
-        d["_values"] = self._values[:]
+        """A copy that shares nothing that can change, as copy.deepcopy but cheaper: the
+        values the world model stores (str, int, float, bool) are immutable and shared;
+        any other value is deep-copied."""
+        cls = type(self)
+        p = _new_object(cls)
+        values = [v if type(v) in _IMMUTABLE else copy.deepcopy(v) for v in self._values]
+        if cls is Property:  # (attributes set one by one: no instance dict is made)
+            p._key, p._type, p._values = self._key, self._type, values
+        else:
+            p.__dict__.update(self.__dict__)
+            p._values = values
         return p
 
     # -- what a subclass checks ------------------------------------------------------
