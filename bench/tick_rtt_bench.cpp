@@ -1,6 +1,8 @@
 // The round trip of one Python primitive tick through the skill manager's machinery:
 // a RemotePrimitive node (the manager's own code) ticking a primitive served by a real
-// skill process over LCM. Registers nothing: the process's RPC area is given.
+// skill process over LCM. No manager: the process (skills-process --standalone) is put in
+// this program's own registry, as a registration would (a node fails a process the
+// registry does not know: its heartbeats stopped).
 // Usage: tick_rtt_bench AREA LABEL TICKS      prints JSON with the median and p99 in us
 #include <algorithm>
 #include <chrono>
@@ -9,6 +11,7 @@
 #include <vector>
 
 #include "remote_primitive.hpp"
+#include "skillbus_msgs/skill_register_t.hpp"
 
 using namespace skillbus;
 using namespace skillbus::skills;
@@ -26,6 +29,14 @@ int main(int argc, char** argv) {
   impl.description.label = argv[2];
   impl.process = "bench";
   impl.rpc_area = argv[1];
+  impl.incarnation = 1;
+  skillbus_msgs::skill_register_t reg{};
+  reg.process = impl.process;
+  reg.rpc_area = impl.rpc_area;
+  reg.incarnation = impl.incarnation;
+  reg.skills = {impl.description};
+  reg.num_skills = 1;
+  registry.add(reg);
   RemotePrimitive node(ctx, impl, std::make_shared<Scope>());
   const int ticks = std::atoi(argv[3]);
   std::vector<double> us;

@@ -118,6 +118,9 @@ def add_parsers(sub) -> None:
                     help="a robot interface for the skills, e.g. arm=skillbus.robot.arm (repeatable)")
     sp.add_argument("--url", default=None)
     sp.add_argument("--register-timeout", type=float, default=30.0)
+    sp.add_argument("--standalone", action="store_true",
+                    help="serve ticks without a skill manager: no registration, no heartbeat (for a "
+                         "program that ticks the process itself, e.g. bench/tick_rtt_bench)")
     sp.add_argument("--lockstep", action="store_true", help="be a lockstep participant named --name")
     sp.add_argument("--gripper", default=None, metavar="CHANNEL[:NODE]",
                     help="shortcut for --interface gripper=skillbus.can.gripper_service:CHANNEL[:NODE]")

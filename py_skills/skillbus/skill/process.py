@@ -379,6 +379,13 @@ def main(args) -> int:
         return 2
     proc = SkillProcess(bus, args.name, args.library, wmi, participant)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
+    if getattr(args, "standalone", False):
+        if participant is not None:
+            print("error: --standalone serves without a manager on the wall clock; not with --lockstep", file=sys.stderr)
+            return 2
+        log.info("serving %d skill(s) without a skill manager (--standalone)", len(proc.classes))
+        while True:
+            bus.handle(1.0)
     try:
         reply = proc.register(timeout=args.register_timeout)
     except WaitTimeout as e:
