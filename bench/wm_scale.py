@@ -144,9 +144,11 @@ def run_size(n: int, commits: int, tmp: Path) -> dict:
     from skillbus import paths
     from skillbus.netns import Sandbox, last_json
     from wm_query import make_scene
-    scene = tmp / f"scene{n}.ttl"
-    scene.write_text(make_scene(n))
     data = tmp / f"data{n}"
+    # (a request names a scene of the server's DATA/scenes, never a path)
+    (data / "scenes").mkdir(parents=True, exist_ok=True)
+    scene = data / "scenes" / f"scene{n}.ttl"
+    scene.write_text(make_scene(n))
     server_bin = paths.build_dir() / "wm_server" / "wm_server"
     me = [sys.executable, str(Path(__file__).resolve())]
     res: dict = {"elements": n}
@@ -168,7 +170,7 @@ def run_size(n: int, commits: int, tmp: Path) -> dict:
     with Sandbox() as box:  # make the data directory: a snapshot and a journal
         server = box.start("wm-load", [server_bin, "--wall-clock", "--data", data])
         server.wait_for("serving", 30)
-        res.update(run_client(box, "load", ["load", str(scene), str(PRELOAD_COMMITS)], 1200))
+        res.update(run_client(box, "load", ["load", scene.stem, str(PRELOAD_COMMITS)], 1200))
         box.kill(server, 15)
         box.wait(server, 60)
     sizes = {f: (data / f).stat().st_size for f in ("snapshot.bin", "journal.bin")}
