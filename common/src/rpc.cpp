@@ -50,7 +50,13 @@ int32_t RpcServer::Answer::chunks() const {
   return payload.size() <= kRpcChunkBytes ? 1 : static_cast<int32_t>((payload.size() + kRpcChunkBytes - 1) / kRpcChunkBytes);
 }
 
-void RpcServer::send_chunk(const Answer& a, int32_t chunk) {
+bool RpcServer::Answer::complete() const {
+  return chunks() == 1 || std::all_of(sent.begin(), sent.end(), [](bool b) { return b; });
+}
+
+void RpcServer::send_chunk(Answer& a, int32_t chunk) {
+  if (a.sent.size() != static_cast<size_t>(a.chunks())) a.sent.assign(static_cast<size_t>(a.chunks()), false);
+  a.sent[static_cast<size_t>(chunk)] = true;
   rpc_reply_t rep{};
   rep.client_id = a.client_id;
   rep.request_id = a.request_id;
@@ -76,7 +82,7 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
   }
   const std::string key = req.client_id + '\n' + std::to_string(req.request_id);
   if (auto it = answered_.find(key); it != answered_.end()) {
-    const Answer& a = it->second;
+    Answer& a = it->second;
     if (req.chunk == 0) {
       ++duplicates_;  // a retry: answer again from memory, do not run the method twice
     } else if (req.chunk > 0 && req.chunk < a.chunks()) {
@@ -129,13 +135,22 @@ void RpcServer::remember(const std::string& key, Answer answer) {
   answered_[key] = std::move(answer);
   order_.push_back(key);
   // Bounded by count and by bytes: pages of a large world would otherwise keep megabytes
-  // of replies that a retry within a call's timeout is the only use for. (The newest is
-  // kept whatever its size: its client may still be pulling its chunks.)
+  // of replies that a retry within a call's timeout is the only use for. The newest is
+  // kept whatever its size, and so, within twice the bytes, is an answer in chunks that a
+  // client is still pulling (it would otherwise get "no longer remembered" halfway).
   while (order_.size() > memory_ || (remembered_bytes_ > memory_bytes_ && order_.size() > 1)) {
-    auto it = answered_.find(order_.front());
+    auto victim = order_.begin();
+    if (order_.size() <= memory_ && remembered_bytes_ <= 2 * memory_bytes_) {
+      for (auto o = order_.begin(); o != std::prev(order_.end()); ++o)
+        if (answered_.at(*o).complete()) {
+          victim = o;
+          break;
+        }
+    }
+    auto it = answered_.find(*victim);
     remembered_bytes_ -= it->second.payload.size() + it->second.error.size() + 64;
     answered_.erase(it);
-    order_.pop_front();
+    order_.erase(victim);
   }
 }
 
@@ -170,9 +185,21 @@ void RpcClient::on_reply(const std::string& ch, const uint8_t* data, size_t size
     p.payload.assign(rep.payload.begin(), rep.payload.end());
     return;
   }
-  // A part of a large reply. Parts of another size of reply (a forged one) are ignored;
-  // so is an empty part (every part of a chunked reply has bytes).
-  if (p.parts.empty()) p.parts.resize(static_cast<size_t>(rep.chunks));
+  // A part of a large reply. The first the client takes is chunk 0, the call's own answer
+  // (the others come only when asked for), with a bounded count; parts of another size of
+  // reply (a forged one) are ignored, and so is an empty part (every part has bytes).
+  if (p.parts.empty()) {
+    if (rep.chunk != 0) return;
+    if (rep.chunks > kRpcMaxChunks) {
+      p.done = true;
+      p.status = rpc_reply_t::ERROR;
+      p.error = "the reply of " + rep.method + " comes in " + std::to_string(rep.chunks) + " chunks, more than " +
+                std::to_string(kRpcMaxChunks) + " (" + std::to_string(kRpcMaxChunks * kRpcChunkBytes >> 20) +
+                " MB): refused";
+      return;
+    }
+    p.parts.resize(static_cast<size_t>(rep.chunks));
+  }
   if (static_cast<size_t>(rep.chunks) != p.parts.size() || rep.chunk < 0 || rep.chunk >= rep.chunks ||
       rep.payload.empty() || !p.parts[static_cast<size_t>(rep.chunk)].empty())
     return;

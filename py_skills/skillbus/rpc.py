@@ -34,6 +34,7 @@ OK, ERROR, UNKNOWN_METHOD, BAD_REQUEST = (rpc_reply_t.OK, rpc_reply_t.ERROR,
                                           rpc_reply_t.UNKNOWN_METHOD, rpc_reply_t.BAD_REQUEST)
 CHUNK_BYTES = 48 * 1024  # the largest reply payload in one message (one LCM datagram): as common/.../rpc.hpp
 PULL_WINDOW = 16         # chunks of a large reply asked for at a time
+MAX_CHUNKS = 16384       # the most chunks a client takes a reply in (a garbled count must not allocate without bound)
 
 
 def request_channel(area: str) -> str:
@@ -109,7 +110,9 @@ class RpcServer:
         self._answered_bytes = 0
         self.req_channel, self.rep_channel = request_channel(area), reply_channel(area)
         self.methods: dict[str, RawMethod] = {}
-        self._answered: collections.OrderedDict[tuple[str, int], bytes] = collections.OrderedDict()
+        self._answered: collections.OrderedDict[tuple[str, int], Any] = collections.OrderedDict()
+        # answers in chunks not all sent yet (a client is pulling them): key -> chunks sent
+        self._pulling: dict[tuple[str, int], set[int]] = {}
         self._deferred: collections.OrderedDict[tuple[str, int], tuple[str, bytes]] = collections.OrderedDict()
         self.served = self.duplicates = self.expired = 0
         self.bad_input = BadInputCounter(f"rpc-server {area}")
@@ -142,6 +145,12 @@ class RpcServer:
     def _send_chunk(self, answer: rpc_reply_t, chunk: int) -> None:
         """Part `chunk` of a remembered answer (its payload whole) on the reply channel."""
         payload = answer.payload
+        key = (answer.client_id, answer.request_id)
+        if _chunks(len(payload)) > 1:
+            sent = self._pulling.setdefault(key, set())
+            sent.add(chunk)
+            if len(sent) == _chunks(len(payload)):
+                del self._pulling[key]
         rep = rpc_reply_t()
         rep.client_id, rep.request_id, rep.method = answer.client_id, answer.request_id, answer.method
         rep.status, rep.error = answer.status, answer.error
@@ -196,8 +205,18 @@ class RpcServer:
         self._send_chunk(rep, 0)
         self._answered[key] = rep
         self._answered_bytes += len(rep.payload) + 64
+        self._forget_old()
+
+    def _forget_old(self) -> None:
+        """Bounded by count and by bytes. The newest is kept whatever its size, and so,
+        within twice the bytes, is an answer in chunks a client is still pulling."""
         while len(self._answered) > self.memory or (self._answered_bytes > self.memory_bytes and len(self._answered) > 1):
-            _, old = self._answered.popitem(last=False)
+            victim = next(iter(self._answered))
+            if len(self._answered) <= self.memory and self._answered_bytes <= 2 * self.memory_bytes:
+                keys = list(self._answered)[:-1]
+                victim = next((k for k in keys if k not in self._pulling), victim)
+            old = self._answered.pop(victim)
+            self._pulling.pop(victim, None)
             self._answered_bytes -= len(old.payload) + 64
 
 
@@ -253,9 +272,18 @@ class RpcClient:
         if rep.chunks <= 1 or rep.status != OK:
             self._pending[rep.request_id] = rep
             return
-        # A part of a large reply; parts of another size of reply (a forged one), empty
-        # parts and parts already here are ignored.
+        # A part of a large reply. The first taken is chunk 0, the call's own answer (the
+        # others come only when asked for), with a bounded count; parts of another size of
+        # reply (a forged one), empty parts and parts already here are ignored.
         if got is None:
+            if rep.chunk != 0:
+                return
+            if rep.chunks > MAX_CHUNKS:
+                rep.status = ERROR
+                rep.error = (f"the reply of {rep.method} comes in {rep.chunks} chunks, more than {MAX_CHUNKS} "
+                             f"({MAX_CHUNKS * CHUNK_BYTES >> 20} MB): refused")
+                self._pending[rep.request_id] = rep
+                return
             got = self._pending[rep.request_id] = _Parts(rep.chunks)
         if len(got.parts) != rep.chunks or not 0 <= rep.chunk < rep.chunks or not rep.payload or \
                 got.parts[rep.chunk] is not None:

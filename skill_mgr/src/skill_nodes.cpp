@@ -13,9 +13,15 @@ std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& im
 
 namespace {
 
+// The node's conditions after the skill's. A ConditionOr is the run of members that share
+// an or_label: a node's that happens to share the label of the skill's last one would join
+// it ((A or B) and (C or D) read as A or B or C or D), so the node's get labels of their own.
 void append(std::vector<skillbus_msgs::skill_condition_t>& to, int32_t& count,
             const std::vector<skillbus_msgs::skill_condition_t>& more) {
-  to.insert(to.end(), more.begin(), more.end());
+  for (auto c : more) {
+    if (!c.or_label.empty()) c.or_label = "node: " + c.or_label;
+    to.push_back(std::move(c));
+  }
   count = static_cast<int32_t>(to.size());
 }
 

@@ -181,3 +181,39 @@ def test_ontology_questions_templates_classes_and_the_lock(sandbox, tmp_path):
     assert r2["sub"] == ["kit:Cup", "kit:Mug", "kit:Teapot"], r2
     assert "kit:Mug" in r2["template"], r2
     assert r2["mugs"][0] == "kit:Mug-2" and "kit:mug_template" in r2["mugs"], r2
+
+
+RELOAD = textwrap.dedent("""
+    import json, sys
+    from skillbus.bus import open_bus
+    from skillbus.world import WorldModelInterface
+    wmi = WorldModelInterface(open_bus(), "reload-test")
+    out = {"first": wmi.load_scene(turtle=sys.argv[1]), "again": wmi.load_scene(turtle=sys.argv[1])}
+    out["template"] = wmi.get_template_element("kit:mug_template").type
+    out["mug_up"] = wmi.get_super_class("kit:Mug")
+    out["ontology_has_mug"] = "kitchen.owl#Mug" in wmi._call("ontology", __import__("skillbus.msgs").msgs.wm_scene_t(),
+                                                              __import__("skillbus.msgs").msgs.wm_scene_t).turtle
+    out["plain"] = wmi.load_scene(turtle=sys.argv[2])
+    out["cup_after_plain"] = wmi.get_sub_classes("kit:Cup")
+    print(json.dumps(out))
+""")
+
+PLAIN = """\
+@prefix owl: <http://www.w3.org/2002/07/owl#> .
+@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .
+@prefix skiros: <http://rvmi.aau.dk/ontologies/skiros.owl#> .
+skiros:Table-1 a owl:NamedIndividual, skiros:Table ; rdfs:label "table" .
+"""
+
+
+def test_a_scene_loaded_again_imports_again_and_the_next_scene_replaces_its_ontology(sandbox, tmp_path):
+    library = tmp_path / "library"
+    library.mkdir()
+    (library / "kitchen.ttl").write_text(ROBOT_OWL)
+    wm = sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
+                              "--ontology-library", str(library)])
+    wm.wait_for("serving", 30)
+    r = run(sandbox, RELOAD, SCENE, PLAIN)
+    assert "imported the ontology" in r["first"] and "imported the ontology" in r["again"], r
+    assert r["template"] == "kit:Mug" and r["mug_up"] == "kit:Cup" and r["ontology_has_mug"], r
+    assert r["cup_after_plain"] == [], r  # the kitchen came with the scene, and went with it

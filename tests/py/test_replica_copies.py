@@ -78,3 +78,15 @@ def test_relations_stay_sorted_as_they_change(wmi):
     got = [r["dst"] for r in wmi.get_element("skiros:Table-1").getRelations()]
     assert got == ["skiros:Cube-10", "skiros:Cube-2", "skiros:Cube-30", "skiros:Cube-50"]
     assert got == sorted(r[2] for r in wmi._by_node["skiros:Table-1"])
+
+
+def test_with_relations_copies_the_callers_element_and_keeps_its_own_relations(wmi):
+    mine = Element("skiros:Cube", "red", "skiros:Cube-2")
+    mine.setProperty("skiros:Size", 0.07)
+    mine.addRelation("-1", "skiros:contain", "skiros:Table-1")
+    w = wmi.with_relations(mine)
+    mine.getProperty("skiros:Size").setValue(1.0, 0)
+    assert w.getProperty("skiros:Size").value == 0.07 and w.loaded()[2]["skiros:Size"].value == 0.07
+    rels = {(r["src"], r["type"], r["dst"]) for r in w.getRelations()}
+    assert rels == {("-1", "skiros:contain", "skiros:Table-1"), ("skiros:Table-1", "skiros:contain", "skiros:Cube-2")}
+    assert not w.changed_since_loaded()

@@ -176,3 +176,51 @@ def test_chunk_requests_out_of_range_or_for_forgotten_replies():
         pass
     rep = rpc_reply_t.decode(got[-1])
     assert rep.status == rpc_reply_t.ERROR and "no longer remembered" in rep.error and server.served == 1
+
+
+def test_a_reply_that_claims_too_many_chunks_is_refused_not_allocated():
+    from skillbus.msgs import rpc_request_t
+    from skillbus.rpc import MAX_CHUNKS, reply_channel, request_channel
+    bus = open_bus("memq://")
+
+    def forge(ch, data):  # a "server" that answers every call with an absurd chunk count
+        r = rpc_request_t.decode(data)
+        rep = rpc_reply_t()
+        rep.client_id, rep.request_id, rep.method, rep.status = r.client_id, r.request_id, r.method, rpc_reply_t.OK
+        rep.chunk, rep.chunks, rep.payload, rep.payload_size = 0, 1 << 30, b"x", 1
+        bus.publish(reply_channel("counter"), rep.encode())
+
+    bus.subscribe(request_channel("counter"), forge)
+    client = RpcClient(bus, "counter", "t")
+    with pytest.raises(RpcRemoteError, match=f"more than {MAX_CHUNKS}"):
+        client.call("add", req("a", 1), rpc_counter_t, timeout=2)
+
+
+def test_an_answer_a_client_is_still_pulling_outlives_newer_answers():
+    """Memory of 1 MB: a 600 KB answer whose chunks are not all sent yet is kept while 20
+    newer 100 KB answers come and go (within twice the memory); then it is pulled whole."""
+    from skillbus.msgs import rpc_request_t
+    bus = open_bus("memq://")
+    server = RpcServer(bus, "counter", memory_bytes=1 << 20)
+    server.add_method("big", lambda r: req("B" * 600_000, 0), rpc_counter_t, rpc_counter_t)
+    server.add_method("add", lambda r: req("k" * 100_000, r.amount), rpc_counter_t, rpc_counter_t)
+    got = []
+    bus.subscribe(server.rep_channel, lambda ch, data: got.append(rpc_reply_t.decode(data)))
+    call = rpc_request_t()
+    call.client_id, call.request_id, call.method = "slow-reader", 1, "big"
+    bus.publish(server.req_channel, call.encode())  # its first chunk comes; the reader is slow to pull
+    while bus.handle(0.01):
+        pass
+    other = RpcClient(bus, "counter", "busy")
+    for i in range(20):
+        other.call("add", req("", i), rpc_counter_t)
+    assert ("slow-reader", 1) in server._answered
+    first = got[0]
+    for k in range(1, first.chunks):
+        call.chunk = k
+        bus.publish(server.req_channel, call.encode())
+    while bus.handle(0.01):
+        pass
+    parts = {r.chunk: r.payload for r in got if r.client_id == "slow-reader"}
+    assert all(r.status == rpc_reply_t.OK for r in got if r.client_id == "slow-reader")
+    assert len(parts) == first.chunks and ("slow-reader", 1) not in server._pulling

@@ -270,3 +270,11 @@ def test_set_relation_writes_nothing_when_the_world_is_already_so(wmi, server):
     assert server.commits == []
     assert wmi.set_relation(*TABLE_CUBE, False)
     assert server.commits == [[(wm_op_t.REMOVE_RELATION, TABLE_CUBE)]]
+
+
+def test_the_ontology_is_read_again_after_the_world_was_replaced(wmi, server):
+    wmi._ontology_cache = OntologyView.from_json({"classes": {"skiros:Unicorn": []}, "relations": {}})
+    assert wmi.get_sub_classes("skiros:Unicorn") == ["skiros:Unicorn"]  # (what it holds now)
+    wmi._on_change(server.load_scene_without(TABLE_CUBE))  # a scene load (or add_class) elsewhere
+    assert wmi.get_sub_classes("skiros:Unicorn") == []  # read again with the world
+    assert wmi.get_sub_classes("skiros:Location") == ["skiros:Location", "skiros:Bin", "skiros:Table"]

@@ -82,6 +82,7 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
   for (const auto& i : imported.missing_imports)
     SB_WARN(kLog, "the ontology imports " << i << ", which neither an --ontology file nor the --ontology-library "
                                           "declares (give its file or folder)");
+  base_ontology_ = ontology_;  // what every scene load starts from
   // The ontologies the loaded scene imported, then its own axioms, before the journal's
   // records, which may use their classes.
   if (const std::string imports = journal_.read_scene_imports(); !imports.empty()) {
@@ -361,10 +362,16 @@ const std::string& WorldModelServer::sparql_data() {
 }
 
 void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {
-  Ontology onto = ontology_;  // the live ontology changes only if the whole scene loads
+  // From the --ontology files (and what they import), not from the live ontology: a scene
+  // replaces the last one's imports and axioms, and what it imports is found again even if
+  // the last scene had imported it too. The live ontology changes only if the whole scene loads.
+  Ontology onto = base_ontology_;
   Prefixes px = prefixes_;
   Scene scene = read_scene(text, onto, px, source);
   const OntologyLoad imported = library_.resolve(onto, px);  // the scene's owl:imports, from the library
+  // Again, now that the imported classes are known: an axiom of the scene between them
+  // (a subclass of an imported class) is read as a restart reads it (files, imports, scene).
+  onto.add_triples(scene.extra, px);
   check_scene_types(scene, onto, source);
   WorldStore check(onto);
   std::vector<Op> ops;

@@ -24,9 +24,10 @@ void check_axiom(const Triple& t, const WorldStore& store, const Prefixes& px) {
   if (t.s.kind == Term::Blank || t.o.kind == Term::Blank)
     throw WmError("add_axioms: a blank node (e.g. an owl:Restriction) cannot be added while the server runs (its "
                   "name could clash with the loaded ones): put it in an ontology file or a scene");
-  if (t.s.kind == Term::Iri && store.get(px.compact(t.s.value)))
-    throw WmError("add_axioms: " + px.compact(t.s.value) +
-                  " is an element of the world: change elements with a transaction (commit), not as axioms");
+  for (const Term* term : {&t.s, &t.o})
+    if (term->kind == Term::Iri && store.get(px.compact(term->value)))
+      throw WmError("add_axioms: " + px.compact(term->value) +
+                    " is an element of the world: change elements with a transaction (commit), not as axioms");
   if (t.p.value == kRdfType && t.o.value == "http://www.w3.org/2002/07/owl#NamedIndividual")
     throw WmError("add_axioms: " + px.compact(t.s.value) +
                   " would be an owl:NamedIndividual, which a scene reads as an element: add elements with add_element");
@@ -135,6 +136,15 @@ wm_scene_t WorldModelServer::on_add_axioms(const wm_scene_t& req) {
   if (added > 0) {
     Ontology onto = ontology_;
     onto.add_triples(triples, px);
+    OntologyLoad imported = library_.resolve(onto, px);  // (an owl:imports among them)
+    if (!imported.triples.empty()) {
+      onto.add_triples(extra, px);
+      std::vector<Triple> imports = scene_imports_;
+      imports.insert(imports.end(), imported.triples.begin(), imported.triples.end());
+      journal_.write_scene_imports(write_turtle(imports, px));
+      scene_imports_ = std::move(imports);
+      for (const auto& f : imported.files) out.report += "; imported the ontology " + f;
+    }
     journal_.write_scene_extra(write_turtle(extra, px));  // durable before the reply
     ontology_ = std::move(onto);
     prefixes_ = px;

@@ -32,6 +32,9 @@ namespace skillbus {
 constexpr size_t kRpcChunkBytes = 48 * 1024;
 // Chunks of a large reply a client asks for at a time.
 constexpr int kRpcPullWindow = 16;
+// The most chunks a client takes a reply in (768 MB): a reply that says more is refused
+// (a garbled or forged count must not make it allocate without bound).
+constexpr int32_t kRpcMaxChunks = 16384;
 
 std::string rpc_request_channel(const std::string& area);  // "SB_<AREA>_REQ" (namespaced)
 std::string rpc_reply_channel(const std::string& area);    // "SB_<AREA>_REP" (namespaced)
@@ -88,10 +91,12 @@ class RpcServer {
     int64_t request_id = 0;
     int8_t status = 0;
     Bytes payload;
+    std::vector<bool> sent;  // a reply in chunks: which have been sent (a client may still be pulling)
     int32_t chunks() const;
+    bool complete() const;   // every chunk sent at least once
   };
   void on_request(const std::string& ch, const uint8_t* data, size_t size);
-  void send_chunk(const Answer& a, int32_t chunk);
+  void send_chunk(Answer& a, int32_t chunk);
   void remember(const std::string& key, Answer answer);
 
   Bus& bus_;

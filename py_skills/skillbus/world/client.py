@@ -34,7 +34,6 @@ from skillbus.world.wire import ElementsPage, decode_elements, query_all
 __all__ = ["WorldModelError", "WorldModelInterface", "query_all"]
 
 Relation = tuple[str, str, str]
-FREEZE_AT = 1000  # elements from which a resync moves the replica out of the collector's reach
 
 
 class WorldModelError(RuntimeError):
@@ -108,13 +107,6 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
                 if ch.version == self.version + 1:
                     self._apply_change(ch)
             self._stale = False
-            if len(self._elements) >= FREEZE_AT:
-                # The replica is most of this process's objects and lives until the next
-                # resync: out of the garbage collector's reach (gc.freeze), a collection no
-                # longer walks it (a full one took ~25 ms at 10,000 elements, several times in
-                # a burst of reads). Its objects hold no reference cycles: when a resync
-                # replaces them, reference counting frees them all the same.
-                gc.freeze()
             return
         raise WorldModelError(f"could not read the world: {last_error}")
 
@@ -251,9 +243,17 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
 
     def with_relations(self, e: Element) -> Element:
         """`e` (e.g. a skill's element parameter, which carries properties only) with the
-        relations the replica has for its id, marked as loaded (see update_element)."""
+        relations the replica has for its id (beside its own), marked as loaded (see
+        update_element): a copy, which shares nothing with `e`."""
         self._fresh()
-        return self._with_relations(e) if e.id and e.id in self._elements else e
+        if not e.id or e.id not in self._elements:
+            return e
+        out = e.clone()
+        have = {(r["src"], r["type"], r["dst"]) for r in out._relations if r.get("state", True)}
+        out._relations += [{"src": s, "type": p, "dst": o, "state": True, "abstract": False}
+                           for (s, p, o) in self._relations_of(e.id) if (s, p, o) not in have]
+        out.mark_loaded()
+        return out
 
     def get_element(self, eid: str) -> Element:
         self._fresh()

@@ -59,6 +59,7 @@ class SkiROS2Queries:
     def ontology_view(self) -> OntologyView:
         """The server's class and relation-type hierarchy and its ontology's individuals,
         read once and kept until the replica reads the world again (RPC wm.hierarchy)."""
+        self._fresh()  # (a reset, another client's add_class or scene load, drops it)
         if self._ontology_cache is None:
             rep = self._call("hierarchy", wm_scene_t(), wm_scene_t)  # type: ignore[attr-defined]
             self._ontology_cache = OntologyView.from_json(rep.turtle)

@@ -90,6 +90,7 @@ class WorldModelServer {
   ServerOptions opt_;
   Prefixes prefixes_;
   Ontology ontology_;
+  Ontology base_ontology_;  // the --ontology files and what they import: where a scene load starts
   WorldStore store_;
   Journal journal_;
   LockstepParticipant participant_;
