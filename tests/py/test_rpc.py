@@ -208,6 +208,8 @@ def test_an_answer_a_client_is_still_pulling_outlives_newer_answers():
     bus.subscribe(server.rep_channel, lambda ch, data: got.append(rpc_reply_t.decode(data)))
     call = rpc_request_t()
     call.client_id, call.request_id, call.method = "slow-reader", 1, "big"
+    call.payload = req("", 0).encode()
+    call.payload_size = len(call.payload)
     bus.publish(server.req_channel, call.encode())  # its first chunk comes; the reader is slow to pull
     while bus.handle(0.01):
         pass
@@ -216,6 +218,8 @@ def test_an_answer_a_client_is_still_pulling_outlives_newer_answers():
         other.call("add", req("", i), rpc_counter_t)
     assert ("slow-reader", 1) in server._answered
     first = got[0]
+    assert first.chunks == 13
+    call.payload, call.payload_size = b"", 0
     for k in range(1, first.chunks):
         call.chunk = k
         bus.publish(server.req_channel, call.encode())
