@@ -27,17 +27,18 @@ void append(std::vector<skillbus_msgs::skill_condition_t>& to, int32_t& count,
 
 }  // namespace
 
+void add_node_conditions(skillbus_msgs::skill_description_t& d, const skillbus_msgs::skill_tree_node_t& node) {
+  append(d.pre, d.num_pre, node.pre);
+  append(d.hold, d.num_hold, node.hold);
+  append(d.post, d.num_post, node.post);
+}
+
 std::unique_ptr<Node> make_placeholder_node(TaskContext& ctx, const std::string& type, const std::string& label,
                                             std::shared_ptr<Scope> scope, const skillbus_msgs::skill_tree_node_t* own) {
   auto impls = ctx.registry.find(type, label);
   if (impls.empty()) return nullptr;
   if (own)  // (the copies the registry gave: the registered descriptions stay as they are)
-    for (auto& impl : impls) {
-      auto& d = impl.description;
-      append(d.pre, d.num_pre, own->pre);
-      append(d.hold, d.num_hold, own->hold);
-      append(d.post, d.num_post, own->post);
-    }
+    for (auto& impl : impls) add_node_conditions(impl.description, *own);
   if (impls.size() > 1 && label.empty())  // by type only: the first implementation that can start
     return std::make_unique<Alternatives>(ctx, std::move(impls), std::move(scope));
   return make_skill_node(ctx, impls.front(), std::move(scope));

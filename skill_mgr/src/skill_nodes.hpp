@@ -18,6 +18,9 @@ namespace skillbus::skills {
 
 class Scope;
 
+// A tree node's own conditions after the description's (each ConditionOr of the node with
+// a label of its own, so that it never joins one of the skill's).
+void add_node_conditions(skillbus_msgs::skill_description_t& d, const skillbus_msgs::skill_tree_node_t& node);
 // The node for an implementation (primitive or compound).
 std::unique_ptr<Node> make_skill_node(TaskContext& ctx, const Implementation& impl, std::shared_ptr<Scope> scope);
 // The node for a placeholder of `type` (and `label`): that implementation, or Alternatives

@@ -5,6 +5,7 @@
 
 #include "blackboard.hpp"
 #include "registry.hpp"
+#include "skill_nodes.hpp"
 #include "skill_params.hpp"
 
 using namespace skillbus::skills;
@@ -140,4 +141,28 @@ TEST(SameValues, ComparesByEncodingIncludingEmptiness) {
   Param emptied = value("N", 1);
   emptied.values.clear();
   EXPECT_FALSE(same_values(value("N", 1), emptied));  // an emptied value is a change
+}
+
+TEST(NodeConditions, ANodesConditionOrNeverJoinsTheSkillsOwn) {
+  auto member = [](const std::string& label, const std::string& or_label) {
+    skillbus_msgs::skill_condition_t c{};
+    c.kind = "IsSpecified";
+    c.label = label;
+    c.subject = "Object";
+    c.desired_state = true;
+    c.or_label = or_label;
+    return c;
+  };
+  skillbus_msgs::skill_description_t d{};
+  d.pre = {member("A", "either"), member("B", "either")};
+  d.num_pre = 2;
+  skillbus_msgs::skill_tree_node_t n{};
+  n.pre = {member("C", "either"), member("D", "either"), member("E", "")};
+  n.num_pre = 3;
+  add_node_conditions(d, n);
+  ASSERT_EQ(d.num_pre, 5);
+  EXPECT_EQ(d.pre[1].or_label, "either");
+  EXPECT_NE(d.pre[2].or_label, d.pre[1].or_label);  // (A or B) and (C or D), not A or B or C or D
+  EXPECT_EQ(d.pre[2].or_label, d.pre[3].or_label);
+  EXPECT_EQ(d.pre[4].or_label, "");
 }
