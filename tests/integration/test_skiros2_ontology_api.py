@@ -191,8 +191,9 @@ RELOAD = textwrap.dedent("""
     out = {"first": wmi.load_scene(turtle=sys.argv[1]), "again": wmi.load_scene(turtle=sys.argv[1])}
     out["template"] = wmi.get_template_element("kit:mug_template").type
     out["mug_up"] = wmi.get_super_class("kit:Mug")
-    out["ontology_has_mug"] = "kitchen.owl#Mug" in wmi._call("ontology", __import__("skillbus.msgs").msgs.wm_scene_t(),
-                                                              __import__("skillbus.msgs").msgs.wm_scene_t).turtle
+    from skillbus.msgs import wm_scene_t
+    onto = wmi._call("ontology", wm_scene_t(), wm_scene_t).turtle
+    out["ontology_has_mug"] = "kit:Mug" in onto or "kitchen.owl#Mug" in onto
     out["plain"] = wmi.load_scene(turtle=sys.argv[2])
     out["cup_after_plain"] = wmi.get_sub_classes("kit:Cup")
     print(json.dumps(out))
