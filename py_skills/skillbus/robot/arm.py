@@ -33,8 +33,10 @@ class ArmError(RuntimeError):
 
 class Arm:
     # A plan is asked for inside a skill's tick: the call must end (and name the motion
-    # service) before the manager's tick timeout (2 s in the system) names the skill process.
-    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 1.5) -> None:
+    # service) well before the manager's tick timeout (2 s in the system) names the skill
+    # process. Under lockstep the tick may wait for the process's frame before it starts:
+    # 1.5 s left too little of the 2 s on a loaded machine. A plan takes milliseconds.
+    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 1.0) -> None:
         self.bus, self.participant = bus, participant
         self.motion = RpcClient(bus, "MOTION", name)
         self.motion_timeout = motion_timeout
