@@ -264,3 +264,28 @@ def test_the_hub_drops_records_whose_length_byte_overflows_the_data(tmp_path):
         hub.close()
         for a, b in pairs:
             b.close()
+
+
+def test_records_sent_just_before_a_client_closes_are_relayed(tmp_path):
+    """A client that sends and closes at once, with records of ours unread (a rogue node in
+    test_gripper_can): its socket reports ECONNRESET once, before what it sent. The hub
+    relays those records, then drops it."""
+    rec = struct.pack("=IB3x8s", 0x185, 3, bytes(8))
+    hub = Hub(tmp_path / "hub.sock")
+    pairs = [socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET) for _ in range(2)]
+    try:
+        sender, receiver = Client(pairs[0][0]), Client(pairs[1][0])
+        for cl in (sender, receiver):
+            cl.sock.setblocking(False)
+            hub.clients[cl.sock.fileno()] = cl
+            hub.sel.register(cl.sock, 1, cl)
+        pairs[0][0].send(b"unread by the sender")  # (as the hub's JOINED, or a frame relayed to it)
+        pairs[0][1].send(rec)
+        pairs[0][1].send(rec)
+        pairs[0][1].close()
+        hub._read(sender)
+        assert hub.relayed == 2 and list(receiver.out) == [rec, rec]
+        assert sender.sock.fileno() == -1 and len(hub.clients) == 1  # and then it was dropped
+    finally:
+        hub.close()
+        pairs[1][1].close()

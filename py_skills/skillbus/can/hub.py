@@ -78,6 +78,7 @@ class Client:
         self.echo = False
         self.last_progress = time.monotonic()  # when it last took a record
         self.gone = False  # its end is closed for reading: relay nothing more to it
+        self.reset = False  # it closed with records of ours unread (ECONNRESET, reported once)
 
 
 class Hub:
@@ -137,7 +138,18 @@ class Hub:
             try:
                 rec = c.sock.recv(CANFD_MTU + 1)
             except BlockingIOError:
+                if c.reset:  # (gone, and nothing of its is left to read)
+                    self._drop(c, "connection reset, its records relayed")
                 return
+            except ConnectionResetError as e:
+                # It closed while records we sent it were unread. The kernel says so once,
+                # before the records it sent before closing: those are read and relayed,
+                # then it is dropped (before, they were lost with it).
+                if c.reset:
+                    self._drop(c, str(e))
+                    return
+                c.reset = True
+                continue
             except OSError as e:
                 self._drop(c, str(e))
                 return
