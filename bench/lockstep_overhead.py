@@ -23,6 +23,7 @@ import statistics
 import sys
 from pathlib import Path
 
+from plots import IMAGES
 from skillbus import paths
 from skillbus.lockstep_session import python_participant_argv
 from skillbus.netns import Sandbox, last_json
@@ -68,7 +69,7 @@ def lockstep(box: Sandbox, n: int, lang: str, frames: int, signed: bool) -> dict
     return s
 
 
-PLOT = Path(__file__).resolve().parent.parent / "docs" / "images" / "bench_lockstep.png"
+PLOT = IMAGES / "bench_lockstep.png"
 
 
 def main() -> int:
@@ -116,25 +117,14 @@ def main() -> int:
 def plot(rows: list, base: float) -> None:
     """us per frame against participants, each language with and without a key, and the
     round trip's median: how the frame's cost grows."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for lang, name in (("py", "Python"), ("cpp", "C++")):
-        mine = [r for r in rows if r[0] == lang]
-        ax.plot([r[1] for r in mine], [r[2] for r in mine], "o-", label=f"{name} participants, signed")
-        ax.plot([r[1] for r in mine], [r[3] for r in mine], "o--", label=f"{name} participants, no key")
-    ax.axhline(base, color="grey", linestyle=":", label="raw Python LCM round trip (median)")
-    ax.set_xlabel("participants")
-    ax.set_ylabel("us per bare frame (median)")
-    ax.set_xticks([1, 2, 4, 8])
-    ax.set_title("Lockstep frame overhead")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    PLOT.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(PLOT, dpi=100)
-
+    from plots import figure  # (matplotlib is loaded only to draw)
+    with figure(PLOT, "Lockstep frame overhead", "participants", "us per bare frame (median)") as ax:
+        for lang, name in (("py", "Python"), ("cpp", "C++")):
+            mine = [r for r in rows if r[0] == lang]
+            ax.plot([r[1] for r in mine], [r[2] for r in mine], "o-", label=f"{name} participants, signed")
+            ax.plot([r[1] for r in mine], [r[3] for r in mine], "o--", label=f"{name} participants, no key")
+        ax.axhline(base, color="grey", linestyle=":", label="raw Python LCM round trip (median)")
+        ax.set_xticks([1, 2, 4, 8])
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -26,6 +26,7 @@ import sys
 import time
 from pathlib import Path
 
+from plots import IMAGES
 from skillbus import paths
 from skillbus.netns import Sandbox, last_json
 
@@ -90,7 +91,7 @@ def tick_round_trip(ticks: int) -> tuple[dict, dict]:
 
 
 GROWTH = (1, 10, 100, 1000)
-PLOT = HERE.parent / "docs" / "images" / "bench_tasks.png"
+PLOT = IMAGES / "bench_tasks.png"
 
 TASKS_CLIENT = r'''
 import json, sys, time
@@ -152,24 +153,13 @@ def task_growth(window_s: float = 4.0) -> dict:
 
 
 def plot_tasks(growth: dict) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from plots import figure  # (matplotlib is loaded only to draw)
     n = sorted(growth)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(n, [growth[k]["median_hz"] for k in n], "o-", label="ticks a second each task gets (median)")
-    ax.plot(n, [growth[k]["min_hz"] for k in n], "o--", label="the least served task")
-    ax.axhline(25, color="grey", linestyle=":", label="asked for: 25 Hz")
-    ax.set_xscale("log")
-    ax.set_xlabel("concurrent tasks (an always-running Python primitive each)")
-    ax.set_ylabel("ticks per second")
-    ax.set_title("The skill manager's ticking as tasks grow")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    PLOT.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(PLOT, dpi=100)
-
+    with figure(PLOT, "The skill manager's ticking as tasks grow",
+                "concurrent tasks (an always-running Python primitive each)", "ticks per second", log_x=True) as ax:
+        ax.plot(n, [growth[k]["median_hz"] for k in n], "o-", label="ticks a second each task gets (median)")
+        ax.plot(n, [growth[k]["min_hz"] for k in n], "o--", label="the least served task")
+        ax.axhline(25, color="grey", linestyle=":", label="asked for: 25 Hz")
 
 def main() -> int:
     a = statistics.median(ours() for _ in range(3))

@@ -33,12 +33,13 @@ import tempfile
 import time
 from pathlib import Path
 
+from plots import IMAGES
 from skillbus import paths
 from skillbus.netns import Sandbox, last_json
 
 HERE = Path(__file__).resolve().parent
 ONTOLOGY = HERE.parent / "wm_server" / "ontology" / "skiros.ttl"
-PLOT = HERE.parent / "docs" / "images" / "bench_wm_resolve.png"
+PLOT = IMAGES / "bench_wm_resolve.png"
 BIG_RELATIONS = 10_000
 TARGET_HITS = 5_000
 
@@ -210,28 +211,16 @@ def ours(scene: str, repeats: int) -> dict:
 
 
 def plot(rows: list[dict]) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from plots import figure  # (matplotlib is loaded only to draw)
     n = [r["n"] for r in rows]
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for key, label, style in (("resolve", "skillbus resolve_elements (replica)", "o-"),
-                              ("resolve_read", "skillbus, and a property of each read", "o--"),
-                              ("anchor_cold", "SkiROS2 path, rdflib (builds elements)", "s-"),
-                              ("anchor_warm", "SkiROS2 path, rdflib (from its cache)", "s--"),
-                              ("replica", "skillbus: a new replica (snapshot)", "^:")):
-        ax.plot(n, [r[key] * 1e3 for r in rows], style, label=label)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("products resolved (full elements)")
-    ax.set_ylabel("ms (median)")
-    ax.set_title("Resolving every product of the world")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    PLOT.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(PLOT, dpi=100)
-
+    with figure(PLOT, "Resolving every product of the world", "products resolved (full elements)", "ms (median)",
+                log_x=True, log_y=True) as ax:
+        for key, label, style in (("resolve", "skillbus resolve_elements (replica)", "o-"),
+                                  ("resolve_read", "skillbus, and a property of each read", "o--"),
+                                  ("anchor_cold", "SkiROS2 path, rdflib (builds elements)", "s-"),
+                                  ("anchor_warm", "SkiROS2 path, rdflib (from its cache)", "s--"),
+                                  ("replica", "skillbus: a new replica (snapshot)", "^:")):
+            ax.plot(n, [r[key] * 1e3 for r in rows], style, label=label)
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -6,7 +6,7 @@ scene's own axioms), read with the world, and a class a client adds while the se
 import sys
 
 from skillbus import paths
-from test_skills import LIBS, cli, mgr_binary
+from test_skills import cli, start_system, start_wm
 
 KITCHEN_OWL = """<?xml version="1.0"?>
 <rdf:RDF xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#"
@@ -33,13 +33,9 @@ def test_the_manager_judges_by_the_world_models_ontology(sandbox, tmp_path):
     scene = tmp_path / "kitchen.ttl"
     scene.write_text(paths.demo_scene().with_suffix("").with_suffix(".ttl").read_text() + EXTRA)
     default = paths.REPO_ROOT / "wm_server" / "ontology" / "skiros.ttl"
-    wm = sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
-                              "--ontology", f"{default},{owl}", "--scene", str(scene)])
+    wm = start_wm(sandbox, tmp_path / "wm", "--ontology", f"{default},{owl}", scene=scene)
     wm.wait_for("serving", 30)
-    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])  # no --ontology
-    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
-                                   "--library", "condition_skills"], env={"PYTHONPATH": str(LIBS)})
-    proc.wait_for("registered", 60)
+    start_system(sandbox, "condition_skills", timeout=60)  # (the manager without --ontology)
     for subject in ("skiros:Bread-20", "skiros:Soda-21"):  # Product by the file, by the scene
         rc, out, err = cli(sandbox, "run", "CheckOnType", "-p", f"Subject={subject}", "--timeout", "30")
         assert rc == 0 and "Success" in out, out + err

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from test_skills import LIBS, cli, mgr_binary
+from test_skills import LIBS, cli, start_system, start_wm
 
 REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
@@ -17,13 +17,8 @@ HERE = Path(__file__).resolve().parent
 
 @pytest.fixture
 def system(sandbox, tmp_path):
-    from skillbus import paths
-    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", tmp_path / "wm",
-                         "--scene", REPO / "deploy" / "scenes" / "demo.ttl"])
-    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
-    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
-                                   "--library", "condition_skills", "--world-model"], env={"PYTHONPATH": str(LIBS)})
-    proc.wait_for("registered", 30)
+    start_wm(sandbox, tmp_path / "wm", scene=REPO / "deploy" / "scenes" / "demo.ttl")
+    start_system(sandbox, "condition_skills", world_model=True)
     return sandbox
 
 

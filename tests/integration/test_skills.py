@@ -22,11 +22,24 @@ def cli(sandbox, *args, timeout=60):
     return rc, p.stdout(), p.stderr()
 
 
-def start_system(sandbox, *libraries, name="proc1"):
+def start_wm(sandbox, data, *args, scene=None):
+    """A wall-clock world model server on `data`, loading `scene` (default: the demo's)
+    when `data` is new."""
+    from skillbus import paths
+    scene = scene or paths.demo_scene().with_suffix("").with_suffix(".ttl")
+    return sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(data), *map(str, args),
+                                "--scene", str(scene)])
+
+
+def start_system(sandbox, *libraries, name="proc1", world_model=False, timeout=30):
+    """A wall-clock skill manager and a skill process serving `libraries` (from
+    skill_libs/), with a world-model client when `world_model`; returns both once the
+    process has registered."""
     mgr = sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
     proc = sandbox.start(name, [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
-                                *[x for lib in libraries for x in ("--library", lib)]], env={"PYTHONPATH": str(LIBS)})
-    proc.wait_for("registered", 30)
+                                *[x for lib in libraries for x in ("--library", lib)],
+                                *(["--world-model"] if world_model else [])], env={"PYTHONPATH": str(LIBS)})
+    proc.wait_for("registered", timeout)
     return mgr, proc
 
 

@@ -3,6 +3,8 @@ that ticks the process itself, bench/tick_rtt_bench, needs): it does not registe
 not exit for want of a manager, and answers START and EXECUTE ticks."""
 
 import json
+import os
+import subprocess
 import sys
 import textwrap
 
@@ -32,3 +34,10 @@ def test_a_standalone_skill_process_answers_ticks_without_a_manager(sandbox):
     assert sandbox.wait(t, 60) == 0, t.stderr()
     assert json.loads(t.stdout().strip().splitlines()[-1]) == ["spinning", "spinning", "spinning"]
     assert proc.returncode is None  # still serving, past its --register-timeout
+
+
+def test_standalone_under_lockstep_is_refused_naming_why():
+    r = subprocess.run([sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "x", "--library",
+                        "spin_skills", "--standalone", "--lockstep"], capture_output=True, text=True, timeout=60,
+                       env={**os.environ, "PYTHONPATH": str(paths.REPO_ROOT / "bench")})
+    assert r.returncode == 2 and "not with --lockstep" in r.stderr, r.stderr

@@ -97,6 +97,12 @@ CLIENT = textwrap.dedent("""
     ask("other_lock_after", lambda: other.lock(timeout=0.3))
     ask("unlock", lambda: other.unlock())
     ask("unlock_free", lambda: wmi.unlock())
+    def anonymous_lock():
+        from skillbus.msgs import wm_lock_t
+        req = wm_lock_t()
+        req.lock = True
+        return wmi._call("lock", req, wm_lock_t).ok
+    ask("lock_without_holder", anonymous_lock)
     ask("path", lambda: wmi.query_ontology("SELECT ?x WHERE { ?x rdfs:subClassOf* skiros:Product }"))
     def axioms(turtle):
         from skillbus.msgs import wm_scene_t
@@ -163,6 +169,7 @@ def test_ontology_questions_templates_classes_and_the_lock(sandbox, tmp_path):
     assert r["other_lock"].startswith("error TimeoutError") and "locked by" in r["other_lock"], r
     assert r["other_unlock"] is True and r["other_lock_after"] is True, r
     assert r["unlock"] is True and r["unlock_free"] is False, r
+    assert "name the holder" in r["lock_without_holder"], r
     assert "property paths" in r["path"] and "get_sub_classes" in r["path"], r
     assert "is an element of the world" in r["axiom_on_element"], r
     assert "blank node" in r["axiom_blank"] and "line" in r["axiom_broken"], r

@@ -4,19 +4,12 @@ skill and read with getData in the next, a monitor that never ends under Paralle
 nested anonymous processors, and a node's own pre-condition (self.skill(...,
 preconditions=[...])), which holds or stops the node naming it."""
 
-import sys
-
-from skillbus import paths
-from test_skills import LIBS, cli, mgr_binary
+from test_skills import cli, start_system, start_wm
 
 
 def test_a_skiros2_library_runs_unchanged_and_succeeds(sandbox, tmp_path):
-    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
-                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
-    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
-    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
-                                   "--library", "skiros2_style_lib", "--world-model"], env={"PYTHONPATH": str(LIBS)})
-    proc.wait_for("registered", 60)
+    start_wm(sandbox, tmp_path / "wm")
+    start_system(sandbox, "skiros2_style_lib", world_model=True, timeout=60)
     rc, out, err = cli(sandbox, "run", "Arrange", "-p", "Object=skiros:Cube-2", "--timeout", "60", timeout=90)
     assert rc == 0, out + err
     lines = [line.strip() for line in out.splitlines()]

@@ -5,19 +5,12 @@ short by a gripper fault end the whole ClearTable that way). Real world model, m
 and skill process; Pick and Place are primitives that move only containment
 (skill_libs/transfer_skills.py)."""
 
-import sys
-
-from skillbus import paths
-from test_skills import LIBS, cli, mgr_binary
+from test_skills import cli, start_system, start_wm
 
 
 def test_a_product_left_in_the_gripper_by_a_failed_place_is_placed_by_the_retry(sandbox, tmp_path):
-    sandbox.start("wm", [paths.binary("wm_server"), "--wall-clock", "--data", str(tmp_path / "wm"),
-                         "--scene", str(paths.demo_scene().with_suffix("").with_suffix(".ttl"))])
-    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
-    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
-                                   "--library", "transfer_skills", "--world-model"], env={"PYTHONPATH": str(LIBS)})
-    proc.wait_for("registered", 60)
+    start_wm(sandbox, tmp_path / "wm")
+    start_system(sandbox, "transfer_skills", world_model=True, timeout=60)
     rc, out, err = cli(sandbox, "run", "TransferProducts", "-p", "Gripper=skiros:Gripper-7", "-p", "Arm=skiros:Arm-8",
                        "-p", "From=skiros:Table-1", "-p", "To=skiros:Bin-5", "--timeout", "60", timeout=90)
     assert rc == 0, out + err

@@ -362,6 +362,9 @@ def main(args) -> int:
     if not args.name or not args.library:
         print("error: skills-process needs --name and at least one --library (or both in --config)", file=sys.stderr)
         return 2
+    if getattr(args, "standalone", False) and args.lockstep:
+        print("error: --standalone serves without a manager on the wall clock; not with --lockstep", file=sys.stderr)
+        return 2
     bus = open_bus(args.url)
     participant = None
     if args.lockstep:
@@ -380,9 +383,6 @@ def main(args) -> int:
     proc = SkillProcess(bus, args.name, args.library, wmi, participant)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
     if getattr(args, "standalone", False):
-        if participant is not None:
-            print("error: --standalone serves without a manager on the wall clock; not with --lockstep", file=sys.stderr)
-            return 2
         log.info("serving %d skill(s) without a skill manager (--standalone)", len(proc.classes))
         while True:
             bus.handle(1.0)
