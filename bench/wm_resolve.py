@@ -43,35 +43,17 @@ PLOT = IMAGES / "bench_wm_resolve.png"
 BIG_RELATIONS = 10_000
 TARGET_HITS = 5_000
 
-PREFIXES = """@prefix skiros: <http://rvmi.aau.dk/ontologies/skiros.owl#> .
-@prefix owl: <http://www.w3.org/2002/07/owl#> .
-@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .
-@prefix xsd: <http://www.w3.org/2001/XMLSchema#> .
-"""
-
-
 def make_scene(products: int) -> str:
-    """A scene root, 100 places (tables, bins, boxes) holding `products` products (cubes,
-    cylinders, starters with a pose, a size and a label), and an inventory that has
-    (skiros:hasA) up to 10,000 of them."""
+    """wm_query's scene (a root, 100 places, products with a label, a pose and a size) with
+    `products` products, and an inventory that has (skiros:hasA) up to 10,000 of them."""
+    from wm_query import make_scene as places_and_products
+    first = 101  # (wm_query's products are numbered from 101; product j is a cube, a cylinder or a starter by j % 3)
     kinds = ["Cube", "Cylinder", "Starter"]
-    places = ["Table", "Bin", "LargeBox"]
-    lines = [PREFIXES, 'skiros:Scene-0 a skiros:Scene, owl:NamedIndividual ; rdfs:label "scene" .',
+    lines = [places_and_products(first + products),
              'skiros:Inventory-1 a skiros:Location, owl:NamedIndividual ; rdfs:label "inventory" .']
-    for i in range(1, 101):
-        lines.append(f'skiros:{places[i % 3]}-{i} a skiros:{places[i % 3]}, owl:NamedIndividual ; '
-                     f'rdfs:label "place{i}" ; skiros:PositionX "{i * 0.1}"^^xsd:float .')
-        lines.append(f"skiros:Scene-0 skiros:contain skiros:{places[i % 3]}-{i} .")
-    for j in range(1000, 1000 + products):
-        kind, place = kinds[j % 3], 1 + j % 100
-        lines.append(f'skiros:{kind}-{j} a skiros:{kind}, owl:NamedIndividual ; rdfs:label "obj{j}" ; '
-                     f'skiros:PositionX "{(j % 7) * 0.01}"^^xsd:float ; skiros:PositionY "{(j % 5) * 0.01}"^^xsd:float ; '
-                     f'skiros:PositionZ "0.02"^^xsd:float ; skiros:Size "0.05"^^xsd:float .')
-        lines.append(f"skiros:{places[place % 3]}-{place} skiros:contain skiros:{kind}-{j} .")
-        if j - 1000 < BIG_RELATIONS:
-            lines.append(f"skiros:Inventory-1 skiros:hasA skiros:{kind}-{j} .")
+    lines += [f"skiros:Inventory-1 skiros:hasA skiros:{kinds[j % 3]}-{j} ."
+              for j in range(first, first + min(products, BIG_RELATIONS))]
     return "\n".join(lines) + "\n"
-
 
 CLIENT = r'''
 import json, sys, time, statistics
