@@ -41,9 +41,9 @@ def summary(proc) -> dict:
 NO_KEY = {"SKILLBUS_KEY_FILE": "none"}
 
 
-def raw_round_trip(box: Sandbox, n: int, size: int) -> dict:
-    pong = box.start("pong", [sys.executable, HERE / "pingpong.py", "pong"], env=NO_KEY)
-    ping = box.start("ping", [sys.executable, HERE / "pingpong.py", "ping", str(n), str(size)], env=NO_KEY)
+def raw_round_trip(box: Sandbox, n: int, size: int, via: str = "lcm") -> dict:
+    pong = box.start(f"pong-{via}", [sys.executable, HERE / "pingpong.py", via, "pong"], env=NO_KEY)
+    ping = box.start(f"ping-{via}", [sys.executable, HERE / "pingpong.py", via, "ping", str(n), str(size)], env=NO_KEY)
     box.wait(ping, 120)
     box.kill(pong)
     box.wait(pong, 10)

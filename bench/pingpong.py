@@ -1,21 +1,42 @@
-"""Raw LCM round trip between two Python processes (the peer of the lockstep benchmark).
-  pingpong.py pong             echo every SB_BENCH_PING back on SB_BENCH_PONG, until killed
-  pingpong.py ping N SIZE      time N round trips of SIZE-byte messages; print JSON"""
+"""Raw round trip between two Python processes (the peer of the lockstep benchmark).
+  pingpong.py VIA pong             echo every SB_BENCH_PING back on SB_BENCH_PONG, until killed
+  pingpong.py VIA ping N SIZE      time N round trips of SIZE-byte messages; print JSON
+
+VIA is `lcm`: the LCM library as a user of LCM has it (lcm.LCM: publish, subscribe,
+handle_timeout; LCM receives on a thread of its own), or `bus`: skillbus's bus without a
+key (LCM publishes, the datagram is read on the dispatching thread; docs/transport.md)."""
 
 import json
 import sys
 import time
 
-from skillbus.bus import open_bus
+import lcm
+
+from skillbus.bus import LcmBus, receive_buffer_url, resolve_url
+
+
+class RawLcm:
+    def __init__(self) -> None:
+        self.lc = lcm.LCM(receive_buffer_url(resolve_url()))
+
+    def publish(self, ch: str, data: bytes) -> None:
+        self.lc.publish(ch, data)
+
+    def subscribe(self, ch: str, handler) -> None:
+        self.lc.subscribe(ch, handler).set_queue_capacity(10000)
+
+    def handle(self, timeout: float) -> bool:
+        return self.lc.handle_timeout(int(timeout * 1000)) > 0
 
 
 def main() -> int:
-    bus = open_bus()
-    if sys.argv[1] == "pong":
+    via, mode = sys.argv[1], sys.argv[2]
+    bus = RawLcm() if via == "lcm" else LcmBus(resolve_url())
+    if mode == "pong":
         bus.subscribe("SB_BENCH_PING", lambda ch, data: bus.publish("SB_BENCH_PONG", data))
         while True:
             bus.handle(1.0)
-    n, size = int(sys.argv[2]), int(sys.argv[3])
+    n, size = int(sys.argv[3]), int(sys.argv[4])
     got = []
     bus.subscribe("SB_BENCH_PONG", lambda ch, data: got.append(data))
     payload = bytes(size)

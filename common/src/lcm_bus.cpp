@@ -3,6 +3,7 @@
 #include <poll.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -61,12 +62,16 @@ std::string receive_buffer_url(const std::string& url) {
 }  // namespace
 
 LcmBus::LcmBus(const std::string& url)
-    : url_(url), lane_urls_{receive_buffer_url(url), receive_buffer_url(lcm_lane1_url(url))} {
+    : url_(url),
+      lane_urls_{receive_buffer_url(url), receive_buffer_url(lcm_lane1_url(url))},
+      // ($SKILLBUS_LCM_RECEIVE_THREAD set: LCM's own receive thread, as before; docs/transport.md)
+      direct_(url.rfind("udpm://", 0) == 0 && !std::getenv("SKILLBUS_LCM_RECEIVE_THREAD")) {
   lane(0);  // fail early, with a clear message, on a bad URL or a missing multicast route
 }
 
 LcmBus::~LcmBus() {
-  for (auto& [id, sub] : subs_) lcm_unsubscribe(lanes_[sub->lane], sub->lcm_sub);
+  for (auto& [id, sub] : subs_)
+    if (sub->lcm_sub) lcm_unsubscribe(lanes_[sub->lane], sub->lcm_sub);
   for (lcm_t* l : lanes_)
     if (l) lcm_destroy(l);
 }
@@ -87,14 +92,34 @@ void LcmBus::publish(const std::string& channel, const void* data, size_t size) 
     throw BusError("LCM publish failed on " + channel + " (" + std::to_string(size) + " bytes)");
 }
 
+UdpmReceiver& LcmBus::receiver(int i) {
+  if (lane_urls_[i].empty()) i = 0;
+  if (!receivers_[i]) {
+    const UdpmAddress a = udpm_address(lane_urls_[i]);
+    receivers_[i] = std::make_unique<UdpmReceiver>(a.group, a.port, a.receive_buffer);
+  }
+  return *receivers_[i];
+}
+
+long LcmBus::undecodable() const {
+  long n = 0;
+  for (const auto& r : receivers_)
+    if (r) n += r->reassembler().bad + r->reassembler().incomplete;
+  return n;
+}
+
 void LcmBus::on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
-  auto* sub = static_cast<Sub*>(user);
+  deliver(*static_cast<Sub*>(user), channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size);
+}
+
+void LcmBus::deliver(Sub& s, const std::string& channel, const uint8_t* data, size_t size) {
+  Sub* sub = &s;
   // An exception must not unwind through LCM's C code; a failing handler is logged and
   // the dispatch loop goes on (servers never crash on input).
   // Logged rate-limited (the first 5, then every 1000th, with the count): a sender that
   // keeps sending what fails must not fill the log.
   try {
-    sub->handler(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size);
+    sub->handler(channel, data, size);
   } catch (const std::exception& e) {
     if (++sub->failures <= 5 || sub->failures % 1000 == 0)
       SB_ERROR("bus", "handler for " << channel << " failed (#" << sub->failures << "): " << e.what());
@@ -108,11 +133,16 @@ int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_cap
   auto sub = std::make_unique<Sub>();
   sub->handler = std::move(handler);
   sub->lane = lane_urls_[1].empty() ? 0 : lcm_lane_of(channel);
-  sub->lcm_sub = lcm_subscribe(lane(sub->lane), channel.c_str(), &LcmBus::on_message, sub.get());
-  if (!sub->lcm_sub) throw BusError("cannot subscribe to " + channel);
-  lcm_subscription_set_queue_capacity(sub->lcm_sub, queue_capacity);
-  ++lane_subs_[sub->lane];
   const int id = next_id_++;
+  if (direct_) {
+    receiver(sub->lane);
+    by_channel_[channel][id] = sub.get();
+  } else {
+    sub->lcm_sub = lcm_subscribe(lane(sub->lane), channel.c_str(), &LcmBus::on_message, sub.get());
+    if (!sub->lcm_sub) throw BusError("cannot subscribe to " + channel);
+    lcm_subscription_set_queue_capacity(sub->lcm_sub, queue_capacity);
+  }
+  ++lane_subs_[sub->lane];
   subs_[id] = std::move(sub);
   return id;
 }
@@ -120,12 +150,63 @@ int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_cap
 void LcmBus::unsubscribe(int id) {
   auto it = subs_.find(id);
   if (it == subs_.end()) return;
-  lcm_unsubscribe(lanes_[it->second->lane], it->second->lcm_sub);
+  if (it->second->lcm_sub) lcm_unsubscribe(lanes_[it->second->lane], it->second->lcm_sub);
+  for (auto c = by_channel_.begin(); c != by_channel_.end(); ++c)
+    if (c->second.erase(id)) {
+      if (c->second.empty()) by_channel_.erase(c);
+      break;
+    }
   --lane_subs_[it->second->lane];
   subs_.erase(it);
 }
 
+bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {
+  std::array<UdpmReceiver*, 2> rs{nullptr, nullptr};
+  int n = 0;
+  for (int k = 0; k < 2; ++k) {
+    auto& r = receivers_[(k + turn_) % 2];
+    if (r) rs[n++] = r.get();
+  }
+  turn_ ^= 1;
+  LcmReassembler::Message m;
+  std::chrono::steady_clock::time_point deadline{};
+  bool waited = false;
+  for (;;) {
+    for (int k = 0; k < n; ++k) {
+      for (;;) {
+        const auto got = rs[k]->read(m);
+        if (got == UdpmReceiver::Read::kNothing) break;
+        if (got == UdpmReceiver::Read::kNone) continue;
+        auto c = by_channel_.find(m.channel);
+        if (c == by_channel_.end()) continue;
+        // A handler may unsubscribe (itself or another): deliver to a copy of the list.
+        std::vector<int> ids;
+        for (const auto& [id, sub] : c->second) ids.push_back(id);
+        for (int id : ids) {
+          auto s = subs_.find(id);
+          if (s != subs_.end()) deliver(*s->second, m.channel, m.data, m.size);
+        }
+        return true;
+      }
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (!waited) {
+      deadline = now + timeout;
+      waited = true;
+    }
+    if (now >= deadline) return false;
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now + std::chrono::microseconds(999));
+    pollfd fds[2];
+    for (int k = 0; k < n; ++k) fds[k] = {rs[k]->fd(), POLLIN, 0};
+    if (::poll(fds, static_cast<nfds_t>(n), static_cast<int>(left.count())) < 0) {
+      if (errno == EINTR) return false;  // a signal (e.g. SIGTERM to stop) is not a bus failure
+      throw BusError("waiting on the bus " + url_ + " failed: " + std::strerror(errno));
+    }
+  }
+}
+
 bool LcmBus::handle(std::chrono::milliseconds timeout) {
+  if (direct_) return handle_direct(timeout);
   const int ms = static_cast<int>(std::max<int64_t>(0, timeout.count()));
   auto check = [&](int r) {
     if (r < 0 && errno == EINTR) return 0;  // a signal (e.g. SIGTERM to stop) is not a bus failure

@@ -6,6 +6,10 @@
 // every participant for every other participant's ack. Those channels travel on lane 1,
 // the same group on port+1, which only their receiver (the master) listens to; all
 // other channels use lane 0, the URL as given. memq:// has one lane.
+//
+// On udpm:// the bus publishes with LCM and receives on the dispatching thread
+// (UdpmReceiver: no receive thread, no pipe); the socket's receive buffer is the queue.
+// Other URLs (memq://, file://) use LCM both ways.
 #pragma once
 
 #include <lcm/lcm.h>
@@ -15,6 +19,7 @@
 #include <memory>
 
 #include "skillbus/bus.hpp"
+#include "udpm_receiver.hpp"
 
 namespace skillbus {
 
@@ -36,7 +41,10 @@ class LcmBus : public Bus {
     long failures = 0;  // handler failures, logged rate-limited
   };
   static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
+  static void deliver(Sub& sub, const std::string& channel, const uint8_t* data, size_t size);
   lcm_t* lane(int i);  // opened on first use
+  UdpmReceiver& receiver(int i);  // opened on first use
+  bool handle_direct(std::chrono::milliseconds timeout);
 
   std::string url_;
   std::array<std::string, 2> lane_urls_;
@@ -44,6 +52,14 @@ class LcmBus : public Bus {
   std::array<int, 2> lane_subs_{0, 0};
   int next_id_ = 1;
   std::map<int, std::unique_ptr<Sub>> subs_;
+  bool direct_ = false;  // udpm://: received by receivers_, not by LCM
+  std::array<std::unique_ptr<UdpmReceiver>, 2> receivers_;
+  std::map<std::string, std::map<int, Sub*>> by_channel_;  // direct: subscriptions by channel
+  int turn_ = 0;  // the lane read first by the next handle(): neither starves the other
+
+ public:
+  // Datagrams that were no LCM message, and fragmented messages that lost a fragment.
+  long undecodable() const;
 };
 
 // Lane of a channel: 1 for many-to-one channels (names ending in _ACK or _JOIN), else 0.

@@ -23,9 +23,12 @@ import logging
 import os
 import re
 import select
+import time
 from typing import Callable
 
 import lcm
+
+from skillbus.udpm import UdpmReceiver
 
 Handler = Callable[[str, bytes], None]
 DEFAULT_URL = "udpm://239.255.76.67:7667?ttl=0"
@@ -207,12 +210,29 @@ def lane1_url(url: str) -> str:
     return f"udpm://{m.group(1) or '239.255.76.67'}:{port + 1}{m.group(3) or ''}"
 
 
+def udpm_address(url: str) -> tuple[str, int, int]:
+    """(group, port, recv_buf_size or 0) of a udpm:// URL.
+
+    >>> udpm_address("udpm://239.1.2.3:7000?ttl=0&recv_buf_size=4096"), udpm_address("udpm://")
+    (('239.1.2.3', 7000, 4096), ('239.255.76.67', 7667, 0))
+    """
+    m = _UDPM.match(url)
+    if not m:
+        raise BusError(f"bus URL '{url}': not a udpm:// URL")
+    size = re.search(r"[?&]recv_buf_size=(\d+)", m.group(3) or "")
+    return m.group(1) or "239.255.76.67", int(m.group(2) or 7667), int(size.group(1)) if size else 0
+
+
 class LcmBus(Bus):
     """LCM backend with two lanes (same design as common/src/lcm_bus.hpp).
 
     LCM's UDP multicast wakes every process on a group and port for every datagram.
     Many-to-one channels (lockstep acks and joins) therefore travel on lane 1, the same
     group on port+1, which only their receiver listens to; everything else uses lane 0.
+
+    On udpm:// the bus publishes with LCM and receives on the calling thread
+    (skillbus.udpm: no receive thread, no pipe between it and this one); the socket's
+    receive buffer is the queue. Other URLs (memq://, file://) use LCM both ways.
     """
 
     def __init__(self, url: str) -> None:
@@ -221,8 +241,13 @@ class LcmBus(Bus):
         self._lane_urls = [receive_buffer_url(url), receive_buffer_url(lane1) if lane1 else ""]
         self._lanes: list[lcm.LCM | None] = [None, None]
         self._lane_subs = [0, 0]
-        self._subs: dict[int, tuple[int, lcm.LCMSubscription]] = {}
+        self._subs: dict[int, tuple[int, object]] = {}
         self._next_id = 1
+        # ($SKILLBUS_LCM_RECEIVE_THREAD set: LCM's own receive thread, as before; docs/transport.md)
+        self._direct = url.startswith("udpm://") and not os.environ.get("SKILLBUS_LCM_RECEIVE_THREAD")
+        self._receivers: list[UdpmReceiver | None] = [None, None]
+        self._by_channel: dict[str, dict[int, Handler]] = {}
+        self._turn = 0  # the lane read first by the next handle(): neither starves the other
         self._lane(0)  # fail early, with a clear message
 
     def _lane(self, i: int) -> lcm.LCM:
@@ -236,6 +261,17 @@ class LcmBus(Bus):
                 raise BusError(f"cannot open LCM at '{self._lane_urls[i]}' (for udpm:// the host needs a "
                                f"multicast route, e.g. `ip route add 224.0.0.0/4 dev lo`): {e}") from e
         return lane
+
+    def _receiver(self, i: int) -> UdpmReceiver:
+        r = self._receivers[i]
+        if r is None:
+            group, port, buffer = udpm_address(self._lane_urls[i])
+            try:
+                r = self._receivers[i] = UdpmReceiver(group, port, buffer)
+            except OSError as e:
+                raise BusError(f"cannot receive on '{self._lane_urls[i]}' (for udpm:// the host needs a "
+                               f"multicast route, e.g. `ip route add 224.0.0.0/4 dev lo`): {e}") from e
+        return r
 
     @property
     def url(self) -> str:
@@ -254,9 +290,14 @@ class LcmBus(Bus):
                 log.exception("handler for %s failed", ch)
 
         lane = lane_of(channel) if self._lane_urls[1] else 0
-        sub = self._lane(lane).subscribe(channel, guarded)
-        sub.set_queue_capacity(queue_capacity)
         sid = self._next_id
+        if self._direct:
+            self._receiver(lane)
+            self._by_channel.setdefault(channel, {})[sid] = guarded
+            sub: object = channel
+        else:
+            sub = self._lane(lane).subscribe(channel, guarded)
+            sub.set_queue_capacity(queue_capacity)  # type: ignore[attr-defined]
         self._next_id += 1
         self._subs[sid] = (lane, sub)
         self._lane_subs[lane] += 1
@@ -264,12 +305,21 @@ class LcmBus(Bus):
 
     def unsubscribe(self, subscription_id: int) -> None:
         entry = self._subs.pop(subscription_id, None)
-        if entry is not None:
-            lane, sub = entry
+        if entry is None:
+            return
+        lane, sub = entry
+        self._lane_subs[lane] -= 1
+        if self._direct:
+            handlers = self._by_channel.get(sub, {})  # type: ignore[call-overload]
+            handlers.pop(subscription_id, None)
+            if not handlers:
+                self._by_channel.pop(sub, None)  # type: ignore[call-overload]
+        else:
             self._lane(lane).unsubscribe(sub)
-            self._lane_subs[lane] -= 1
 
     def handle(self, timeout: float) -> bool:
+        if self._direct:
+            return self._handle_direct(timeout)
         ms = max(0, int(timeout * 1000 + 0.999))
         if self._lane_subs[1] == 0 or self._lane_subs[0] == 0:
             r = self._lane(1 if self._lane_subs[0] == 0 and self._lane_subs[1] else 0).handle_timeout(ms)
@@ -282,6 +332,37 @@ class LcmBus(Bus):
         for lane in ready:
             handled |= lane.handle_timeout(0) > 0
         return handled
+
+    def _handle_direct(self, timeout: float) -> bool:
+        """One message to its handlers, waiting at most `timeout` for it (datagrams for
+        channels nobody here subscribed to are read and dropped meanwhile)."""
+        receivers = [r for r in self._receivers if r is not None]
+        if len(receivers) == 2 and self._turn:
+            receivers.reverse()
+        self._turn ^= 1
+        deadline = None
+        while True:
+            for r in receivers:
+                while (m := r.read()) is not False:
+                    if m is None:
+                        continue
+                    handlers = self._by_channel.get(m[0])
+                    if handlers:
+                        for h in list(handlers.values()):
+                            h(m[0], m[1])
+                        return True
+            if deadline is None:
+                deadline = time.monotonic() + timeout
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            select.select(receivers, [], [], left)
+
+    @property
+    def undecodable(self) -> int:
+        """Datagrams on this bus's sockets that were no LCM message, and fragmented
+        messages given up because a fragment was lost."""
+        return sum(r.reassembler.bad + r.reassembler.incomplete for r in self._receivers if r is not None)
 
 
 class DropEveryNthBus(Bus):

@@ -49,7 +49,7 @@ std::map<std::string, Sample> samples() {
 
 int main(int argc, char** argv) {
   if (argc != 3) {
-    std::fprintf(stderr, "usage: codec_peer --publish SECONDS | --check SECONDS\n");
+    std::fprintf(stderr, "usage: codec_peer --publish SECONDS | --check SECONDS | --echo SECONDS\n");
     return 2;
   }
   const std::string mode = argv[1];
@@ -57,6 +57,20 @@ int main(int argc, char** argv) {
   auto bus = open_bus();
   auto all = samples();
   const auto end = std::chrono::steady_clock::now() + duration;
+  if (mode == "--echo") {
+    // Every message on SB_ECHO_IN back on SB_ECHO_OUT, bytes unchanged: what the bus
+    // received (reassembled from LCM's fragments when large) and what it publishes.
+    long echoed = 0;
+    bus->subscribe("SB_ECHO_IN", [&](const std::string&, const uint8_t* d, size_t n) {
+      bus->publish("SB_ECHO_OUT", d, n);
+      ++echoed;
+    });
+    std::printf("ready\n");
+    std::fflush(stdout);
+    while (std::chrono::steady_clock::now() < end) bus->handle(std::chrono::milliseconds(20));
+    std::printf("{\"echoed\": %ld}\n", echoed);
+    return 0;
+  }
   if (mode == "--publish") {
     while (std::chrono::steady_clock::now() < end) {
       for (const auto& [name, s] : all) bus->publish("SB_CODEC_C2P_" + name, s.bytes.data(), s.bytes.size());
