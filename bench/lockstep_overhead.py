@@ -81,21 +81,26 @@ def main() -> int:
     args = ap.parse_args()
     configs = [(lang, n) for lang in ("py", "cpp") for n in (1, 2, 4, 8)]
     rt_runs: list[dict] = []
+    bus_rt_runs: list[dict] = []
     per_config: dict[tuple[str, int, bool], list[float]] = {(*c, a): [] for c in configs for a in (True, False)}
     with Sandbox() as box:
         for _ in range(args.repeats):
             # A clock for one participant is ~90 bytes; the round trip uses the same size.
             rt_runs.append(raw_round_trip(box, args.round_trips, 96))
+            bus_rt_runs.append(raw_round_trip(box, args.round_trips, 96, via="bus"))
             for lang, n in configs:
                 for signed in (True, False):
                     per_config[(lang, n, signed)].append(lockstep(box, n, lang, args.frames, signed)["us_per_frame"])
     rt = {k: statistics.median(r[k] for r in rt_runs) for k in ("mean_us", "median_us", "p99_us")}
+    bus_rt = {k: statistics.median(r[k] for r in bus_rt_runs) for k in ("mean_us", "median_us", "p99_us")}
     rows = [(lang, n, statistics.median(per_config[(lang, n, True)]), statistics.median(per_config[(lang, n, False)]))
             for lang, n in configs]
     print(f"lockstep frame overhead, {args.frames} bare frames each, median of {args.repeats} ({platform.machine()}, "
           f"{len(os.sched_getaffinity(0))} cores, {box.mode})")
     print(f"raw Python LCM round trip (96 B, no key): mean {rt['mean_us']:.1f} us, median {rt['median_us']:.1f} us, "
           f"p99 {rt['p99_us']:.1f} us")
+    print(f"the same through skillbus's bus (no key):   mean {bus_rt['mean_us']:.1f} us, median {bus_rt['median_us']:.1f} us, "
+          f"p99 {bus_rt['p99_us']:.1f} us")
     # Ratios to the round trip's median: its mean is inflated by the tail (a few slow
     # round trips on a shared machine), which flattered every ratio.
     base = rt["median_us"]

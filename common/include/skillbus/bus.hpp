@@ -2,7 +2,8 @@
 //
 // Every skillbus process talks through this interface, never through LCM directly, so
 // that the transport is picked by a URL at start-up:
-//   udpm://239.255.76.67:7667?ttl=0   LCM over UDP multicast (the default)
+//   udpm://239.255.76.67:7667?ttl=0   LCM over UDP multicast (the default; LCM publishes,
+//                                     the bus reads the socket itself: docs/transport.md)
 //   memq://                           LCM in-process queue (unit tests)
 //   dds://DOMAIN                      Cyclone DDS (reserved; not built yet, clear error)
 // Dispatch is single-threaded: handlers run inside handle(), on the caller's thread.
@@ -35,9 +36,10 @@ class Bus {
  public:
   virtual ~Bus() = default;
   virtual void publish(const std::string& channel, const void* data, size_t size) = 0;
-  // `channel` is an exact name or a regular expression (LCM semantics). queue_capacity
-  // bounds how many undelivered messages are kept for this subscription; LCM's default
-  // of 30 silently drops bursts, so ours is far larger.
+  // `channel` is an exact name. queue_capacity bounds how many undelivered messages are
+  // kept for this subscription where LCM queues them (memq://; LCM's default of 30
+  // silently drops bursts, so ours is far larger); on udpm:// the socket's receive
+  // buffer is the queue.
   virtual int subscribe(const std::string& channel, Handler handler, int queue_capacity = 10000) = 0;
   virtual void unsubscribe(int subscription_id) = 0;
   // Dispatches pending messages, waiting at most `timeout` for the first one.
