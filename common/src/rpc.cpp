@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <random>
+#include <set>
 
 #include "skillbus_msgs/rpc_reply_t.hpp"
 #include "skillbus_msgs/rpc_request_t.hpp"
@@ -94,6 +95,12 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
     send_chunk(a, req.chunk);
     return;
   }
+  if (req.chunk == 0 && running_.count(key)) {
+    // A retry of a call still running: a method that waits (a nested call pumps the bus)
+    // would otherwise run twice. Its answer goes out when it ends.
+    ++duplicates_;
+    return;
+  }
   Answer a;
   a.client_id = req.client_id;
   a.request_id = req.request_id;
@@ -115,6 +122,12 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
     a.status = rpc_reply_t::UNKNOWN_METHOD;
     a.error = "unknown method '" + req.method + "' on " + area_;
   } else {
+    running_.insert(key);
+    struct Done {
+      std::set<std::string>& running;
+      const std::string& key;
+      ~Done() { running.erase(key); }
+    } done{running_, key};
     try {
       a.payload = m->second(req.payload.data(), req.payload.size());
     } catch (const RpcBadRequest& e) {

@@ -114,6 +114,7 @@ class RpcServer:
         # answers in chunks not all sent yet (a client is pulling them): key -> chunks sent
         self._pulling: dict[tuple[str, int], set[int]] = {}
         self._deferred: collections.OrderedDict[tuple[str, int], tuple[str, bytes]] = collections.OrderedDict()
+        self._running: set[tuple[str, int]] = set()  # calls whose method is running
         self.served = self.duplicates = self.expired = 0
         self.bad_input = BadInputCounter(f"rpc-server {area}")
         self._sub = bus.subscribe(self.req_channel, self._on_request)
@@ -174,6 +175,12 @@ class RpcServer:
                 return
             self._send_chunk(cached, req.chunk)
             return
+        if req.chunk == 0 and key in self._running:
+            # A retry of a call still running: a method that waits (a nested call pumps
+            # the bus, as a skill's tick planning a motion does) would otherwise run twice.
+            # Its answer goes out when it ends.
+            self.duplicates += 1
+            return
         rep = rpc_reply_t()
         rep.client_id, rep.request_id, rep.method, rep.status = req.client_id, req.request_id, req.method, OK
         if req.chunk != 0:  # a part of a reply this server no longer has
@@ -189,6 +196,7 @@ class RpcServer:
         if method is None:
             rep.status, rep.error = UNKNOWN_METHOD, f"unknown method '{req.method}' on {self.area}"
         else:
+            self._running.add(key)
             try:
                 rep.payload = method(bytes(req.payload))
             except RpcDefer:
@@ -201,6 +209,8 @@ class RpcServer:
                 rep.status, rep.error = BAD_REQUEST, str(e)
             except Exception as e:  # a failing method is an ERROR reply, never silence
                 rep.status, rep.error = ERROR, f"{self.area}.{req.method} failed: {e}"
+            finally:
+                self._running.discard(key)
         self.served += 1
         self._send_chunk(rep, 0)
         self._answered[key] = rep

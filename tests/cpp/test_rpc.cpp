@@ -152,3 +152,24 @@ TEST(Rpc, ALargeReplyArrivesInChunksWhenEveryThirdMessageIsDropped) {
   EXPECT_EQ(runs, 1);
   EXPECT_GE(server.chunks_pulled(), 20);  // 21 chunks after the first, some asked twice
 }
+
+TEST(Rpc, ARetryThatArrivesWhileTheCallStillRunsDoesNotRunItAgain) {
+  // A method that waits pumps the bus (a nested call); the client's retry of the same
+  // call arrives meanwhile. It must not run the method a second time.
+  auto bus = open_bus("memq://");
+  std::vector<Bytes> raw;
+  bus->subscribe(rpc_request_channel("slow"), [&](const std::string&, const uint8_t* d, size_t n) { raw.emplace_back(d, d + n); });
+  RpcServer server(*bus, "slow");
+  int runs = 0;
+  server.add_method<rpc_counter_t, rpc_counter_t>("run", [&](const rpc_counter_t& r) {
+    if (++runs == 1) {
+      bus->publish(rpc_request_channel("slow"), raw.at(0).data(), raw.at(0).size());  // the retry, meanwhile
+      for (int i = 0; i < 20; ++i) bus->handle(10ms);
+    }
+    return r;
+  });
+  RpcClient client(*bus, "slow", "test");
+  EXPECT_EQ(client.call<rpc_counter_t>("run", CounterFixture::add("a", 1)).key, "a");
+  EXPECT_EQ(runs, 1);
+  EXPECT_GE(server.duplicates(), 1);
+}

@@ -228,3 +228,38 @@ def test_an_answer_a_client_is_still_pulling_outlives_newer_answers():
     parts = {r.chunk: r.payload for r in got if r.client_id == "slow-reader"}
     assert all(r.status == rpc_reply_t.OK for r in got if r.client_id == "slow-reader")
     assert len(parts) == first.chunks and ("slow-reader", 1) not in server._pulling
+
+
+def test_a_retry_that_arrives_while_the_call_still_runs_does_not_run_it_again():
+    # A method that waits pumps the bus (a skill's tick planning a motion calls the motion
+    # service); the client's retry of the same call arrives meanwhile. Seen on DDS, where
+    # the skill process then sent the arm the same trajectory twice.
+    from skillbus.rpc import request_channel
+    bus = open_bus("memq://")
+    raw = []
+    bus.subscribe(request_channel("slow"), lambda ch, data: raw.append(data))
+    runs = []
+
+    def slow(r):
+        runs.append(r.key)
+        if len(runs) == 1:
+            bus.publish(request_channel("slow"), raw[0])  # the retry, as it arrives meanwhile
+            end = time.monotonic() + 0.2
+            while time.monotonic() < end:
+                bus.handle(0.01)
+        return r
+
+    server = RpcServer(bus, "slow")
+    server.add_method("run", slow, rpc_counter_t, rpc_counter_t)
+    client = RpcClient(bus, "slow", "t")
+    assert client.call("run", req("a", 1), rpc_counter_t, timeout=5).key == "a"
+    assert runs == ["a"]
+    assert server.duplicates >= 1  # (the client may have retried once more itself)
+    # and a retry after it ended is answered from memory, still not run again
+    while bus.handle(0.01):  # (the client's own last retry, if one is still queued)
+        pass
+    before = server.duplicates
+    bus.publish(request_channel("slow"), raw[0])
+    while bus.handle(0.01):
+        pass
+    assert runs == ["a"] and server.duplicates == before + 1

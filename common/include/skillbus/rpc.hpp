@@ -18,6 +18,7 @@
 #include <functional>
 #include <list>
 #include <map>
+#include <set>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -107,6 +108,7 @@ class RpcServer {
   std::map<std::string, RawMethod> methods_;
   std::list<std::string> order_;  // oldest first
   std::unordered_map<std::string, Answer> answered_;
+  std::set<std::string> running_;  // calls whose method is running (a retry meanwhile waits for it)
   long served_ = 0, duplicates_ = 0, expired_ = 0, pulled_ = 0;
   BadInputCounter bad_;
 };
