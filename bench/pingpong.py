@@ -4,7 +4,8 @@
 
 VIA is `lcm`: the LCM library as a user of LCM has it (lcm.LCM: publish, subscribe,
 handle_timeout; LCM receives on a thread of its own), or `bus`: skillbus's bus without a
-key (LCM publishes, the datagram is read on the dispatching thread; docs/transport.md)."""
+key, on the bus $SKILLBUS_BUS_URL names (udpm://: LCM publishes, the datagram is read on
+the dispatching thread; dds://: Cyclone DDS; docs/transport.md)."""
 
 import json
 import sys
@@ -12,7 +13,7 @@ import time
 
 import lcm
 
-from skillbus.bus import LcmBus, receive_buffer_url, resolve_url
+from skillbus.bus import open_bus, receive_buffer_url, resolve_url
 
 
 class RawLcm:
@@ -31,7 +32,7 @@ class RawLcm:
 
 def main() -> int:
     via, mode = sys.argv[1], sys.argv[2]
-    bus = RawLcm() if via == "lcm" else LcmBus(resolve_url())
+    bus = RawLcm() if via == "lcm" else open_bus()
     if mode == "pong":
         bus.subscribe("SB_BENCH_PING", lambda ch, data: bus.publish("SB_BENCH_PONG", data))
         while True:

@@ -33,6 +33,23 @@ def sandbox(tmp_path):
         box.__exit__(None, None, None)
 
 
+TRANSPORTS = ("lcm", "dds")
+
+
+@pytest.fixture(params=TRANSPORTS)
+def transport_sandbox(request, tmp_path):
+    """A sandbox on each transport in turn: LCM (udpm://) and Cyclone DDS (dds://)."""
+    try:
+        box = Sandbox(log_dir=tmp_path / "logs", transport=request.param)
+        box.__enter__()
+    except SandboxError as e:
+        cannot_run(str(e))
+    try:
+        yield box
+    finally:
+        box.__exit__(None, None, None)
+
+
 @pytest.fixture
 def binary():
     return paths.binary

@@ -1,7 +1,8 @@
-// open_bus(): picks the backend by URL scheme. Only LCM exists today; a Cyclone DDS
-// backend slots in here behind dds:// without any caller changing.
+// open_bus(): picks the backend by URL scheme: LCM (udpm://, memq://, file://) or Cyclone
+// DDS (dds://), behind the deployment's key either way.
 #include <cstdlib>
 
+#include "dds_bus.hpp"
 #include "lcm_bus.hpp"
 #include "skillbus/auth.hpp"
 #include "skillbus/bus.hpp"
@@ -22,8 +23,7 @@ std::unique_ptr<Bus> open_bus(const std::string& url_in) {
   if (scheme == "udpm") check_multicast_interface(url);
   if (scheme == "udpm" || scheme == "memq" || scheme == "file" || scheme == "tcpq")
     return auth::authenticated(std::make_unique<LcmBus>(url));
-  if (scheme == "dds")
-    throw BusError("bus URL '" + url + "': the Cyclone DDS backend is not built into this version");
+  if (scheme == "dds") return auth::authenticated(std::make_unique<DdsBus>(url));
   throw BusError("bus URL '" + url + "': unknown scheme (expected udpm://, memq:// or dds://)");
 }
 

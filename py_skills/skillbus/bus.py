@@ -5,7 +5,7 @@ transport is picked by URL at start-up::
 
     udpm://239.255.76.67:7667?ttl=0   LCM over UDP multicast (the default)
     memq://                           LCM in-process queue (unit tests)
-    dds://DOMAIN                      Cyclone DDS (reserved; not built yet, clear error)
+    dds://DOMAIN                      Cyclone DDS (skillbus.dds; loopback only unless told)
 
 Example::
 
@@ -88,7 +88,8 @@ def open_bus(url: str | None = None) -> Bus:
     if scheme in ("udpm", "memq", "file", "tcpq"):
         return authenticated(LcmBus(url))
     if scheme == "dds":
-        raise BusError(f"bus URL '{url}': the Cyclone DDS backend is not built into this version")
+        from skillbus.dds import DdsBus
+        return authenticated(DdsBus(url))
     raise BusError(f"bus URL '{url}': unknown scheme (expected udpm://, memq:// or dds://)")
 
 

@@ -20,6 +20,8 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="the main job: the robot clears the table (lockstep, under supervisord)")
     d.add_argument("--run-dir", default="runs/demo", help="logs, world model data and the LCM log go here")
     d.add_argument("--json", action="store_true", help="print the result as JSON")
+    d.add_argument("--bus", choices=("lcm", "dds"), default="lcm",
+                   help="the transport: LCM (udpm://, recorded in an LCM log) or Cyclone DDS (dds://; docs/transport.md)")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
     ls.add_argument("--frames", type=int, default=1000)
     ls.add_argument("--python", type=int, default=3, help="Python participants")

@@ -148,7 +148,10 @@ def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
         wm.wait(10)
 
 
-def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
+DDS_DOMAIN = 42  # the demo's DDS domain (its private network namespace is its own anyway)
+
+
+def run(run_dir: Path, quiet: bool = False, bus: str = "lcm") -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
     from skillbus.system import Program, programs
@@ -156,8 +159,13 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)
     progs = programs(run_dir)
-    progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
-    conf = launch.write_config(run_dir, progs, lockstep=True)
+    lcm_log = bus == "lcm"  # (lcm-logger records udpm://; on DDS nothing is recorded yet)
+    if lcm_log:
+        progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
+    url = f"dds://{DDS_DOMAIN}" if bus == "dds" else None
+    if url:
+        os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
+    conf = launch.write_config(run_dir, progs, lockstep=True, bus_url=url)
     watcher = None if quiet else Watcher().start()
     t0 = time.monotonic()
     logs = run_dir / "logs"
@@ -169,10 +177,11 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
                        interval=0.2)
             poll_until(lambda: not any(launch.status(conf).get(n) == "RUNNING"
                                        for n in ("wm", "skill_mgr", "skills", "gripper")), 30, interval=0.2)
-            try:  # the logger has written all of the run before it is stopped
-                mark_log(run_dir / "demo.lcmlog")
-            except TimeoutError as e:
-                print(f"warning: the LCM log may lack the end of the run: {e}", file=sys.stderr)
+            if lcm_log:
+                try:  # the logger has written all of the run before it is stopped
+                    mark_log(run_dir / "demo.lcmlog")
+                except TimeoutError as e:
+                    print(f"warning: the LCM log may lack the end of the run: {e}", file=sys.stderr)
         finally:
             held = signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, signal.SIGTERM))
             try:
@@ -185,7 +194,7 @@ def run(run_dir: Path, quiet: bool = False) -> dict[str, Any]:
     wall = time.monotonic() - t0
     sim = _last_json(logs / "sim.out")
     mgr = _last_json(logs / "skill_mgr.out")
-    result = {"sim": sim, "mgr": mgr, "wall_launch_s": wall, "run_dir": str(run_dir),
+    result = {"sim": sim, "mgr": mgr, "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus,
               "participants": {n: _last_json(logs / f"{n}.out") for n in ("wm", "skills", "gripper")}}
     result["world_model"] = world_model_after(run_dir)
     if watcher is not None and (watcher.final or watcher.latest) is not None:
@@ -225,7 +234,10 @@ def print_summary(r: dict[str, Any]) -> None:
               f"{'  in the bin' if in_bin(p) else '  NOT in the bin'}")
     print(f"  state digest      {sim.get('state_digest')}")
     print(f"  session digest    {sim.get('session_digest')}")
-    print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (skillbus replay; skillbus spy)")
+    if r.get("bus", "lcm") == "lcm":
+        print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (skillbus replay; skillbus spy)")
+    else:
+        print(f"  bus               Cyclone DDS, domain {DDS_DOMAIN} (no LCM log is recorded on DDS)")
     print(f"  logs              {Path(r['run_dir']) / 'logs'}")
 
 
@@ -245,13 +257,16 @@ def main(args) -> int:
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
         from skillbus.monitor import run_foreground
         return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
-                               str(Path(args.run_dir).resolve())] + (["--json"] if args.json else []))
+                               str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", "lcm")]
+                              + (["--json"] if args.json else []))
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        print("skillbus demo: launching the pick-and-place system under supervisord (lockstep) ...", flush=True)
+        bus = getattr(args, "bus", "lcm")
+        print(f"skillbus demo: launching the pick-and-place system under supervisord (lockstep, "
+              f"{'Cyclone DDS' if bus == 'dds' else 'LCM'}) ...", flush=True)
         try:
-            r = run(Path(args.run_dir))
+            r = run(Path(args.run_dir), bus=bus)
         except Interrupted as e:
             print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
             return 128 + e.signum

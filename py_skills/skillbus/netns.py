@@ -99,7 +99,12 @@ def _host_routes_multicast_to_lo() -> bool:
 class Sandbox:
     """Starts processes in one private network namespace and always cleans them up."""
 
-    def __init__(self, log_dir: str | Path | None = None, port: int | None = None) -> None:
+    def __init__(self, log_dir: str | Path | None = None, port: int | None = None, transport: str = "lcm") -> None:
+        """`transport`: "lcm" (udpm://, the default) or "dds" (Cyclone DDS, dds://, on a
+        domain of this sandbox's own)."""
+        if transport not in ("lcm", "dds"):
+            raise ValueError(f"transport {transport!r}: 'lcm' or 'dds'")
+        self.transport = transport
         self._own_dir = log_dir is None
         self.log_dir = Path(log_dir or tempfile.mkdtemp(prefix="skillbus-"))
         self.log_dir.mkdir(parents=True, exist_ok=True)
@@ -153,6 +158,10 @@ class Sandbox:
 
     @property
     def url(self) -> str:
+        if self.transport == "dds":
+            # A domain per sandbox (within its namespace it is alone anyway; on the shared
+            # host, where the port is this process's own, so is the domain).
+            return f"dds://{self.port % 200 + 1}"
         return f"udpm://239.255.76.67:{self.port}?ttl=0"
 
     def prefix(self) -> list[str]:

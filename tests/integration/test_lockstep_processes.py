@@ -1,12 +1,12 @@
 """Lockstep between real processes: a C++ clock master, Python and C++ participants, over
-LCM in a private network namespace."""
+LCM (and, where marked, also over Cyclone DDS) in a private network namespace."""
 
 import re
 import time
 
 import pytest
 
-from conftest import last_json, python_tool
+from conftest import TRANSPORTS, last_json, python_tool
 from skillbus.lockstep_session import python_participant_argv, run_session
 from skillbus.netns import Sandbox
 
@@ -24,10 +24,11 @@ def start(sandbox, binary, names, frames, clock_args=(), part_args=None):
     return clock, parts
 
 
-def test_10000_frames_twice_give_the_same_digest(tmp_path):
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_10000_frames_twice_give_the_same_digest(tmp_path, transport):
     runs = []
     for i in range(2):
-        with Sandbox(log_dir=tmp_path / f"run{i}") as box:  # a fresh namespace per run
+        with Sandbox(log_dir=tmp_path / f"run{i}", transport=transport) as box:  # a fresh namespace per run
             runs.append(run_session(box, frames=10_000, n_python=3, n_cpp=1, timeout=300))
     for r in runs:
         assert r["ok"], r["error"]
@@ -38,6 +39,20 @@ def test_10000_frames_twice_give_the_same_digest(tmp_path):
     assert runs[0]["digest"] == runs[1]["digest"]
     for name in runs[0]["participant_results"]:
         assert runs[0]["participant_results"][name]["digest"] == runs[1]["participant_results"][name]["digest"]
+
+
+def test_the_same_session_gives_the_same_digests_on_dds_as_on_lcm(tmp_path):
+    # The transport is not part of the world: what everyone published, and so every
+    # digest, is the same bytes whichever bus carried it.
+    runs = {}
+    for transport in TRANSPORTS:
+        with Sandbox(log_dir=tmp_path / transport, transport=transport) as box:
+            runs[transport] = run_session(box, frames=1000, n_python=2, n_cpp=2, timeout=120)
+    for r in runs.values():
+        assert r["ok"], r["error"]
+    assert runs["lcm"]["digest"] == runs["dds"]["digest"]
+    assert {n: p["digest"] for n, p in runs["lcm"]["participant_results"].items()} == \
+        {n: p["digest"] for n, p in runs["dds"]["participant_results"].items()}
 
 
 def test_a_different_world_gives_a_different_digest(tmp_path):

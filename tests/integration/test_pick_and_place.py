@@ -19,10 +19,10 @@ from skillbus.netns import Sandbox
 from skillbus.system import programs, start
 
 
-def clear_table(tmp: Path, name: str, load: bool = False) -> dict:
+def clear_table(tmp: Path, name: str, load: bool = False, transport: str = "lcm") -> dict:
     run = tmp / name
     run.mkdir(parents=True)
-    with Sandbox(log_dir=run / "logs") as box:
+    with Sandbox(log_dir=run / "logs", transport=transport) as box:
         hog = None
         if load:  # another process keeps a core busy all along (and the other one now and then)
             hog = box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
@@ -38,6 +38,18 @@ def clear_table(tmp: Path, name: str, load: bool = False) -> dict:
         assert box.wait(where, 60) == 0, where.stderr()[-2000:]
         out["world_model"] = json.loads(where.stdout().strip().splitlines()[-1])
     return out
+
+
+def test_clear_table_on_dds_gives_the_same_digests_and_world_as_on_lcm(tmp_path):
+    # Every part on Cyclone DDS instead of LCM: the same frames, physics, session digest,
+    # every participant's digest and final world model (the transport is not the world).
+    lcm, dds = clear_table(tmp_path, "lcm"), clear_table(tmp_path, "dds", transport="dds")
+    assert dds["skill_mgr"]["tasks"] == {"1": "Success: all succeeded"}, dds["skill_mgr"]
+    for key in ("frames", "state_digest", "session_digest"):
+        assert dds["sim"][key] == lcm["sim"][key], key
+    for n in ("wm", "skill_mgr", "skills", "gripper"):
+        assert dds[n]["digest"] == lcm[n]["digest"], n
+    assert dds["world_model"] == lcm["world_model"]
 
 
 def test_clear_table_is_reproducible_bit_for_bit_even_under_load(tmp_path):

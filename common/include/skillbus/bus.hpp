@@ -5,7 +5,7 @@
 //   udpm://239.255.76.67:7667?ttl=0   LCM over UDP multicast (the default; LCM publishes,
 //                                     the bus reads the socket itself: docs/transport.md)
 //   memq://                           LCM in-process queue (unit tests)
-//   dds://DOMAIN                      Cyclone DDS (reserved; not built yet, clear error)
+//   dds://DOMAIN                      Cyclone DDS (loopback only unless told; docs/transport.md)
 // Dispatch is single-threaded: handlers run inside handle(), on the caller's thread.
 #pragma once
 

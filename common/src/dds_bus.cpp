@@ -1,0 +1,236 @@
+#include "dds_bus.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <regex>
+
+#include "envelope.h"
+#include "skillbus/log.hpp"
+
+namespace skillbus {
+
+namespace {
+constexpr int kStateDepth = 32;
+constexpr int kMaxParticipants = 120;  // per host and domain (Cyclone's participant index)
+constexpr int kLateJoinerDepth = 16;   // samples a writer keeps for readers that match it later
+constexpr dds_duration_t kLateJoinerWindow = DDS_SECS(2);  // of those, only what was written this long before the reader
+
+bool is_state(const std::string& channel) {
+  return channel.size() >= 6 && channel.compare(channel.size() - 6, 6, "_STATE") == 0;
+}
+
+std::string dds_error(dds_return_t r) { return dds_strretcode(r); }
+}  // namespace
+
+DdsUrl parse_dds_url(const std::string& url) {
+  static const std::regex form(R"(^dds://(\d+)(?:\?(.*))?$)");
+  std::smatch m;
+  if (!std::regex_match(url, m, form))
+    throw BusError("bus URL '" + url +
+                   "': expected dds://DOMAIN (a number 0-232), optionally ?peers=HOST,...&interface=ADDRESS&state=best-effort");
+  DdsUrl u;
+  if (m[1].str().size() > 3 || std::stoi(m[1].str()) > 232)
+    throw BusError("bus URL '" + url + "': DDS domain " + m[1].str() + " is out of range (0-232)");
+  u.domain = std::stoi(m[1].str());
+  std::string query = m[2].str();
+  size_t start = 0;
+  while (start <= query.size() && !query.empty()) {
+    const size_t end = std::min(query.find('&', start), query.size());
+    const std::string part = query.substr(start, end - start);
+    start = end + 1;
+    if (part.empty()) continue;
+    const size_t eq = part.find('=');
+    const std::string key = part.substr(0, eq), value = eq == std::string::npos ? "" : part.substr(eq + 1);
+    if (key == "peers") {
+      size_t s = 0;
+      while (s <= value.size()) {
+        const size_t e = std::min(value.find(',', s), value.size());
+        if (e > s) u.peers.push_back(value.substr(s, e - s));
+        s = e + 1;
+      }
+    } else if (key == "interface" && !value.empty()) {
+      u.interface = value;
+    } else if (key == "state" && (value == "best-effort" || value == "reliable")) {
+      u.state_best_effort = value == "best-effort";
+    } else {
+      throw BusError("bus URL '" + url + "': unknown option '" + part + "' (peers=, interface=, state=best-effort)");
+    }
+    if (end == query.size()) break;
+  }
+  return u;
+}
+
+std::string dds_config_xml(const DdsUrl& u) {
+  std::string peers = "<Peer address=\"localhost\"/>";
+  for (const auto& p : u.peers) peers += "<Peer address=\"" + p + "\"/>";
+  return "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface address=\"" + u.interface +
+         "\" multicast=\"false\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
+         "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>" +
+         std::to_string(kMaxParticipants) + "</MaxAutoParticipantIndex><Peers>" + peers +
+         "</Peers></Discovery></Domain></CycloneDDS>";
+}
+
+void check_dds_local(const DdsUrl& u, const std::string& url) {
+  const char* allowed = std::getenv("SKILLBUS_NETWORK");
+  if (allowed && *allowed) return;
+  std::vector<std::string> all{u.interface};
+  all.insert(all.end(), u.peers.begin(), u.peers.end());
+  std::string outside;
+  for (const auto& a : all)
+    if (a.rfind("127.", 0) != 0 && a != "localhost") outside += (outside.empty() ? "" : ", ") + a;
+  if (!outside.empty())
+    throw BusError("bus URL '" + url + "': " + outside +
+                   " would let other hosts reach this robot's bus. skillbus stays on this host unless told otherwise: "
+                   "allow the network with --network IFACE (or SKILLBUS_NETWORK=IFACE; docs/security.md, "
+                   "docs/transport.md)");
+}
+
+DdsBus::DdsBus(const std::string& url) : url_(url), parsed_(parse_dds_url(url)) {
+  check_dds_local(parsed_, url);
+  // Private by default: our configuration unless the user gave Cyclone one.
+  const char* given = std::getenv("CYCLONEDDS_URI");
+  if (!given || !*given) setenv("CYCLONEDDS_URI", dds_config_xml(parsed_).c_str(), 1);
+  participant_ = dds_create_participant(static_cast<dds_domainid_t>(parsed_.domain), nullptr, nullptr);
+  if (participant_ < 0)
+    throw BusError("bus URL '" + url + "': cannot join DDS domain " + std::to_string(parsed_.domain) + ": " +
+                   dds_error(participant_));
+  waitset_ = dds_create_waitset(participant_);
+  if (waitset_ < 0) throw BusError("DDS waitset: " + dds_error(waitset_));
+}
+
+DdsBus::~DdsBus() {
+  if (participant_ > 0) dds_delete(participant_);  // (deletes everything it made)
+}
+
+dds_qos_t* DdsBus::qos(const std::string& channel) const {
+  dds_qos_t* q = dds_create_qos();
+  if (is_state(channel)) {
+    dds_qset_reliability(q, parsed_.state_best_effort ? DDS_RELIABILITY_BEST_EFFORT : DDS_RELIABILITY_RELIABLE,
+                         DDS_SECS(1));
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, kStateDepth);
+  } else {
+    dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+  }
+  // Transient-local with a short history for late joiners: DDS matches a new writer with
+  // its readers some time after it is made, and a volatile writer's first samples would
+  // miss readers that existed (LCM delivers to every subscriber at once). The reader
+  // drops what was written long before it (take_one).
+  dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_durability_service(q, 0, DDS_HISTORY_KEEP_LAST, kLateJoinerDepth, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
+                              DDS_LENGTH_UNLIMITED);
+  return q;
+}
+
+dds_entity_t DdsBus::topic(const std::string& channel) {
+  auto it = topics_.find(channel);
+  if (it != topics_.end()) return it->second;
+  dds_qos_t* q = qos(channel);
+  const dds_entity_t t = dds_create_topic(participant_, &skillbus_Envelope_desc, channel.c_str(), q, nullptr);
+  dds_delete_qos(q);
+  if (t < 0) throw BusError("DDS topic '" + channel + "': " + dds_error(t));
+  topics_[channel] = t;
+  return t;
+}
+
+void DdsBus::publish(const std::string& channel, const void* data, size_t size) {
+  auto it = writers_.find(channel);
+  if (it == writers_.end()) {
+    dds_qos_t* q = qos(channel);
+    const dds_entity_t w = dds_create_writer(participant_, topic(channel), q, nullptr);
+    dds_delete_qos(q);
+    if (w < 0) throw BusError("DDS writer for " + channel + ": " + dds_error(w));
+    it = writers_.emplace(channel, w).first;
+  }
+  skillbus_Envelope e{};
+  e.data._buffer = static_cast<uint8_t*>(const_cast<void*>(data));
+  e.data._length = e.data._maximum = static_cast<uint32_t>(size);
+  e.data._release = false;
+  const dds_return_t r = dds_write(it->second, &e);
+  if (r < 0) throw BusError("DDS write on " + channel + " (" + std::to_string(size) + " bytes): " + dds_error(r));
+}
+
+int DdsBus::subscribe(const std::string& channel, Handler handler, int /*queue_capacity: DDS's history*/) {
+  auto it = readers_.find(channel);
+  if (it == readers_.end()) {
+    Reader r;
+    dds_qos_t* q = qos(channel);
+    r.reader = dds_create_reader(participant_, topic(channel), q, nullptr);
+    dds_delete_qos(q);
+    if (r.reader < 0) throw BusError("DDS reader for " + channel + ": " + dds_error(r.reader));
+    r.condition = dds_create_readcondition(r.reader, DDS_ANY_STATE);
+    if (r.condition < 0 || dds_waitset_attach(waitset_, r.condition, r.condition) < 0)
+      throw BusError("DDS read condition for " + channel);
+    r.since = dds_time() - kLateJoinerWindow;
+    it = readers_.emplace(channel, std::move(r)).first;
+    order_.push_back(channel);
+  }
+  const int id = next_id_++;
+  it->second.handlers[id] = std::move(handler);
+  subs_[id] = channel;
+  return id;
+}
+
+void DdsBus::unsubscribe(int id) {
+  auto s = subs_.find(id);
+  if (s == subs_.end()) return;
+  auto r = readers_.find(s->second);
+  subs_.erase(s);
+  if (r == readers_.end()) return;
+  r->second.handlers.erase(id);
+  if (!r->second.handlers.empty()) return;
+  // Nobody reads the channel here any more: the reader goes, and DDS stops sending it.
+  dds_waitset_detach(waitset_, r->second.condition);
+  dds_delete(r->second.reader);  // (deletes its condition)
+  order_.erase(std::find(order_.begin(), order_.end(), r->first));
+  readers_.erase(r);
+}
+
+bool DdsBus::take_one() {
+  for (size_t i = 0; i < order_.size(); ++i) {
+    const std::string channel = order_[i];
+    Reader& r = readers_.at(channel);
+    void* samples[1] = {nullptr};
+    dds_sample_info_t info[1];
+    const dds_return_t n = dds_take(r.reader, samples, info, 1, 1);
+    if (n <= 0) continue;
+    std::rotate(order_.begin() + static_cast<long>(i), order_.begin() + static_cast<long>(i) + 1, order_.end());
+    Bytes payload;
+    // (a late joiner's history from before we subscribed: LCM never had it)
+    const bool valid = info[0].valid_data && info[0].source_timestamp >= r.since;
+    if (valid) {
+      const auto* e = static_cast<const skillbus_Envelope*>(samples[0]);
+      payload.assign(e->data._buffer, e->data._buffer + e->data._length);
+    }
+    dds_return_loan(r.reader, samples, n);
+    if (valid) {
+      // Handlers may (un)subscribe, even this reader: a copy of the bytes and of the list.
+      std::vector<Handler> hs;
+      for (const auto& [id, h] : r.handlers) hs.push_back(h);
+      for (const auto& h : hs) {
+        try {
+          h(channel, payload.data(), payload.size());
+        } catch (const std::exception& ex) {
+          if (++handler_failures_ <= 5 || handler_failures_ % 1000 == 0)
+            SB_ERROR("bus", "handler for " << channel << " failed (#" << handler_failures_ << "): " << ex.what());
+        }
+      }
+    }
+    return true;
+  }
+  return false;
+}
+
+bool DdsBus::handle(std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    if (take_one()) return true;
+    const auto left = deadline - std::chrono::steady_clock::now();
+    if (left <= std::chrono::steady_clock::duration::zero()) return false;
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(left).count();
+    const dds_return_t r = dds_waitset_wait(waitset_, nullptr, 0, ns);
+    if (r < 0) throw BusError("waiting on the DDS bus " + url_ + " failed: " + dds_error(r));
+  }
+}
+
+}  // namespace skillbus

@@ -1,0 +1,293 @@
+"""The Cyclone DDS backend of the bus: ``dds://DOMAIN[?peers=HOST,HOST&interface=ADDR&state=best-effort]``.
+
+Messages stay LCM-encoded (lcmtypes/); DDS carries each as a sequence of octets
+(``skillbus::Envelope``, lcmtypes/dds/envelope.idl), one DDS topic per channel, so a
+process receives only the channels it reads (LCM's multicast wakes every process for
+every datagram on the port). The C++ twin is common/src/dds_bus.cpp; the Python side is
+the ``cyclonedds`` wheel (its own Cyclone DDS 11), the C++ side Debian's 0.10: the two
+interoperate for this octet payload (an int8/uint8 field would not; keep it so).
+
+Quality of service per channel class (docs/transport.md, "DDS"):
+
+* everything by default (RPC, lockstep, the world model's change stream, skills):
+  reliable, keep-all, volatile: nothing published to a matched reader is lost;
+* state (names ending in ``_STATE``): reliable keep-last 32 (a reader that falls 32
+  behind gets the latest), or with ``state=best-effort`` best-effort keep-last 32, for
+  wall-clock state on a real network (never under lockstep: a lost state stops a run).
+
+Private by default: unless $CYCLONEDDS_URI is set, the participant talks on loopback
+only (no multicast; discovery by unicast to localhost). ``peers=`` adds hosts to
+discover (a fixed peer list, for a network without multicast), ``interface=`` names
+the address to talk on instead of 127.0.0.1 (the network guard applies as for udpm://).
+"""
+
+
+import logging
+import os
+import re
+import struct
+import time
+from dataclasses import dataclass
+from skillbus.bus import Bus, BusError, Handler
+
+log = logging.getLogger("bus")
+
+try:
+    from cyclonedds import core
+    from cyclonedds._clayer import ddspy_take, ddspy_write  # (the wheel's raw CDR calls: no Python codec)
+    from cyclonedds.idl import IdlStruct
+    from cyclonedds.idl.types import byte, sequence
+
+    class Envelope(IdlStruct, typename="skillbus::Envelope"):
+        """One LCM-encoded message (lcmtypes/dds/envelope.idl)."""
+        data: sequence[byte]
+
+    _IMPORT_ERROR: ImportError | None = None
+except ImportError as _e:
+    _IMPORT_ERROR = _e
+
+STATE_DEPTH = 32
+LATE_JOINER_DEPTH = 16  # samples a writer keeps for readers that match it later
+LATE_JOINER_WINDOW_NS = 2_000_000_000  # of those, only what was written this long before the reader
+MAX_PARTICIPANTS = 120  # per host and domain (Cyclone's participant index: ports 7410 + 2 * index ...)
+_URL = re.compile(r"^dds://(\d+)(?:\?(.*))?$")
+_LEN_LE, _LEN_BE = struct.Struct("<I"), struct.Struct(">I")
+_CDR_HEADER = b"\x00\x01\x00\x00"  # CDR, little-endian (XCDR1: what a final struct of octets is in both)
+
+
+class DdsUrlError(ValueError):
+    pass
+
+
+@dataclass(frozen=True)
+class DdsUrl:
+    domain: int
+    peers: tuple[str, ...] = ()
+    interface: str = "127.0.0.1"
+    state_best_effort: bool = False
+
+
+def parse_url(url: str) -> DdsUrl:
+    """The parts of a dds:// URL; DdsUrlError naming what is wrong.
+
+    >>> parse_url("dds://7")
+    DdsUrl(domain=7, peers=(), interface='127.0.0.1', state_best_effort=False)
+    >>> parse_url("dds://0?peers=10.0.0.2,robot-b&interface=10.0.0.1&state=best-effort").peers
+    ('10.0.0.2', 'robot-b')
+    """
+    m = _URL.match(url)
+    if not m:
+        raise DdsUrlError(f"bus URL '{url}': expected dds://DOMAIN (a number 0-232), optionally "
+                          f"?peers=HOST,...&interface=ADDRESS&state=best-effort")
+    domain = int(m.group(1))
+    if domain > 232:
+        raise DdsUrlError(f"bus URL '{url}': DDS domain {domain} is out of range (0-232)")
+    out = DdsUrl(domain)
+    for part in filter(None, (m.group(2) or "").split("&")):
+        key, _, value = part.partition("=")
+        if key == "peers":
+            out = DdsUrl(out.domain, tuple(p for p in value.split(",") if p), out.interface, out.state_best_effort)
+        elif key == "interface" and value:
+            out = DdsUrl(out.domain, out.peers, value, out.state_best_effort)
+        elif key == "state" and value in ("best-effort", "reliable"):
+            out = DdsUrl(out.domain, out.peers, out.interface, value == "best-effort")
+        else:
+            raise DdsUrlError(f"bus URL '{url}': unknown option '{part}' (peers=, interface=, state=best-effort)")
+    return out
+
+
+def check_local(u: DdsUrl, url: str, allowed: str | None = None) -> None:
+    """Local by default, as udpm:// is: an interface other than loopback, or a peer other
+    than this host, lets other hosts in; BusError saying how to allow it, unless
+    $SKILLBUS_NETWORK (``--network``) is set.
+
+    >>> check_local(parse_url("dds://1"), "dds://1")
+    >>> check_local(parse_url("dds://1?interface=10.0.0.1"), "dds://1?interface=10.0.0.1", allowed="eth0")
+    """
+    allowed = os.environ.get("SKILLBUS_NETWORK") if allowed is None else allowed
+    if allowed:
+        return
+    outside = [a for a in (u.interface, *u.peers) if not (a.startswith("127.") or a == "localhost")]
+    if outside:
+        raise BusError(f"bus URL '{url}': {', '.join(outside)} would let other hosts reach this robot's bus. "
+                       f"skillbus stays on this host unless told otherwise: allow the network with --network IFACE "
+                       f"(or SKILLBUS_NETWORK=IFACE; docs/security.md, docs/transport.md)")
+
+
+def config_xml(u: DdsUrl) -> str:
+    """Cyclone DDS's configuration for a URL: one interface, no multicast, discovery by
+    unicast to localhost and the named peers."""
+    peers = "".join(f'<Peer address="{p}"/>' for p in ("localhost", *u.peers))
+    return ("<CycloneDDS><Domain id=\"any\"><General><Interfaces>"
+            f"<NetworkInterface address=\"{u.interface}\" multicast=\"false\"/></Interfaces>"
+            "<AllowMulticast>false</AllowMulticast></General>"
+            "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
+            f"<MaxAutoParticipantIndex>{MAX_PARTICIPANTS}</MaxAutoParticipantIndex>"
+            f"<Peers>{peers}</Peers></Discovery></Domain></CycloneDDS>")
+
+
+def is_state(channel: str) -> bool:
+    return channel.endswith("_STATE")
+
+
+def wrap(data: bytes) -> bytes:
+    """An Envelope's serialized form: header, octet count, octets, padding to 4."""
+    pad = -len(data) % 4
+    return _CDR_HEADER + _LEN_LE.pack(len(data)) + data + bytes(pad)
+
+
+def unwrap(sample: bytes) -> bytes | None:
+    """The octets of a serialized Envelope; None when it is none.
+
+    >>> unwrap(wrap(b"abc")), unwrap(b"\\x00\\x00\\x00\\x00\\x00\\x00\\x00\\x02xy"), unwrap(b"\\x00\\x01")
+    (b'abc', b'xy', None)
+    """
+    if len(sample) < 8:
+        return None
+    length = (_LEN_LE if sample[1] & 1 else _LEN_BE).unpack_from(sample, 4)[0]
+    if 8 + length > len(sample):
+        return None
+    return bytes(sample[8:8 + length])
+
+
+class DdsBus(Bus):
+    """The bus over Cyclone DDS (see the module's docstring). One reader per channel
+    read, one writer per channel written, made on first use."""
+
+    def __init__(self, url: str) -> None:
+        self._error = BusError
+        try:
+            self.parsed = parse_url(url)
+        except DdsUrlError as e:
+            raise BusError(str(e)) from None
+        check_local(self.parsed, url)
+        if not os.environ.get("CYCLONEDDS_URI"):
+            os.environ["CYCLONEDDS_URI"] = config_xml(self.parsed)
+        if _IMPORT_ERROR is not None:
+            raise BusError(f"bus URL '{url}': the cyclonedds package is missing ({_IMPORT_ERROR}); run make setup")
+        from cyclonedds import domain
+        self._envelope, self._core, self._take, self._write = Envelope, core, ddspy_take, ddspy_write
+        self._url = url
+        try:
+            self._dp = domain.DomainParticipant(self.parsed.domain)
+        except Exception as e:  # (cyclonedds raises DDSException)
+            raise BusError(f"bus URL '{url}': cannot join DDS domain {self.parsed.domain}: {e}") from None
+        self._waitset = core.WaitSet(self._dp)
+        self._topics: dict[str, object] = {}
+        self._writers: dict[str, object] = {}
+        self._readers: dict[str, tuple[object, object]] = {}  # channel -> (reader, read condition)
+        self._handlers: dict[str, dict[int, Handler]] = {}
+        self._since: dict[str, int] = {}  # channel -> the oldest source time delivered to its reader
+        self._subs: dict[int, str] = {}
+        self._next_id = 1
+        self._order: list[str] = []  # channels read, in a rotating order: none starves
+        self._mask = core.SampleState.Any | core.ViewState.Any | core.InstanceState.Any
+
+    @property
+    def url(self) -> str:
+        return self._url
+
+    def _qos(self, channel: str):
+        from cyclonedds.core import Policy, Qos
+        from cyclonedds.util import duration
+        # Transient-local with a short history for late joiners: DDS matches a new writer
+        # with its readers some time after it is made, and a volatile writer's first
+        # samples would miss readers that existed (LCM delivers to every subscriber at
+        # once). The reader drops what was written long before it (_take_one).
+        late = Policy.DurabilityService(0, Policy.History.KeepLast(LATE_JOINER_DEPTH), -1, -1, -1)
+        if is_state(channel):
+            reliability = (Policy.Reliability.BestEffort if self.parsed.state_best_effort
+                           else Policy.Reliability.Reliable(duration(seconds=1)))
+            return Qos(reliability, Policy.History.KeepLast(STATE_DEPTH), Policy.Durability.TransientLocal, late)
+        return Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepAll,
+                   Policy.Durability.TransientLocal, late)
+
+    def _topic(self, channel: str):
+        t = self._topics.get(channel)
+        if t is None:
+            from cyclonedds.topic import Topic
+            try:
+                t = self._topics[channel] = Topic(self._dp, channel, self._envelope, qos=self._qos(channel))
+            except Exception as e:
+                raise self._error(f"DDS topic '{channel}': {e}") from None
+        return t
+
+    def publish(self, channel: str, data: bytes) -> None:
+        w = self._writers.get(channel)
+        if w is None:
+            from cyclonedds.pub import DataWriter
+            w = self._writers[channel] = DataWriter(self._dp, self._topic(channel), qos=self._qos(channel))
+        ret = self._write(w._ref, wrap(bytes(data)))
+        if ret < 0:
+            raise self._error(f"DDS write on {channel} failed ({ret})")
+
+    def subscribe(self, channel: str, handler: Handler, queue_capacity: int = 0) -> int:
+        if channel not in self._readers:
+            from cyclonedds.sub import DataReader
+            r = DataReader(self._dp, self._topic(channel), qos=self._qos(channel))
+            cond = self._core.ReadCondition(r, self._mask)
+            self._waitset.attach(cond)
+            self._readers[channel] = (r, cond)
+            self._since[channel] = time.time_ns() - LATE_JOINER_WINDOW_NS
+            self._order.append(channel)
+        sid = self._next_id
+        self._next_id += 1
+        self._handlers.setdefault(channel, {})[sid] = handler
+        self._subs[sid] = channel
+        return sid
+
+    def unsubscribe(self, subscription_id: int) -> None:
+        channel = self._subs.pop(subscription_id, None)
+        if channel is None:
+            return
+        handlers = self._handlers.get(channel, {})
+        handlers.pop(subscription_id, None)
+        if not handlers:  # nobody reads it here any more: the reader goes, DDS stops sending
+            self._handlers.pop(channel, None)
+            r, cond = self._readers.pop(channel)
+            self._waitset.detach(cond)
+            self._order.remove(channel)
+            del cond, r
+
+    def _take_one(self) -> bool:
+        for i, channel in enumerate(self._order):
+            reader, _ = self._readers[channel]
+            got = self._take(reader._ref, self._mask, 1)
+            if isinstance(got, int) or not got:
+                continue
+            self._order.append(self._order.pop(i))  # (next time, the others first)
+            since = self._since.get(channel, 0)
+            for data, info in got:
+                if not info.valid_data or info.source_timestamp < since:
+                    continue  # (a late joiner's history from before we subscribed: LCM never had it)
+                payload = unwrap(data)
+                if payload is None:
+                    continue
+                for h in list(self._handlers.get(channel, {}).values()):
+                    try:
+                        h(channel, payload)
+                    except Exception:  # logged; the dispatch loop goes on (never crash on input)
+                        log.exception("handler for %s failed", channel)
+            return True
+        return False
+
+    def handle(self, timeout: float) -> bool:
+        from cyclonedds.util import duration
+        deadline = None
+        while True:
+            if self._take_one():
+                return True
+            if deadline is None:
+                deadline = time.monotonic() + timeout
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            if not self._readers:
+                time.sleep(left)
+                return False
+            self._waitset.wait(duration(seconds=left))
+
+    def close(self) -> None:
+        self._readers.clear()
+        self._writers.clear()
+        self._dp = None
