@@ -76,6 +76,7 @@ bench: build
 	$(PY) bench/sim_physics.py
 	$(PY) bench/can_latency.py
 	$(PY) bench/pick_and_place.py
+	$(PY) bench/dds_transport.py
 
 clean:
 	rm -rf $(BUILD)

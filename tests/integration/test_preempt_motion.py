@@ -90,9 +90,12 @@ def stop_during_motion(bus, start: Callable[[], int], stop: Callable[[int], None
         stop(task_box["id"])
         n_ack = len(states)
         t_ack, p_ack = states[-1][0], states[-1][1]
-        # the tool's speed just before the stop
-        prev = next((s for s in reversed(states[:n_ack]) if s[0] <= t_ack - 0.1), states[0])
-        out["speed_at_stop_m_s"] = _dist(p_ack, prev[1]) / max(t_ack - prev[0], 1e-9)
+        # The tool's speed when the stop was sent: the stop came in full motion (at the ack,
+        # 60-80 ms of sim time later on a loaded machine, the arm may be slowing down
+        # towards its goal already, which says nothing about the stop).
+        n_sent = next(i for i in range(len(states) - 1, -1, -1) if states[i][0] <= t_sent)
+        prev = next((s for s in reversed(states[:n_sent + 1]) if s[0] <= t_sent - 0.1), states[0])
+        out["speed_at_stop_m_s"] = _dist(p_sent, prev[1]) / max(t_sent - prev[0], 1e-9)
         poll_until(lambda: states[-1][0] >= t_ack + settle_s - 1e-6 and final, left(), interval=0.02, step=bus.handle)
         after = [s for s in states[n_ack:]]
         p_end = states[-1][1]
