@@ -12,6 +12,10 @@ namespace skillbus {
 namespace {
 constexpr int kStateDepth = 32;
 constexpr int kMaxParticipants = 120;  // per host and domain (Cyclone's participant index)
+// How long a process that vanished without saying so (killed) is still matched: a reliable
+// writer keeps what it sent for that process's readers until then, and blocks once too
+// much is unacknowledged. Cyclone's default is 10 s. (As skillbus.dds.LEASE_S.)
+constexpr int kLeaseSeconds = 3;
 constexpr int kLateJoinerDepth = 16;   // samples a writer keeps for readers that match it later
 constexpr dds_duration_t kLateJoinerWindow = DDS_SECS(2);  // of those, only what was written this long before the reader
 
@@ -66,7 +70,8 @@ std::string dds_config_xml(const DdsUrl& u) {
   return "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface address=\"" + u.interface +
          "\" multicast=\"false\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
          "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>" +
-         std::to_string(kMaxParticipants) + "</MaxAutoParticipantIndex><Peers>" + peers +
+         std::to_string(kMaxParticipants) + "</MaxAutoParticipantIndex><LeaseDuration>" +
+         std::to_string(kLeaseSeconds) + " s</LeaseDuration><Peers>" + peers +
          "</Peers></Discovery></Domain></CycloneDDS>";
 }
 

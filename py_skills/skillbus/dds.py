@@ -22,6 +22,7 @@ the address to talk on instead of 127.0.0.1 (the network guard applies as for ud
 """
 
 
+import atexit
 import logging
 import os
 import re
@@ -50,6 +51,10 @@ STATE_DEPTH = 32
 LATE_JOINER_DEPTH = 16  # samples a writer keeps for readers that match it later
 LATE_JOINER_WINDOW_NS = 2_000_000_000  # of those, only what was written this long before the reader
 MAX_PARTICIPANTS = 120  # per host and domain (Cyclone's participant index: ports 7410 + 2 * index ...)
+# How long a process that vanished without saying so (killed) is still matched: a
+# reliable writer keeps what it sent for that process's readers until then, and blocks
+# once too much is unacknowledged. Cyclone's default is 10 s.
+LEASE_S = 3
 _URL = re.compile(r"^dds://(\d+)(?:\?(.*))?$")
 _LEN_LE, _LEN_BE = struct.Struct("<I"), struct.Struct(">I")
 _CDR_HEADER = b"\x00\x01\x00\x00"  # CDR, little-endian (XCDR1: what a final struct of octets is in both)
@@ -123,6 +128,7 @@ def config_xml(u: DdsUrl) -> str:
             "<AllowMulticast>false</AllowMulticast></General>"
             "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
             f"<MaxAutoParticipantIndex>{MAX_PARTICIPANTS}</MaxAutoParticipantIndex>"
+            f"<LeaseDuration>{LEASE_S} s</LeaseDuration>"
             f"<Peers>{peers}</Peers></Discovery></Domain></CycloneDDS>")
 
 
@@ -173,6 +179,9 @@ class DdsBus(Bus):
         except Exception as e:  # (cyclonedds raises DDSException)
             raise BusError(f"bus URL '{url}': cannot join DDS domain {self.parsed.domain}: {e}") from None
         self._waitset = core.WaitSet(self._dp)
+        # Leave the domain when the process ends: the others unmatch its readers at once
+        # (the wheel keeps every entity referenced, so it is never collected by itself).
+        atexit.register(self.close)
         self._topics: dict[str, object] = {}
         self._writers: dict[str, object] = {}
         self._readers: dict[str, tuple[object, object]] = {}  # channel -> (reader, read condition)
@@ -288,6 +297,10 @@ class DdsBus(Bus):
             self._waitset.wait(duration(seconds=left))
 
     def close(self) -> None:
+        """Leaves the DDS domain (deletes the participant, its readers and writers)."""
+        dp, self._dp = self._dp, None
         self._readers.clear()
         self._writers.clear()
-        self._dp = None
+        self._order.clear()
+        if dp is not None:
+            dp.__del__()

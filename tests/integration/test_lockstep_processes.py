@@ -66,7 +66,8 @@ def test_a_different_world_gives_a_different_digest(tmp_path):
     assert a["digest"] != b["digest"]
 
 
-def test_killing_a_participant_stops_the_master_with_an_error_naming_it(sandbox, binary):
+def test_killing_a_participant_stops_the_master_with_an_error_naming_it(transport_sandbox, binary):
+    sandbox = transport_sandbox  # (on DDS the killed process is still matched for its lease: nothing may block)
     clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=10_000_000,
                          clock_args=["--ack-timeout-ms", "1500"])
     clock.wait_for("starting frames", 30)
