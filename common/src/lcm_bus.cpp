@@ -88,8 +88,19 @@ lcm_t* LcmBus::lane(int i) {
 }
 
 void LcmBus::publish(const std::string& channel, const void* data, size_t size) {
-  if (lcm_publish(lane(lcm_lane_of(channel)), channel.c_str(), data, static_cast<unsigned int>(size)) != 0)
-    throw BusError("LCM publish failed on " + channel + " (" + std::to_string(size) + " bytes)");
+  lcm_t* l = lane(lcm_lane_of(channel));
+  errno = 0;
+  if (lcm_publish(l, channel.c_str(), data, static_cast<unsigned int>(size)) == 0) return;
+  const int e = errno;
+  if (e == 0 || e == EMSGSIZE || e == EINVAL)  // LCM refused it (a channel name too long) or it can never fit
+    throw BusError("LCM publish failed on " + channel + " (" + std::to_string(size) + " bytes)" +
+                   (e ? std::string(": ") + std::strerror(e) : std::string()));
+  // The network refused the send (down, unreachable, out of buffers): the message is lost,
+  // as a datagram can be, and the protocols above notice and retry (RPC, lockstep resends)
+  // or report it (a participant cut off). Counted and logged, never fatal.
+  ++lost_sends_;
+  if (lost_sends_ <= 5 || lost_sends_ % 1000 == 0)
+    SB_WARN("bus", "sending on " << channel << " failed (" << std::strerror(e) << "): message lost (#" << lost_sends_ << ")");
 }
 
 UdpmReceiver& LcmBus::receiver(int i) {

@@ -60,6 +60,11 @@ class LcmBus : public Bus {
  public:
   // Datagrams that were no LCM message, and fragmented messages that lost a fragment.
   long undecodable() const;
+  // Messages the network refused to send (logged; the protocols above retry or report).
+  long lost_sends() const { return lost_sends_; }
+
+ private:
+  long lost_sends_ = 0;
 };
 
 // Lane of a channel: 1 for many-to-one channels (names ending in _ACK or _JOIN), else 0.

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import abc
 import collections
+import errno
 import logging
 import os
 import re
@@ -249,6 +250,7 @@ class LcmBus(Bus):
         self._receivers: list[UdpmReceiver | None] = [None, None]
         self._by_channel: dict[str, dict[int, Handler]] = {}
         self._turn = 0  # the lane read first by the next handle(): neither starves the other
+        self.lost_sends = 0  # messages the network refused to send
         self._lane(0)  # fail early, with a clear message
 
     def _lane(self, i: int) -> lcm.LCM:
@@ -279,7 +281,17 @@ class LcmBus(Bus):
         return self._url
 
     def publish(self, channel: str, data: bytes) -> None:
-        self._lane(lane_of(channel)).publish(channel, data)
+        try:
+            self._lane(lane_of(channel)).publish(channel, data)
+        except OSError as e:
+            if e.errno in (None, 0, errno.EMSGSIZE, errno.EINVAL):  # LCM refused it, or it can never fit
+                raise BusError(f"LCM publish failed on {channel} ({len(data)} bytes): {e}") from None
+            # The network refused the send (down, unreachable, out of buffers): the message
+            # is lost, as a datagram can be, and the protocols above notice and retry (RPC,
+            # lockstep resends) or report it. Counted and logged, never fatal.
+            self.lost_sends += 1
+            if self.lost_sends <= 5 or self.lost_sends % 1000 == 0:
+                log.warning("sending on %s failed (%s): message lost (#%d)", channel, e.strerror, self.lost_sends)
 
     def subscribe(self, channel: str, handler: Handler,
                   queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:

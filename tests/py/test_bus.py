@@ -97,3 +97,29 @@ def test_memq_has_one_lane_so_acks_still_arrive():
     bus.publish("SB_LOCKSTEP_ACK", b"a")
     drain(bus)
     assert got == [b"a"]
+
+
+def test_a_send_the_network_refuses_is_a_lost_message_not_a_crash(caplog):
+    # A cable pulled (ENETDOWN) made the lockstep master die of an uncaught BusError; a
+    # refused send is now a lost datagram (counted, logged), which the protocols above
+    # retry or report. A message that can never fit still raises, naming the channel.
+    import errno as e
+
+    from skillbus.bus import LcmBus
+
+    class Refusing:
+        def __init__(self, err):
+            self.err = err
+
+        def publish(self, channel, data):
+            raise OSError(self.err, "refused")
+
+    bus = LcmBus("memq://")
+    bus._lanes[0] = Refusing(e.ENETDOWN)
+    for _ in range(3):
+        bus.publish("SB_X", b"x")
+    assert bus.lost_sends == 3
+    assert "message lost" in caplog.text
+    bus._lanes[0] = Refusing(e.EMSGSIZE)
+    with pytest.raises(BusError, match="SB_X"):
+        bus.publish("SB_X", b"x" * 10)

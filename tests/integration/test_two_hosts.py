@@ -1,0 +1,73 @@
+"""Two simulated hosts (skillbus.hosts: the sandbox's namespace and a child one joined by a
+veth pair), over LCM with ttl=1 and over Cyclone DDS with each host's address and the
+other as its peer. The world model, physics, motion service and skill manager run on
+host A; the skill process, the gripper device and its CAN hub on host B. The digests
+are those of one host; a cut cable is reported, naming who was cut off."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from conftest import TRANSPORTS, last_json, python_tool
+from skillbus.hosts import TwoHosts
+from skillbus.lockstep_session import python_participant_argv
+from skillbus.netns import Sandbox
+from skillbus.paths import binary
+from skillbus.system import programs, start
+
+ON_B = {"skills": "b", "gripper": "b", "can_hub": "b"}
+
+
+def clear_table(box, run: Path) -> dict:
+    procs = start(box, programs(run), run)
+    assert box.wait(procs["sim"], 600) == 0, procs["sim"].stderr()[-3000:]
+    out = {"sim": last_json(procs["sim"].stdout())}
+    for n in ("wm", "skill_mgr", "skills", "gripper"):
+        assert box.wait(procs[n], 60) == 0, procs[n].stderr()[-3000:]
+        out[n] = last_json(procs[n].stdout())
+    where = box.start("where", python_tool("wm_where.py", str(run)))
+    assert box.wait(where, 60) == 0, where.stderr()[-2000:]
+    out["world_model"] = json.loads(where.stdout().strip().splitlines()[-1])
+    return out
+
+
+@pytest.fixture(scope="module")
+def one_host(tmp_path_factory) -> dict:
+    run = tmp_path_factory.mktemp("one_host")
+    with Sandbox(log_dir=run / "logs") as box:
+        return clear_table(box, run)
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_the_system_split_over_two_hosts_gives_the_digests_of_one(tmp_path, transport, one_host):
+    run = tmp_path / transport
+    run.mkdir()
+    with TwoHosts(log_dir=run / "logs", transport=transport, placement=ON_B) as box:
+        two = clear_table(box, run)
+        assert {n: box.started_on[n] for n in ON_B} == ON_B  # (they did run on B)
+        assert box.started_on["sim"] == box.started_on["wm"] == box.started_on["skill_mgr"] == "a"
+    assert two["skill_mgr"]["tasks"] == {"1": "Success: all succeeded"}, two["skill_mgr"]
+    for key in ("frames", "state_digest", "session_digest"):
+        assert two["sim"][key] == one_host["sim"][key], key
+    for n in ("wm", "skill_mgr", "skills", "gripper"):
+        assert two[n]["digest"] == one_host[n]["digest"], n
+    assert two["world_model"] == one_host["world_model"]
+
+
+@pytest.mark.parametrize("transport", TRANSPORTS)
+def test_a_cut_cable_is_reported_naming_the_participant_cut_off(tmp_path, transport):
+    with TwoHosts(log_dir=tmp_path / "logs", transport=transport, placement={"far": "b"}) as box:
+        clock = box.start("clock", [binary("sb_clock"), "--demo", "--frames", "10000000",
+                                    "--participants", "near,far", "--ack-timeout-ms", "1500"])
+        box.start("near", python_participant_argv("near"))
+        box.start("far", python_participant_argv("far", "--clock-timeout", "3"))
+        clock.wait_for("starting frames", 30)
+        clock.wait_for(" joined", 5)
+        box.cut()
+        assert box.wait(clock, 30) == 1
+        err = clock.stderr() + clock.stdout()
+        assert "far" in err and ("no ack" in err or "message lost" in err), err[-2000:]
+        assert "near" not in err.split("participant(s)")[-1].split("\n")[0], err[-2000:]
