@@ -22,6 +22,7 @@ from typing import Any
 
 from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t, skill_value_t
+from skillbus.skill.tick_wire import TickReply
 from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, request_channel
 from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
@@ -174,7 +175,7 @@ class SkillProcess:
 
     # -- RPC methods ------------------------------------------------------------
     def _reply(self, skill: SkillCore | None, state: State, message: str, code: int = 0) -> skill_tick_reply_t:
-        r = skill_tick_reply_t()
+        r = TickReply()  # (a skill_tick_reply_t encoded by skillbus.skill.tick_wire: every tick sends one)
         r.state, r.message, r.code = int(state), message, code
         r.wm_version = self.wmi.version if self.wmi is not None else -1
         if skill is not None:
