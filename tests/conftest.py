@@ -20,10 +20,9 @@ from support.skip_policy import cannot_run, pytest_configure, pytest_make_collec
 TESTS = Path(__file__).resolve().parent
 
 
-@pytest.fixture
-def sandbox(tmp_path):
+def _sandbox(tmp_path: Path, transport: str = "lcm"):
     try:
-        box = Sandbox(log_dir=tmp_path / "logs")
+        box = Sandbox(log_dir=tmp_path / "logs", transport=transport)
         box.__enter__()
     except SandboxError as e:
         cannot_run(str(e))
@@ -31,6 +30,11 @@ def sandbox(tmp_path):
         yield box
     finally:
         box.__exit__(None, None, None)
+
+
+@pytest.fixture
+def sandbox(tmp_path):
+    yield from _sandbox(tmp_path)
 
 
 TRANSPORTS = ("lcm", "dds")
@@ -39,15 +43,7 @@ TRANSPORTS = ("lcm", "dds")
 @pytest.fixture(params=TRANSPORTS)
 def transport_sandbox(request, tmp_path):
     """A sandbox on each transport in turn: LCM (udpm://) and Cyclone DDS (dds://)."""
-    try:
-        box = Sandbox(log_dir=tmp_path / "logs", transport=request.param)
-        box.__enter__()
-    except SandboxError as e:
-        cannot_run(str(e))
-    try:
-        yield box
-    finally:
-        box.__exit__(None, None, None)
+    yield from _sandbox(tmp_path, request.param)
 
 
 @pytest.fixture

@@ -8,11 +8,11 @@ from __future__ import annotations
 import json
 import re
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
+from clear_table_run import run_clear_table
 from conftest import last_json, python_tool
 from skillbus.demo import in_bin
 from skillbus.netns import Sandbox
@@ -26,17 +26,9 @@ def clear_table(tmp: Path, name: str, load: bool = False, transport: str = "lcm"
         hog = None
         if load:  # another process keeps a core busy all along (and the other one now and then)
             hog = box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
-        procs = start(box, programs(run), run)
-        assert box.wait(procs["sim"], 600) == 0, procs["sim"].stderr()[-3000:]
-        out = {"sim": last_json(procs["sim"].stdout())}
+        out = run_clear_table(box, run)
         # the load ran for the whole session (it is never told to stop)
         out["load_ran_throughout"] = hog is not None and hog.returncode is None
-        for n in ("wm", "skill_mgr", "skills", "gripper"):
-            assert box.wait(procs[n], 60) == 0, procs[n].stderr()[-3000:]
-            out[n] = last_json(procs[n].stdout())
-        where = box.start("where", python_tool("wm_where.py", str(run)))
-        assert box.wait(where, 60) == 0, where.stderr()[-2000:]
-        out["world_model"] = json.loads(where.stdout().strip().splitlines()[-1])
     return out
 
 
@@ -99,7 +91,6 @@ def test_a_skill_process_killed_during_pick_fails_the_task_and_is_restarted(sand
 def test_locate_adds_the_objects_the_world_model_does_not_know(tmp_path):
     """The world model starts without the blue cube; Locate (the simulated camera) adds
     it, contained in the table, at the pose the physics server reports."""
-    import shutil
     from skillbus import paths
     from skillbus.sim import scene as scene_file
     run = tmp_path / "locate"

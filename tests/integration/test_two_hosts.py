@@ -6,39 +6,23 @@ are those of one host; a cut cable is reported, naming who was cut off."""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import pytest
 
-from conftest import TRANSPORTS, last_json, python_tool
+from clear_table_run import run_clear_table
+from conftest import TRANSPORTS
 from skillbus.hosts import TwoHosts
 from skillbus.lockstep_session import python_participant_argv
 from skillbus.netns import Sandbox
 from skillbus.paths import binary
-from skillbus.system import programs, start
 
 ON_B = {"skills": "b", "gripper": "b", "can_hub": "b"}
-
-
-def clear_table(box, run: Path) -> dict:
-    procs = start(box, programs(run), run)
-    assert box.wait(procs["sim"], 600) == 0, procs["sim"].stderr()[-3000:]
-    out = {"sim": last_json(procs["sim"].stdout())}
-    for n in ("wm", "skill_mgr", "skills", "gripper"):
-        assert box.wait(procs[n], 60) == 0, procs[n].stderr()[-3000:]
-        out[n] = last_json(procs[n].stdout())
-    where = box.start("where", python_tool("wm_where.py", str(run)))
-    assert box.wait(where, 60) == 0, where.stderr()[-2000:]
-    out["world_model"] = json.loads(where.stdout().strip().splitlines()[-1])
-    return out
 
 
 @pytest.fixture(scope="module")
 def one_host(tmp_path_factory) -> dict:
     run = tmp_path_factory.mktemp("one_host")
     with Sandbox(log_dir=run / "logs") as box:
-        return clear_table(box, run)
+        return run_clear_table(box, run)
 
 
 @pytest.mark.parametrize("transport", TRANSPORTS)
@@ -46,7 +30,7 @@ def test_the_system_split_over_two_hosts_gives_the_digests_of_one(tmp_path, tran
     run = tmp_path / transport
     run.mkdir()
     with TwoHosts(log_dir=run / "logs", transport=transport, placement=ON_B) as box:
-        two = clear_table(box, run)
+        two = run_clear_table(box, run)
         assert {n: box.started_on[n] for n in ON_B} == ON_B  # (they did run on B)
         assert box.started_on["sim"] == box.started_on["wm"] == box.started_on["skill_mgr"] == "a"
     assert two["skill_mgr"]["tasks"] == {"1": "Success: all succeeded"}, two["skill_mgr"]
