@@ -69,6 +69,17 @@ class Bus(abc.ABC):
     def url(self) -> str: ...
 
 
+def guarded(handler: Handler) -> Handler:
+    """`handler`, whose failure is logged instead of raised: every backend's dispatch loop
+    goes on (never crash on input)."""
+    def call(ch: str, data: bytes) -> None:
+        try:
+            handler(ch, data)
+        except Exception:
+            log.exception("handler for %s failed", ch)
+    return call
+
+
 def resolve_url(url: str | None = None) -> str:
     return url or os.environ.get("SKILLBUS_BUS_URL") or DEFAULT_URL
 
@@ -149,11 +160,6 @@ def route_interface(address: int, table: str = "/proc/net/route") -> str:
         if address & mask == dest & mask and (length > best_len or (length == best_len and metric < best_metric)):
             best, best_len, best_metric = f[0], length, metric
     return best
-    for line in out.splitlines():
-        parts = line.split()
-        if len(parts) >= 4 and parts[3].split("/")[0] == address:
-            return parts[1]
-    return ""
 
 
 def with_receive_buffer(url: str, rmem_max: int | None) -> str:
@@ -295,21 +301,14 @@ class LcmBus(Bus):
 
     def subscribe(self, channel: str, handler: Handler,
                   queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
-        def guarded(ch: str, data: bytes) -> None:
-            # A failing handler is logged; the dispatch loop goes on (never crash on input).
-            try:
-                handler(ch, data)
-            except Exception:
-                log.exception("handler for %s failed", ch)
-
         lane = lane_of(channel) if self._lane_urls[1] else 0
         sid = self._next_id
         if self._direct:
             self._receiver(lane)
-            self._by_channel.setdefault(channel, {})[sid] = guarded
+            self._by_channel.setdefault(channel, {})[sid] = guarded(handler)
             sub: object = channel
         else:
-            sub = self._lane(lane).subscribe(channel, guarded)
+            sub = self._lane(lane).subscribe(channel, guarded(handler))
             sub.set_queue_capacity(queue_capacity)  # type: ignore[attr-defined]
         self._next_id += 1
         self._subs[sid] = (lane, sub)

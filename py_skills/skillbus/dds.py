@@ -29,7 +29,7 @@ import re
 import struct
 import time
 from dataclasses import dataclass
-from skillbus.bus import Bus, BusError, Handler
+from skillbus.bus import Bus, BusError, Handler, guarded
 
 log = logging.getLogger("bus")
 
@@ -186,6 +186,7 @@ class DdsBus(Bus):
         self._writers: dict[str, object] = {}
         self._readers: dict[str, tuple[object, object]] = {}  # channel -> (reader, read condition)
         self._handlers: dict[str, dict[int, Handler]] = {}
+        self.undecodable = 0  # samples that were no Envelope
         self._since: dict[str, int] = {}  # channel -> the oldest source time delivered to its reader
         self._subs: dict[int, str] = {}
         self._next_id = 1
@@ -241,7 +242,7 @@ class DdsBus(Bus):
             self._order.append(channel)
         sid = self._next_id
         self._next_id += 1
-        self._handlers.setdefault(channel, {})[sid] = handler
+        self._handlers.setdefault(channel, {})[sid] = guarded(handler)
         self._subs[sid] = channel
         return sid
 
@@ -271,12 +272,10 @@ class DdsBus(Bus):
                     continue  # (a late joiner's history from before we subscribed: LCM never had it)
                 payload = unwrap(data)
                 if payload is None:
+                    self.undecodable += 1  # (no Envelope: a foreign writer on our topic)
                     continue
                 for h in list(self._handlers.get(channel, {}).values()):
-                    try:
-                        h(channel, payload)
-                    except Exception:  # logged; the dispatch loop goes on (never crash on input)
-                        log.exception("handler for %s failed", channel)
+                    h(channel, payload)
             return True
         return False
 
