@@ -64,7 +64,7 @@ fuzz-asan: build
 	  $(PY) -m pytest -q -rs -s tests/integration/test_fuzz.py -k "test_wm_server or test_skill_mgr"
 
 demo: build
-	$(VENV)/bin/skillbus demo $(if $(BUS),--bus $(BUS))
+	$(VENV)/bin/skillbus demo $(if $(BUS),--bus $(BUS)) $(if $(ROBOTS),--robots $(ROBOTS))
 
 bench: build
 	$(PY) bench/lockstep_overhead.py

@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
   Blackboard bb;
   RpcClient client(*bus, argv[1], "bench");
   TaskContext ctx{registry, bb, [&](const std::string&) -> RpcClient& { return client; }, std::chrono::milliseconds(2000),
-                  1, nullptr, ""};
+                  1, nullptr, "", ""};
   Implementation impl;
   impl.description.type = "Spin";
   impl.description.label = argv[2];

@@ -178,9 +178,9 @@ Policy Policy::parse(const std::string& text, const std::string& source) {
       throw BusError(source + ", line " + std::to_string(n) + ": '" + r.pattern +
                      "' names a channel and no identity (a rule is CHANNEL IDENTITY...; * for any holder of the key)");
     for (char c : r.pattern)
-      if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '*'))
+      if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '*' || c == '/'))
         throw BusError(source + ", line " + std::to_string(n) + ": '" + r.pattern +
-                       "' is not a channel name or pattern (letters, digits, _ and *)");
+                       "' is not a channel name or pattern (letters, digits, _, / and *)");
     out.rules_.push_back(std::move(r));
   }
   return out;
@@ -197,8 +197,12 @@ Policy Policy::load(const std::string& path) {
 bool Policy::allows(const std::string& identity, const std::string& channel) const {
   std::string name = channel;
   if (!namespace_.empty() && name.compare(0, namespace_.size(), namespace_) == 0) name = name.substr(namespace_.size());
+  // A robot's own channel ("r2/SB_ROBOT_ARM_CMD"): a pattern without a robot ("SB_ROBOT_*")
+  // is about that channel of every robot; one with a robot ("r2/SB_ROBOT_*") about that robot's.
+  const auto slash = name.find('/');
+  const std::string base = slash == std::string::npos ? name : name.substr(slash + 1);
   for (const auto& r : rules_) {
-    if (!glob_match(r.pattern, name)) continue;
+    if (!glob_match(r.pattern, r.pattern.find('/') == std::string::npos ? base : name)) continue;
     for (const auto& id : r.identities)
       if (id == "*" || id == identity) return true;
     return false;

@@ -27,9 +27,5 @@ std::unique_ptr<Bus> open_bus(const std::string& url_in) {
   throw BusError("bus URL '" + url + "': unknown scheme (expected udpm://, memq:// or dds://)");
 }
 
-std::string channel(const std::string& name) {
-  const char* ns = std::getenv("SKILLBUS_NAMESPACE");
-  return (ns ? std::string(ns) : std::string()) + name;
-}
 
 }  // namespace skillbus

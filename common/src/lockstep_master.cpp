@@ -41,6 +41,9 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
       inbox_(cfg_.name, bad_) {
   std::sort(expected_.begin(), expected_.end());
   expected_.erase(std::unique(expected_.begin(), expected_.end()), expected_.end());
+  auto& enders = cfg_.end_when_asked_by;
+  std::sort(enders.begin(), enders.end());
+  enders.erase(std::unique(enders.begin(), enders.end()), enders.end());
   subs_.push_back(bus_.subscribe(join_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_join(d, n, ch);
   }));
@@ -52,10 +55,24 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
     if (!decode_msg(m.data.data(), m.data.size(), e) || e.after_frames < 0)
       return bad_.record(m.channel, "not a lockstep_end_t", m.data.size());
     const int64_t at = m.stamp.frame + e.after_frames;
-    if (end_at_ < 0 || at < end_at_) {
-      end_at_ = at;
-      SB_INFO(kLog, m.stamp.sender << " asks to end the session after frame " << at << ": " << e.why);
+    const auto& needed = cfg_.end_when_asked_by;
+    if (needed.empty()) {
+      if (end_at_ < 0 || at < end_at_) {
+        end_at_ = at;
+        SB_INFO(kLog, m.stamp.sender << " asks to end the session after frame " << at << ": " << e.why);
+      }
+      return;
     }
+    if (std::find(needed.begin(), needed.end(), m.stamp.sender) == needed.end()) {
+      SB_INFO(kLog, m.stamp.sender << " asks to end the session (" << e.why << "); it ends when "
+                                   << needed.size() << " named participants have asked");
+      return;
+    }
+    if (!end_asked_.emplace(m.stamp.sender, at).second) return;  // (its first ask counts)
+    SB_INFO(kLog, m.stamp.sender << " asks to end the session after frame " << at << ": " << e.why << " ("
+                                 << end_asked_.size() << " of " << needed.size() << ")");
+    if (end_asked_.size() == needed.size())
+      for (const auto& [who, frame] : end_asked_) end_at_ = std::max(end_at_, frame);
   });
 }
 

@@ -47,7 +47,10 @@ class PoseCost : public ceres::CostFunction {
 // search is the same on every run.
 std::vector<Eigen::VectorXd> seeds(const Kinematics& k, const Eigen::Isometry3d& target, const Eigen::VectorXd& q0) {
   std::vector<Eigen::VectorXd> out{q0};
-  const double yaw = std::atan2(target.translation().y(), target.translation().x());
+  // The target's direction seen from the robot's base (an arm that does not stand at the
+  // world's origin, or is turned, turns its first joint by the direction from itself).
+  const Eigen::Vector3d from_base = k.base().linear().transpose() * (target.translation() - k.base().translation());
+  const double yaw = std::atan2(from_base.y(), from_base.x());
   Eigen::VectorXd turned = q0;
   turned[0] = yaw;
   out.push_back(turned);

@@ -19,8 +19,8 @@ struct Kinematics::Impl {
   }
 };
 
-Kinematics::Kinematics(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
-  const auto& r = scene.robot;
+Kinematics::Kinematics(const scene::Scene& scene, const std::string& robot) : impl_(std::make_unique<Impl>()) {
+  const scene::RobotSpec& r = scene::robot_on_bus(scene, robot);
   dart::utils::DartLoader loader;
   impl_->robot = loader.parseSkeleton(dart::common::Uri::createFromPath(r.urdf), nullptr,
                                       dart::utils::DartLoader::FIXED_BASE_LINK);
@@ -29,8 +29,9 @@ Kinematics::Kinematics(const scene::Scene& scene) : impl_(std::make_unique<Impl>
   base.translation() = Eigen::Vector3d(r.pose[0], r.pose[1], r.pose[2]);
   base.linear() = Eigen::Quaterniond(r.pose[6], r.pose[3], r.pose[4], r.pose[5]).normalized().toRotationMatrix();
   impl_->robot->getRootJoint()->setTransformFromParentBodyNode(base);
+  base_ = base;
   impl_->tool = impl_->robot->getBodyNode(r.tool_link);
-  if (!impl_->tool) throw scene::SceneError(scene.path + ": robot.tool_link '" + r.tool_link + "' is not a link");
+  if (!impl_->tool) throw scene::SceneError(scene.path + ": robot " + r.name + ": tool_link '" + r.tool_link + "' is not a link");
   impl_->offset = Eigen::Vector3d(0, 0, r.tool_offset);
   for (size_t i = 0; i < impl_->robot->getNumDofs(); ++i) {
     auto* dof = impl_->robot->getDof(i);

@@ -81,12 +81,13 @@ int main(int argc, char** argv) {
   std::string url, scene_file;
   apps::add_url_option(app, url);
   app.add_option("--scene", scene_file, "the scene file the robot comes from (required)")->type_name("FILE");
+  apps::add_robot_option(app);  // which of the scene's robots, and its MOTION channels
   apps::parse_or_exit(app, argc, argv);
   if (scene_file.empty()) apps::usage_error(app, "--scene FILE is required (the robot comes from it)");
   std::unique_ptr<Bus> bus;
   std::unique_ptr<motion::Kinematics> kin;
   apps::start_or_exit("motion_server", [&] {
-    kin = std::make_unique<motion::Kinematics>(scene::load_scene(scene_file));
+    kin = std::make_unique<motion::Kinematics>(scene::load_scene(scene_file), current_robot());
     bus = open_bus(url);
   });
   RpcServer rpc(*bus, "MOTION");

@@ -29,6 +29,7 @@ from typing import Callable
 
 import lcm
 
+from skillbus import channels
 from skillbus.udpm import UdpmReceiver
 
 Handler = Callable[[str, bytes], None]
@@ -85,8 +86,9 @@ def resolve_url(url: str | None = None) -> str:
 
 
 def channel(name: str) -> str:
-    """Namespaced channel name: $SKILLBUS_NAMESPACE + name (several robots on one bus)."""
-    return os.environ.get("SKILLBUS_NAMESPACE", "") + name
+    """The channel `name` as this process names it (skillbus.channels: a robot's own
+    channels under its robot, everything behind $SKILLBUS_NAMESPACE)."""
+    return channels.channel(name)
 
 
 def open_bus(url: str | None = None) -> Bus:

@@ -20,6 +20,8 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="the main job: the robot clears the table (lockstep, under supervisord)")
     d.add_argument("--run-dir", default="runs/demo", help="logs, world model data and the LCM log go here")
     d.add_argument("--json", action="store_true", help="print the result as JSON")
+    d.add_argument("--robots", type=int, choices=(1, 2), default=1,
+                   help="2: two arms, each with its gripper, CAN bus and skill manager, clear six cubes at once")
     d.add_argument("--bus", choices=("lcm", "dds"), default="lcm",
                    help="the transport: LCM (udpm://, recorded in an LCM log) or Cyclone DDS (dds://; docs/transport.md)")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
@@ -71,6 +73,8 @@ def build_parser() -> argparse.ArgumentParser:
     dev.add_argument("--physics", action="store_true",
                      help="wall clock, with the fingers of the physics server (in wall-clock mode)")
     dev.add_argument("--name", default="gripper", help="lockstep participant name")
+    dev.add_argument("--robot", default=None, metavar="NAME",
+                     help="the robot whose fingers it drives (channels NAME/SB_SIM_GRIPPER_CMD, NAME/SB_CAN_SYNC)")
     dev.add_argument("--url", default=None, help="bus URL (lockstep)")
     rec = sub.add_parser("can-record", help="record a CAN bus to a candump log file")
     rec.add_argument("file", help="where to write (.log: candump format)")
@@ -99,6 +103,18 @@ def main(argv: list[str] | None = None) -> int:
     setup_logging(args.log_level)
     if args.network:  # (read by open_bus here and by every program this command starts)
         os.environ["SKILLBUS_NETWORK"] = args.network
+    from skillbus.channels import set_robot, valid_robot_name
+    robot = getattr(args, "robot", None)
+    if isinstance(robot, str):  # a command's --robot NAME: its robot's channels (skillbus.channels)
+        try:
+            set_robot(robot)
+        except ValueError as e:
+            print(f"error: --robot: {e}", file=sys.stderr)
+            return 2
+    elif os.environ.get("SKILLBUS_ROBOT") and not valid_robot_name(os.environ["SKILLBUS_ROBOT"]):
+        print(f"error: $SKILLBUS_ROBOT: robot name {os.environ['SKILLBUS_ROBOT']!r}: a letter, then letters, "
+              f"digits or _", file=sys.stderr)
+        return 2
     from skillbus.bus import BusError
     from skillbus.rpc import RpcTimeout
     try:

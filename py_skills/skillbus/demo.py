@@ -30,7 +30,8 @@ from skillbus.waiting import poll_until, wait_until
 
 ENDED = (State.Success, State.Failure)
 
-BIN_CENTRE, BIN_HALF, BIN_TOP = (0.0, 0.6), 0.15, 0.25
+BIN_CENTRE, BIN_HALF, BIN_TOP = (0.0, 0.6), 0.15, 0.25  # the demo scene's bin (two_arms: each arm's)
+BIN_CENTRES = {1: [BIN_CENTRE], 2: [(0.0, 0.6), (0.0, -1.0)]}  # by the number of robots
 
 
 def _last_json(path: Path) -> dict[str, Any]:
@@ -41,13 +42,27 @@ def _last_json(path: Path) -> dict[str, Any]:
         return {}
 
 
-def in_bin(p: list[float]) -> bool:
-    return abs(p[0] - BIN_CENTRE[0]) < BIN_HALF and abs(p[1] - BIN_CENTRE[1]) < BIN_HALF and p[2] < BIN_TOP
+def in_bin(p: list[float], robots: int = 1) -> bool:
+    """Whether the point is inside a bin of the scene (the demo's, or one of two_arms')."""
+    return any(abs(p[0] - c[0]) < BIN_HALF and abs(p[1] - c[1]) < BIN_HALF and p[2] < BIN_TOP
+               for c in BIN_CENTRES[robots])
+
+
+class TaskView:
+    """One manager's task as the watcher saw it."""
+
+    def __init__(self, robot: str) -> None:
+        self.robot = robot
+        self.last = ""
+        self.final = None   # the task's final progress (Success or Failure)
+        self.latest = None  # the last progress seen
+        self.task = None
 
 
 class Watcher:
     """The live skill tree: one line whenever the running path changes, and the task's
-    final progress for the tree at the end.
+    final progress for the tree at the end; with several robots, each manager's (the line
+    starts with its robot's name).
 
     It handles the bus on a thread of its own: LCM reads a datagram only when the bus is
     handled, so a watcher that also waits for other things (the supervisorctl calls that
@@ -56,31 +71,43 @@ class Watcher:
     included. Its socket has a large receive buffer too (monitor.watch_url), for the
     moments this thread is not scheduled."""
 
-    def __init__(self) -> None:
-        from skillbus.bus import channel, open_bus
+    def __init__(self, robots: list[str] | None = None) -> None:
+        from skillbus.bus import open_bus
+        from skillbus.channels import robot_channel
         from skillbus.monitor import watch_url
         self.bus = open_bus(watch_url())
-        self.last = ""
-        self.final = None   # the task's final progress (Success or Failure)
-        self.latest = None  # the last progress seen
-        self.task = None
+        self.views = [TaskView(r) for r in (robots or [""])]
         self.error: Exception | None = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._spin, name="watcher", daemon=True)
-        self.bus.subscribe(channel("SB_SKILL_PROGRESS"), self.on_progress)
+        for view in self.views:
+            self.bus.subscribe(robot_channel("SB_SKILL_PROGRESS", view.robot),
+                               lambda ch, data, v=view: self.on_progress(v, data))
 
-    def on_progress(self, ch: str, data: bytes) -> None:
+    @property
+    def final(self):
+        """The one robot's task's final progress (the demo with one robot)."""
+        return self.views[0].final
+
+    @property
+    def latest(self):
+        return self.views[0].latest
+
+    def all_final(self) -> bool:
+        return all(v.final is not None for v in self.views)
+
+    def on_progress(self, view: TaskView, data: bytes) -> None:
         from skillbus.msgs import decode, skill_progress_t
         p = decode(skill_progress_t, data)
         if p is None:
             return
-        if self.task is None:
-            self.task = p.task  # the demo's one task (started by the manager at its first tick)
-        if p.task != self.task or self.final is not None:
+        if view.task is None:
+            view.task = p.task  # the manager's one task (started at its first tick)
+        if p.task != view.task or view.final is not None:
             return
-        self.latest = p
+        view.latest = p
         if p.state in ENDED:
-            self.final = p
+            view.final = p
         names = {n.id: n for n in p.nodes}
         running = [n for n in p.nodes if n.state == State.Running and n.type]
         if not running:
@@ -95,9 +122,10 @@ class Watcher:
                 path.append(f"{label}({obj})" if obj and cur.type in ("Pick", "Place") else label)
             cur = names.get(cur.parent)
         line = " > ".join(reversed(path)) + (f": {leaf.message}" if leaf.message else "")
-        if line != self.last:
-            self.last = line
-            print(f"  t={p.header.sim_time_ns * 1e-9:6.2f} s  {line}", flush=True)
+        if line != view.last:
+            view.last = line
+            who = f"{view.robot}: " if view.robot else ""
+            print(f"  t={p.header.sim_time_ns * 1e-9:6.2f} s  {who}{line}", flush=True)
 
     def start(self) -> "Watcher":
         self._thread.start()
@@ -117,7 +145,7 @@ class Watcher:
     def stop(self, wait_final: float = 2.0) -> None:
         """Stops the thread once the task's final progress is in (or wait_final has passed:
         whatever is still in the socket is read first)."""
-        poll_until(lambda: self.final is not None or not self._thread.is_alive(), wait_final, interval=0.02)
+        poll_until(lambda: self.all_final() or not self._thread.is_alive(), wait_final, interval=0.02)
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(5)
@@ -151,14 +179,17 @@ def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
 DDS_DOMAIN = 42  # the demo's DDS domain (its private network namespace is its own anyway)
 
 
-def run(run_dir: Path, quiet: bool = False, bus: str = "lcm") -> dict[str, Any]:
+def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
-    from skillbus.system import Program, programs
+    from skillbus.system import TWO_ARMS_REGIONS, Program, programs, robots_programs
     if run_dir.exists():
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)
-    progs = programs(run_dir)
+    progs = programs(run_dir) if robots == 1 else robots_programs(run_dir, robots)
+    robot_names = [""] if robots == 1 else list(TWO_ARMS_REGIONS)
+    participants = [p.name for p in progs if p.participant]
+    managers = [p.name for p in progs if p.name.endswith("skill_mgr")]
     lcm_log = bus == "lcm"  # (lcm-logger records udpm://; on DDS nothing is recorded yet)
     if lcm_log:
         progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
@@ -166,7 +197,7 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm") -> dict[str, Any]:
     if url:
         os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
     conf = launch.write_config(run_dir, progs, lockstep=True, bus_url=url)
-    watcher = None if quiet else Watcher().start()
+    watcher = None if quiet else Watcher(robot_names).start()
     t0 = time.monotonic()
     logs = run_dir / "logs"
     try:
@@ -175,8 +206,8 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm") -> dict[str, Any]:
             wait_until(lambda: launch.status(conf).get("sim") in ("EXITED", "FATAL", "STOPPED"),
                        900 - (time.monotonic() - t0), "the end of the demo's session (15 minutes at most)",
                        interval=0.2)
-            poll_until(lambda: not any(launch.status(conf).get(n) == "RUNNING"
-                                       for n in ("wm", "skill_mgr", "skills", "gripper")), 30, interval=0.2)
+            poll_until(lambda: not any(launch.status(conf).get(n) == "RUNNING" for n in participants), 30,
+                       interval=0.2)
             if lcm_log:
                 try:  # the logger has written all of the run before it is stopped
                     mark_log(run_dir / "demo.lcmlog")
@@ -193,32 +224,46 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm") -> dict[str, Any]:
             watcher.stop()
     wall = time.monotonic() - t0
     sim = _last_json(logs / "sim.out")
-    mgr = _last_json(logs / "skill_mgr.out")
-    result = {"sim": sim, "mgr": mgr, "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus,
-              "participants": {n: _last_json(logs / f"{n}.out") for n in ("wm", "skills", "gripper")}}
+    mgrs = {m: _last_json(logs / f"{m}.out") for m in managers}
+    result = {"sim": sim, "mgr": mgrs[managers[0]], "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus,
+              "robots": robots,
+              "participants": {n: _last_json(logs / f"{n}.out") for n in participants if n not in managers}}
     result["world_model"] = world_model_after(run_dir)
-    if watcher is not None and (watcher.final or watcher.latest) is not None:
+    for view in watcher.views if watcher is not None else []:
+        if (view.final or view.latest) is None:
+            continue
         from skillbus.skill.cli import print_tree
         # The task's final progress; only if it never came, the last one seen, said so.
-        print("\nthe skill tree at the end:" if watcher.final else
-              "\nthe skill tree as last seen (the task's final progress was not seen):")
-        print_tree(watcher.final or watcher.latest)
+        whose = f" of {view.robot}" if view.robot else ""
+        print(f"\nthe skill tree{whose} at the end:" if view.final else
+              f"\nthe skill tree{whose} as last seen (the task's final progress was not seen):")
+        print_tree(view.final or view.latest)
     if watcher is not None and watcher.error is not None:
         print(f"(the live view stopped early: {watcher.error})")
-    task = (mgr.get("tasks") or {}).get("1", "no result")
+    tasks = {m: (mgrs[m].get("tasks") or {}).get("1", "no result") for m in managers}
     physics = sim.get("objects", {})
-    result["task"] = task
-    result["ok"] = (task.startswith("Success") and bool(physics) and all(in_bin(p) for p in physics.values())
+    result["task"] = tasks[managers[0]]
+    result["tasks"] = tasks
+    result["ok"] = (all(t.startswith("Success") for t in tasks.values()) and bool(physics)
+                    and all(in_bin(p, robots) for p in physics.values())
                     and all(w["in_type"] == "skiros:Bin" for w in result["world_model"].values())
-                    and len(result["world_model"]) == len(physics))
+                    and len(result["world_model"]) == len(physics)
+                    and sim.get("robot_contact_steps", 0) == 0)
     return result
 
 
 def print_summary(r: dict[str, Any]) -> None:
     sim = r["sim"]
     print()
-    print("skillbus pick-and-place demo: ClearTable")
-    print(f"  result            {'ok' if r['ok'] else 'FAILED'}: {r['task']}")
+    robots = r.get("robots", 1)
+    print("skillbus pick-and-place demo: ClearTable" + (f", {robots} robots" if robots > 1 else ""))
+    if robots == 1:
+        print(f"  result            {'ok' if r['ok'] else 'FAILED'}: {r['task']}")
+    else:
+        print(f"  result            {'ok' if r['ok'] else 'FAILED'}")
+        for m, t in r["tasks"].items():
+            print(f"    {m:16s}{t}")
+        print(f"  arms touching     {sim.get('robot_contact_steps', '?')} physics steps (each arm keeps to its region)")
     frame_ms = 1000 * sim.get("sim_time_s", 0) / max(1, sim.get("frames", 1))
     print(f"  sim time          {sim.get('sim_time_s', 0):.2f} s ({sim.get('frames', 0)} frames of {frame_ms:.0f} ms)")
     print(f"  wall time         {sim.get('wall_time_s', 0):.2f} s (the lockstep session; "
@@ -231,7 +276,7 @@ def print_summary(r: dict[str, Any]) -> None:
         w = r["world_model"].get(name, {})
         where = f"in {w.get('in', '?')} ({w.get('id', '?')})"
         print(f"    {name:8s}        {where:32s} ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f})"
-              f"{'  in the bin' if in_bin(p) else '  NOT in the bin'}")
+              f"{'  in a bin' if in_bin(p, robots) else '  NOT in a bin'}")
     print(f"  state digest      {sim.get('state_digest')}")
     print(f"  session digest    {sim.get('session_digest')}")
     if r.get("bus", "lcm") == "lcm":
@@ -257,16 +302,19 @@ def main(args) -> int:
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
         from skillbus.monitor import run_foreground
         return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
-                               str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", "lcm")]
+                               str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", "lcm"),
+                               "--robots", str(getattr(args, "robots", 1))]
                               + (["--json"] if args.json else []))
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         bus = getattr(args, "bus", "lcm")
+        robots = getattr(args, "robots", 1)
         print(f"skillbus demo: launching the pick-and-place system under supervisord (lockstep, "
-              f"{'Cyclone DDS' if bus == 'dds' else 'LCM'}) ...", flush=True)
+              f"{'Cyclone DDS' if bus == 'dds' else 'LCM'}{f', {robots} robots' if robots > 1 else ''}) ...",
+              flush=True)
         try:
-            r = run(Path(args.run_dir), bus=bus)
+            r = run(Path(args.run_dir), bus=bus, robots=robots)
         except Interrupted as e:
             print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
             return 128 + e.signum

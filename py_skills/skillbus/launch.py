@@ -33,6 +33,15 @@ PRIORITY = {"can_hub": 10, "sim": 20, "motion": 20, "wm": 30, "gripper": 40, "sk
             "logger": 5}
 
 
+def priority(name: str) -> int:
+    """A program's start priority; a robot's programs ("r1_skills", "can_hub_r1", with
+    several robots: skillbus.system.robots_programs) as their part's."""
+    if name in PRIORITY:
+        return PRIORITY[name]
+    head, _, tail = name.partition("_")
+    return PRIORITY.get(tail, PRIORITY.get(name.rpartition("_")[0], 70))
+
+
 def bus_security() -> dict[str, str]:
     """The key and the policy every program of a launch uses (docs/security.md): the key
     of $SKILLBUS_KEY_FILE, else the default key file, created (0600) when missing;
@@ -82,7 +91,7 @@ def write_config(run_dir: Path, programs: list[Program], lockstep: bool, bus_url
             f"[program:{p.name}]",
             f"command={p.command()}",
             f"directory={paths.REPO_ROOT}",
-            f"priority={PRIORITY.get(p.name, 70)}",
+            f"priority={priority(p.name)}",
             "autostart=true",
             f"autorestart={'unexpected' if lockstep else 'true'}",
             "exitcodes=0",

@@ -2,7 +2,9 @@
 
 One rule per line, ``CHANNEL IDENTITY...``; ``#`` starts a comment. CHANNEL is a name or
 a pattern in which ``*`` stands for any characters (``SB_SKPROC_*_REQ``), matched against
-the channel without ``$SKILLBUS_NAMESPACE``; the first rule that matches decides; the
+the channel without ``$SKILLBUS_NAMESPACE``; a robot's own channel (``r2/SB_ROBOT_ARM_CMD``)
+is matched without its robot by a pattern that names none (``SB_ROBOT_ARM_CMD``: every
+robot's) and whole by one that does (``r2/SB_ROBOT_*``); the first rule that matches decides; the
 identity ``*`` is every holder of the key. A channel that no rule matches is refused.
 The receivers enforce it (skillbus.auth), with the sender's identity from the
 authenticated trailer. The C++ reader (common/src/auth.cpp) reads the same file.
@@ -14,6 +16,11 @@ authenticated trailer. The C++ reader (common/src/auth.cpp) reads the same file.
 (True, False)
 >>> p.allows("cli", "SB_SKILL_REQ")
 True
+>>> q = Policy.parse("r2/SB_ROBOT_ARM_CMD r2_skills\\nSB_ROBOT_ARM_CMD skills\\n")
+>>> q.allows("r2_skills", "r2/SB_ROBOT_ARM_CMD"), q.allows("r2_skills", "r1/SB_ROBOT_ARM_CMD")
+(True, False)
+>>> q.allows("skills", "r1/SB_ROBOT_ARM_CMD"), q.allows("skills", "SB_ROBOT_ARM_CMD")
+(True, True)
 """
 
 from __future__ import annotations
@@ -53,9 +60,9 @@ class Policy:
             if len(words) < 2:
                 raise PolicyError(f"{source}, line {n}: '{line.strip()}' names a channel and no identity "
                                   f"(a rule is CHANNEL IDENTITY...; * for any holder of the key)")
-            if not re.fullmatch(r"[A-Za-z0-9_*]+", words[0]):
+            if not re.fullmatch(r"[A-Za-z0-9_*/]+", words[0]):
                 raise PolicyError(f"{source}, line {n}: '{words[0]}' is not a channel name or pattern "
-                                  f"(letters, digits, _ and *)")
+                                  f"(letters, digits, _, / and *)")
             regex = re.compile("".join(".*" if c == "*" else re.escape(c) for c in words[0]))
             rules.append(Rule(words[0], frozenset(words[1:]), regex))
         return Policy(rules, source)
@@ -73,9 +80,12 @@ class Policy:
         hit = self._cache.get(key)
         if hit is None:
             name = channel[len(self._namespace):] if self._namespace and channel.startswith(self._namespace) else channel
+            # A robot's own channel ("r2/SB_ROBOT_ARM_CMD"): a pattern without a robot is
+            # about that channel of every robot; one with a robot about that robot's.
+            base = name.split("/", 1)[-1]
             hit = False
             for r in self.rules:
-                if r.regex.fullmatch(name):
+                if r.regex.fullmatch(name if "/" in r.pattern else base):
                     hit = "*" in r.identities or identity in r.identities
                     break
             if len(self._cache) > 65536:  # (names come from the wire: bounded)

@@ -26,7 +26,8 @@ import os
 import time
 from typing import Any, Callable
 
-from skillbus.bus import Bus, channel
+from skillbus.bus import Bus
+from skillbus.channels import channel, robot_channel
 from skillbus.log import BadInputCounter
 from skillbus.msgs import decode, rpc_reply_t, rpc_request_t
 
@@ -37,12 +38,16 @@ PULL_WINDOW = 16         # chunks of a large reply asked for at a time
 MAX_CHUNKS = 16384       # the most chunks a client takes a reply in (a garbled count must not allocate without bound)
 
 
-def request_channel(area: str) -> str:
-    return channel(f"SB_{area.upper()}_REQ")
+def request_channel(area: str, robot: str | None = None) -> str:
+    """SB_<AREA>_REQ, under the robot (`robot`, else the process's: skillbus.channels) when
+    the area is one of a robot's own (SKILL, SKPROC_*, MOTION)."""
+    name = f"SB_{area.upper()}_REQ"
+    return channel(name) if robot is None else robot_channel(name, robot)
 
 
-def reply_channel(area: str) -> str:
-    return channel(f"SB_{area.upper()}_REP")
+def reply_channel(area: str, robot: str | None = None) -> str:
+    name = f"SB_{area.upper()}_REP"
+    return channel(name) if robot is None else robot_channel(name, robot)
 
 
 class RpcError(RuntimeError):
@@ -254,9 +259,11 @@ class RpcClient:
     """A client of one area. The client id adds pid and a per-incarnation nonce to the name,
     so a restarted client never collides with its predecessor's request ids."""
 
-    def __init__(self, bus: Bus, area: str, name: str) -> None:
+    def __init__(self, bus: Bus, area: str, name: str, robot: str | None = None) -> None:
+        """`robot`: the robot whose area it is (default: this process's robot)."""
         self.bus, self.area = bus, area
-        self.req_channel = request_channel(area)
+        self.req_channel = request_channel(area, robot)
+        self.rep_channel = reply_channel(area, robot)
         self.client_id = f"{name}:{os.getpid()}:{os.urandom(8).hex()}"
         self.next_request_id = 1
         self.retries = 0
@@ -264,7 +271,7 @@ class RpcClient:
         # Replies by request id for the calls in progress. A dict, not one slot, so that a
         # call made from a handler that runs while another call waits does not steal its reply.
         self._pending: dict[int, Any] = {}
-        self._sub = bus.subscribe(reply_channel(area), self._on_reply)
+        self._sub = bus.subscribe(self.rep_channel, self._on_reply)
 
     def close(self) -> None:
         self.bus.unsubscribe(self._sub)
@@ -364,9 +371,9 @@ class RpcClient:
             rep = self._pending.pop(rid)
         if isinstance(rep, _Parts):
             raise RpcTimeout(f"rpc {self.area}.{method}: {rep.have} of the {len(rep.parts)} parts of its reply came "
-                             f"on {reply_channel(self.area)} within {timeout:.1f} s", self.area, timeout)
+                             f"on {self.rep_channel} within {timeout:.1f} s", self.area, timeout)
         if rep is None:
-            raise RpcTimeout(f"rpc {self.area}.{method}: no reply on {reply_channel(self.area)} "
+            raise RpcTimeout(f"rpc {self.area}.{method}: no reply on {self.rep_channel} "
                              f"within {timeout:.1f} s ({attempts} attempts)", self.area, timeout)
         if rep.status != OK:
             raise RpcRemoteError(rep.status, rep.error)

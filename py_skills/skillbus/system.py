@@ -21,6 +21,15 @@ PARTICIPANTS = ["wm", "skill_mgr", "skills", "gripper"]
 TASK = ("ClearTable Gripper=skiros:Gripper-7 Arm=skiros:Arm-8 Table=skiros:Table-1 Bin=skiros:Bin-5")
 LIBRARIES = ["skillbus.skills.gripper", "skillbus.skills.manipulation"]
 
+# Several robots (docs/pick_and_place.md, "Two arms"): the scene with two arms, each at its
+# own table with its own bin, and the region (table, bin) each one clears. An arm keeps to
+# its region, so the arms never meet; each robot has its own skill manager, skill
+# process, gripper device, CAN bus and motion service, and one world model and one
+# physics server serve both.
+TWO_ARMS_SCENE = "two_arms.scene.json"
+TWO_ARMS_REGIONS = {"r1": ("table1", "bin1"), "r2": ("table2", "bin2")}
+ROBOT_PARTS = ["skill_mgr", "skills", "gripper"]  # a robot's lockstep participants, as <robot>_<part>
+
 
 @dataclass
 class Program:
@@ -88,16 +97,70 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     ]
 
 
+def robots_programs(run_dir: Path, robots: int = 2, lockstep: bool = True, stop_after_task: bool = True,
+                    frame_ms: float = FRAME_MS) -> list[Program]:
+    """The system with several robots (two_arms.scene.json; only 2 for now), in start order:
+    per robot a CAN hub, a motion service, a gripper device, a skill manager (which starts
+    ClearTable on its region at its first tick) and a skill process, all with --robot; one
+    world model and one physics server. Participant and program names are <robot>_<part>.
+    Under lockstep the session ends once every manager's task has ended."""
+    if robots != 2:
+        raise ValueError(f"{robots} robots: the scenes have one (demo.scene.json) or two (two_arms.scene.json)")
+    from skillbus.sim.scene import element_ids
+    run_dir = Path(run_dir).resolve()
+    scene = (paths.REPO_ROOT / "deploy" / "scenes" / TWO_ARMS_SCENE).resolve()
+    ttl = scene.with_suffix("").with_suffix(".ttl")
+    ids = element_ids(scene)
+    py = [sys.executable, "-m", "skillbus.cli"]
+    names = list(TWO_ARMS_REGIONS)
+    participants = ["wm"] + [f"{r}_{part}" for r in names for part in ROBOT_PARTS]
+    clock = [] if lockstep else ["--wall-clock"]
+    sim = [str(paths.binary("sim_server")), "--scene", str(scene), "--frame-ms", str(frame_ms)]
+    if lockstep:
+        sim += ["--pipeline", "--participants", ",".join(participants), "--join-timeout-ms", "60000"]
+        if stop_after_task:
+            sim += ["--end-when-asked-by", ",".join(f"{r}_skill_mgr" for r in names)]
+    else:
+        sim += ["--wall-clock"]
+    progs = [Program(f"can_hub_{r}", [*py, "can-hub", "--channel", str(run_dir / f"{r}_gripper.sock")]) for r in names]
+    progs.append(Program("sim", sim))
+    progs += [Program(f"motion_{r}", [str(paths.binary("motion_server")), "--scene", str(scene), "--robot", r])
+              for r in names]
+    progs.append(Program("wm", [str(paths.binary("wm_server")), *clock, "--data", str(run_dir / "wm"),
+                                "--scene", str(ttl)], participant=True))
+    for r in names:
+        can = str(run_dir / f"{r}_gripper.sock")
+        table, bin_ = TWO_ARMS_REGIONS[r]
+        task = (f"ClearTable Gripper={ids[f'{r}_gripper']} Arm={ids[f'{r}_arm']} Table={ids[table]} "
+                f"Bin={ids[bin_]}")
+        mgr = [str(paths.binary("skill_mgr")), *clock, "--robot", r, "--name", f"{r}_skill_mgr",
+               "--tick-timeout-ms", "2000", "--start", task]
+        if lockstep and stop_after_task:
+            mgr += ["--end-session-after-task", "10"]
+        skills = [*py, "skills-process", "--robot", r, "--name", f"{r}_skills", "--world-model", "--arm",
+                  "--interface", "camera=skillbus.robot.camera", "--gripper", f"{can}:5"]
+        for lib in LIBRARIES:
+            skills += ["--library", lib]
+        if lockstep:
+            skills.append("--lockstep")
+        device = [*py, "gripper-device", "--robot", r, "--channel", can, "--node-id", "5", "--name", f"{r}_gripper"]
+        device += ["--lockstep"] if lockstep else ["--physics"]
+        progs += [Program(f"{r}_gripper", device, participant=True),
+                  Program(f"{r}_skill_mgr", mgr, participant=True),
+                  Program(f"{r}_skills", skills, participant=True)]
+    return progs
+
+
 def start(box, progs: list[Program], run_dir: Path, timeout: float = 10.0) -> dict:
-    """Starts the programs in a sandbox (skillbus.netns.Sandbox) in order; the CAN hub's
+    """Starts the programs in a sandbox (skillbus.netns.Sandbox) in order; a CAN hub's
     socket must exist before the processes that open the CAN bus start. Returns the
     processes by name."""
     from skillbus.waiting import wait_until
     procs = {}
     for p in progs:
         proc = procs[p.name] = box.start(p.name, p.argv, env=p.env or None)
-        if p.name == "can_hub":
-            sock = Path(run_dir) / "gripper0.sock"
+        if p.name.startswith("can_hub"):
+            sock = Path(p.argv[p.argv.index("--channel") + 1])
             wait_until(sock.exists, timeout, f"the CAN hub's socket {sock}", interval=0.02,
                        diagnostic=lambda: f"the end of the CAN hub's stderr:\n{proc.stderr()[-1000:]}")
     return procs

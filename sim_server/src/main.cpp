@@ -27,6 +27,9 @@ int main(int argc, char** argv) {
   app.add_option("--record-script", o.record_script, "write every accepted command to this file, as a script")->type_name("FILE");
   app.add_option("--name", o.name, "its name on the bus");
   apps::add_list_option(app, "--participants", o.participants, "lockstep: who must join and ack every frame");
+  apps::add_list_option(app, "--end-when-asked-by", o.end_when_asked_by,
+                        "lockstep: end a session asked to end only once each of these participants has asked "
+                        "(default: when the first asks)");
   app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of as lockstep master");
   app.add_option("--speed", o.speed, "wall clock: sim seconds per wall second")->check(apps::positive());
   app.add_option("--frames", o.frames, "frames to run (-1: until stopped)");
@@ -56,7 +59,7 @@ int main(int argc, char** argv) {
   const auto& r = rep.run;
   // Where each object ended (x y z in the world), for people and for the demo's summary.
   skillbus_msgs::sim_state_t state{};
-  server->physics().fill_state(state);
+  server->physics().fill_state(0, state);
   apps::Summary objects = apps::Summary::object();
   for (const auto& ob : state.objects)
     objects[ob.name] = {apps::rounded(ob.pose[0], 4), apps::rounded(ob.pose[1], 4), apps::rounded(ob.pose[2], 4)};
@@ -88,8 +91,14 @@ int main(int argc, char** argv) {
   out["commands_accepted"] = rep.accepted;
   out["commands_rejected"] = rep.rejected;
   out["bad_input"] = rep.bad_input;
-  out["finger_width"] = apps::rounded(state.finger_width, 5);
+  out["finger_width"] = apps::rounded(state.finger_width, 5);  // (the first robot's)
   out["finger_force"] = apps::rounded(state.finger_force, 3);
+  if (server->physics().num_robots() > 1) {
+    apps::Summary robots = apps::Summary::array();
+    for (const auto& rb : server->physics().scene().robots) robots.push_back(rb.name);
+    out["robots"] = robots;
+    out["robot_contact_steps"] = server->physics().robot_contact_steps();  // steps in which two robots touched
+  }
   out["objects"] = objects;
   out["frame_ms"] = frame_ms;
   // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).

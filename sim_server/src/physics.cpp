@@ -2,7 +2,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <dart/collision/CollisionObject.hpp>
+#include <dart/collision/CollisionResult.hpp>
+#include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/DegreeOfFreedom.hpp>
+#include <dart/dynamics/ShapeNode.hpp>
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/simulation/World.hpp>
 
@@ -12,20 +17,27 @@ namespace skillbus::sim {
 
 void Physics::Impl::build() {
   steps_since_build = 0;
-  world = build_world(scene, [&](dart::dynamics::Skeleton& robot) {
-    layout = set_up_robot(robot, scene);
+  robots.clear();
+  robots.resize(scene.robots.size());
+  world = build_world(scene, [&](size_t index, dart::dynamics::Skeleton& robot) {
+    RobotRig& rig = robots[index];
+    rig.spec = &scene.robots[index];
+    rig.layout = set_up_robot(robot, scene, *rig.spec);
     std::vector<double> arm_positions;
-    for (size_t d : layout.arm_dofs) arm_positions.push_back(robot.getPosition(d));
-    arm = ArmController(layout.arm_names, layout.arm_limits, std::move(arm_positions), step_ns);
-    const double opening = 0.5 * (robot.getPosition(layout.left_dof) + robot.getPosition(layout.right_dof));
-    const double finger_mass = robot.getMassMatrix()(layout.left_dof, layout.left_dof);
-    fingers = FingerController(layout.finger_limits, finger_mass, step_ns, opening);
+    for (size_t d : rig.layout.arm_dofs) arm_positions.push_back(robot.getPosition(d));
+    rig.arm = ArmController(rig.layout.arm_names, rig.layout.arm_limits, std::move(arm_positions), step_ns);
+    const double opening = 0.5 * (robot.getPosition(rig.layout.left_dof) + robot.getPosition(rig.layout.right_dof));
+    const double finger_mass = robot.getMassMatrix()(rig.layout.left_dof, rig.layout.left_dof);
+    rig.fingers = FingerController(rig.layout.finger_limits, finger_mass, step_ns, opening);
   });
-  applied = Eigen::VectorXd::Zero(world.robot->getNumDofs());
+  for (size_t i = 0; i < robots.size(); ++i) {
+    robots[i].skeleton = world.robots[i];
+    robots[i].applied = Eigen::VectorXd::Zero(world.robots[i]->getNumDofs());
+  }
 }
 
-void Physics::Impl::control() {
-  dart::dynamics::Skeleton& robot = *world.robot;
+void RobotRig::control(int64_t total_steps) {
+  dart::dynamics::Skeleton& robot = *skeleton;
   const Eigen::VectorXd q = robot.getPositions();
   const Eigen::VectorXd dq = robot.getVelocities();
   Eigen::VectorXd acc = Eigen::VectorXd::Zero(robot.getNumDofs());
@@ -57,14 +69,48 @@ void Physics::Impl::control() {
   robot.setForces(applied);
 }
 
+double RobotRig::opening() const {
+  return 0.5 * (skeleton->getPosition(layout.left_dof) + skeleton->getPosition(layout.right_dof));
+}
+
 void Physics::Impl::step() {
-  control();
+  for (RobotRig& r : robots) r.control(total_steps);
   const auto t0 = std::chrono::steady_clock::now();
   world.sim->step();
   physics_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ++total_steps;
   ++steps_since_build;
-  arm.finish_step(total_steps);
+  for (RobotRig& r : robots) r.arm.finish_step(total_steps);
+  if (robots.size() > 1) count_robot_contacts();
+}
+
+// Two robots touching is a collision the skills should never cause (each arm keeps to its
+// region of the scene): counted, so that a run can show there was none.
+void Physics::Impl::count_robot_contacts() {
+  for (const auto& c : world.sim->getLastCollisionResult().getContacts()) {
+    const auto* a = c.collisionObject1->getShapeFrame()->asShapeNode()->getBodyNodePtr()->getSkeleton().get();
+    const auto* b = c.collisionObject2->getShapeFrame()->asShapeNode()->getBodyNodePtr()->getSkeleton().get();
+    if (a == b) continue;
+    bool a_robot = false, b_robot = false;
+    for (const auto& r : world.robots) {
+      a_robot = a_robot || r.get() == a;
+      b_robot = b_robot || r.get() == b;
+    }
+    if (a_robot && b_robot) {
+      ++robot_contact_steps;
+      return;
+    }
+  }
+}
+
+RobotRig& Physics::Impl::rig(size_t robot) {
+  return const_cast<RobotRig&>(static_cast<const Impl*>(this)->rig(robot));
+}
+
+const RobotRig& Physics::Impl::rig(size_t robot) const {
+  if (robot >= robots.size())
+    throw std::out_of_range("robot " + std::to_string(robot) + ": the scene has " + std::to_string(robots.size()));
+  return robots[robot];
 }
 
 Physics::Physics(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
@@ -78,12 +124,13 @@ Physics::~Physics() = default;
 
 void Physics::reset() { impl_->build(); }
 
-std::string Physics::command_arm(const ArmCommand& cmd) { return impl_->arm.command(cmd, impl_->total_steps); }
+std::string Physics::command_arm(size_t robot, const ArmCommand& cmd) {
+  return impl_->rig(robot).arm.command(cmd, impl_->total_steps);
+}
 
-std::string Physics::command_gripper(const GripperCommand& cmd) {
-  const Impl& m = *impl_;
-  const double opening = 0.5 * (m.world.robot->getPosition(m.layout.left_dof) + m.world.robot->getPosition(m.layout.right_dof));
-  return impl_->fingers.command(cmd, opening);
+std::string Physics::command_gripper(size_t robot, const GripperCommand& cmd) {
+  RobotRig& r = impl_->rig(robot);
+  return r.fingers.command(cmd, r.opening());
 }
 
 void Physics::step_frame() {
@@ -95,5 +142,7 @@ int Physics::steps_per_frame() const { return impl_->steps_per_frame; }
 int64_t Physics::step_count() const { return impl_->total_steps; }
 std::string Physics::collision_detector() const { return impl_->scene.physics.collision_detector; }
 double Physics::physics_seconds() const { return impl_->physics_seconds; }
+size_t Physics::num_robots() const { return impl_->robots.size(); }
+int64_t Physics::robot_contact_steps() const { return impl_->robot_contact_steps; }
 
 }  // namespace skillbus::sim

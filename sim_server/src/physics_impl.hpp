@@ -15,26 +15,40 @@
 
 namespace skillbus::sim {
 
-struct Physics::Impl {
-  scene::Scene scene;
-  World world;
+// One robot of the scene: its skeleton's layout, its controllers, the forces applied to
+// it in the last step.
+struct RobotRig {
+  const scene::RobotSpec* spec = nullptr;  // in Impl::scene, which never changes after construction
+  dart::dynamics::SkeletonPtr skeleton;
   RobotLayout layout;
   ArmController arm;
   FingerController fingers;
-  Eigen::VectorXd applied;   // forces applied in the last step
+  Eigen::VectorXd applied;
+
+  void control(int64_t total_steps);  // the controllers' forces for the next step
+  void tool_pose(double* out) const;  // the tool centre point (world): x y z qx qy qz qw
+  double tracking_error(int64_t total_steps) const;  // rad, max |reference - position| over the arm joints
+  double opening() const;             // m, the mean of the two fingers' positions
+};
+
+struct Physics::Impl {
+  scene::Scene scene;
+  World world;
+  std::vector<RobotRig> robots;  // in scene order
   int steps_per_frame = 10;
   int64_t step_ns = 1'000'000;
   int64_t total_steps = 0;   // since start (never reset): the time base of trajectories
   int64_t steps_since_build = 0;  // no step yet: no contacts to read supports from
+  int64_t robot_contact_steps = 0;  // steps in which two robots touched (never reset)
   double physics_seconds = 0;
 
   void build();    // the world and the controllers from the scene (again on reset)
-  void control();  // the controllers' forces for the next step
   void step();
-  // For the state messages (state.cpp):
-  void tool_pose(double* out) const;  // the tool centre point (world): x y z qx qy qz qw
-  double tracking_error() const;      // rad, max |reference - position| over the arm joints
-  std::vector<std::string> supports() const;  // per object: what it rests on (state.cpp)
+  void count_robot_contacts();  // after a step, with several robots
+  RobotRig& rig(size_t robot);  // throws std::out_of_range naming the robots there are
+  const RobotRig& rig(size_t robot) const;
+  // For the state messages (state.cpp): per object, what it rests on.
+  std::vector<std::string> supports() const;
 };
 
 }  // namespace skillbus::sim

@@ -30,9 +30,11 @@ std::vector<ScriptStep> load_script(const std::string& path) {
       const std::string where = path + ": steps[" + std::to_string(i++) + "]";
       if (!s.contains("at_s") || !s["at_s"].is_number()) throw SceneError(where + " needs a number at_s");
       const int64_t at = static_cast<int64_t>(std::llround(s["at_s"].get<double>() * 1e9));
+      const std::string robot = s.value("robot", "");
       if (s.contains("arm")) {
         ScriptStep st;
         st.at_ns = at;
+        st.robot = robot;
         st.is_arm = true;
         const auto& a = s["arm"];
         st.arm.id = a.value("id", "");
@@ -48,6 +50,7 @@ std::vector<ScriptStep> load_script(const std::string& path) {
       if (s.contains("gripper")) {
         ScriptStep st;
         st.at_ns = at;
+        st.robot = robot;
         const auto& g = s["gripper"];
         st.gripper = GripperCommand{g.value("id", ""), g.at("width").get<double>(), g.value("speed", 0.1),
                                     g.value("force_limit", 20.0)};

@@ -26,13 +26,13 @@ namespace {
 constexpr const char* kLog = "sim_server";
 }
 
-std::string robot_arm_state_channel() { return channel("SB_ROBOT_ARM_STATE"); }
-std::string robot_arm_cmd_channel() { return channel("SB_ROBOT_ARM_CMD"); }
-std::string robot_reply_channel() { return channel("SB_ROBOT_CMD_REPLY"); }
-std::string robot_objects_channel() { return channel("SB_ROBOT_OBJECTS"); }
-std::string state_channel() { return channel("SB_SIM_STATE"); }
-std::string gripper_channel() { return channel("SB_SIM_GRIPPER_CMD"); }
-std::string reply_channel() { return channel("SB_SIM_CMD_REPLY"); }
+std::string robot_arm_state_channel(const std::string& robot) { return robot_channel("SB_ROBOT_ARM_STATE", robot); }
+std::string robot_arm_cmd_channel(const std::string& robot) { return robot_channel("SB_ROBOT_ARM_CMD", robot); }
+std::string robot_reply_channel(const std::string& robot) { return robot_channel("SB_ROBOT_CMD_REPLY", robot); }
+std::string robot_objects_channel(const std::string& robot) { return robot_channel("SB_ROBOT_OBJECTS", robot); }
+std::string state_channel(const std::string& robot) { return robot_channel("SB_SIM_STATE", robot); }
+std::string gripper_channel(const std::string& robot) { return robot_channel("SB_SIM_GRIPPER_CMD", robot); }
+std::string reply_channel(const std::string& robot) { return robot_channel("SB_SIM_CMD_REPLY", robot); }
 
 SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::move(options)) {
   if (!(opt_.speed > 0) || !std::isfinite(opt_.speed)) throw SceneError("--speed must be a positive number");
@@ -67,17 +67,44 @@ Scene SimServer::load(const std::string& path) const {
   return s;
 }
 
-void SimServer::reply(const std::string& id, const std::string& command, const std::string& error) {
+void SimServer::reply(size_t robot, const std::string& id, const std::string& command, const std::string& error) {
   if (error.empty()) {
     ++accepted_;
   } else {
     ++rejected_;
-    SB_WARN(kLog, "rejected " << command << " command '" << id << "': " << error);
+    const std::string& name = physics_->scene().robots[robot].name;
+    SB_WARN(kLog, "rejected " << command << " command '" << id << "' for " << name << ": " << error);
   }
-  pending_replies_.push_back({id, command, error});
+  pending_replies_.push_back({robot, id, command, error});
 }
 
-void SimServer::on_arm(const uint8_t* data, size_t size, const std::string& ch) {
+std::vector<std::string> SimServer::command_channels() const {
+  std::vector<std::string> out;
+  for (const auto& r : physics_->scene().robots) {
+    out.push_back(robot_arm_cmd_channel(r.bus_name));
+    out.push_back(gripper_channel(r.bus_name));
+  }
+  return out;
+}
+
+// A command goes to the robot whose channel it came on.
+void SimServer::on_command(const std::string& ch, const uint8_t* data, size_t size) {
+  const auto& robots = physics_->scene().robots;
+  for (size_t i = 0; i < robots.size(); ++i) {
+    if (ch == robot_arm_cmd_channel(robots[i].bus_name)) return on_arm(i, data, size, ch);
+    if (ch == gripper_channel(robots[i].bus_name)) return on_gripper(i, data, size, ch);
+  }
+  bad_.record(ch, "a command on a channel of no robot of the scene", size);
+}
+
+size_t SimServer::robot_of_script_step(const ScriptStep& s) const {
+  const auto& robots = physics_->scene().robots;
+  for (size_t i = 0; i < robots.size(); ++i)
+    if (robots[i].bus_name == s.robot) return i;
+  return robots.size();  // (none: the step is rejected)
+}
+
+void SimServer::on_arm(size_t robot, const uint8_t* data, size_t size, const std::string& ch) {
   skillbus_msgs::robot_arm_cmd_t m;
   if (!decode_msg(data, size, m)) {
     bad_.record(ch, "does not decode as robot_arm_cmd_t", size);
@@ -94,15 +121,17 @@ void SimServer::on_arm(const uint8_t* data, size_t size, const std::string& ch) 
     w.qd = p.velocities;
     c.points.push_back(std::move(w));
   }
-  const std::string err = physics_->command_arm(c);
-  if (err.empty()) record(&c, nullptr);
-  reply(m.id, "arm", err);
+  const std::string err = physics_->command_arm(robot, c);
+  if (err.empty()) record(robot, &c, nullptr);
+  reply(robot, m.id, "arm", err);
 }
 
-void SimServer::record(const ArmCommand* arm, const GripperCommand* gripper) {
+void SimServer::record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper) {
   if (opt_.record_script.empty()) return;
   nlohmann::json step;
   step["at_s"] = static_cast<double>(sim_time_ns_) * 1e-9;
+  const std::string& bus_name = physics_->scene().robots[robot].bus_name;
+  if (!bus_name.empty()) step["robot"] = bus_name;
   if (arm) {
     nlohmann::json pts = nlohmann::json::array();
     for (const auto& w : arm->points) pts.push_back({static_cast<double>(w.t_ns) * 1e-9, w.q});
@@ -123,7 +152,7 @@ void SimServer::write_recording() const {
   if (!out) SB_ERROR(kLog, "cannot write the recorded script to " << opt_.record_script);
 }
 
-void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& ch) {
+void SimServer::on_gripper(size_t robot, const uint8_t* data, size_t size, const std::string& ch) {
   skillbus_msgs::sim_gripper_cmd_t m;
   if (!decode_msg(data, size, m)) {
     bad_.record(ch, "does not decode as sim_gripper_cmd_t", size);
@@ -131,63 +160,68 @@ void SimServer::on_gripper(const uint8_t* data, size_t size, const std::string& 
     return;
   }
   GripperCommand c{m.id, m.width, m.speed, m.force_limit};
-  const std::string err = physics_->command_gripper(c);
-  if (err.empty()) record(nullptr, &c);
-  reply(m.id, "gripper", err);
+  const std::string err = physics_->command_gripper(robot, c);
+  if (err.empty()) record(robot, nullptr, &c);
+  reply(robot, m.id, "gripper", err);
 }
 
 void SimServer::apply_pending() {
   const auto cmds = std::move(pending_commands_);
   pending_commands_.clear();
-  for (const auto& [ch, data] : cmds) {
-    if (ch == robot_arm_cmd_channel())
-      on_arm(data.data(), data.size(), ch);
-    else
-      on_gripper(data.data(), data.size(), ch);
-  }
+  for (const auto& [ch, data] : cmds) on_command(ch, data.data(), data.size());
 }
 
 void SimServer::play_script() {
   while (script_next_ < script_.size() && script_[script_next_].at_ns <= sim_time_ns_) {
     const ScriptStep& s = script_[script_next_++];
-    if (s.is_arm)
-      reply(s.arm.id, "arm", physics_->command_arm(s.arm));
-    else
-      reply(s.gripper.id, "gripper", physics_->command_gripper(s.gripper));
+    const size_t robot = robot_of_script_step(s);
+    if (robot == physics_->num_robots()) {
+      ++rejected_;
+      SB_WARN(kLog, "script step at " << s.at_ns * 1e-9 << " s: the scene has no robot '" << s.robot << "'");
+    } else if (s.is_arm) {
+      reply(robot, s.arm.id, "arm", physics_->command_arm(robot, s.arm));
+    } else {
+      reply(robot, s.gripper.id, "gripper", physics_->command_gripper(robot, s.gripper));
+    }
   }
 }
 
-// Every frame: the replies to the commands applied since the last frame (arm commands are
-// the robot's, finger commands the simulator's), the robot's arm state and camera, and
-// the simulator's ground truth.
+// Every frame, for each robot in scene order: the replies to its commands applied since
+// the last frame (arm commands are the robot's, finger commands the simulator's), its arm
+// state and camera, and the simulator's ground truth around it.
 template <class Publish>
 void SimServer::publish_frame(Publish&& publish) {
-  for (const auto& p : pending_replies_) {
-    if (p.command == "arm") {
-      skillbus_msgs::robot_cmd_reply_t r{};
-      r.id = p.id;
-      r.command = p.command;
-      r.accepted = p.error.empty();
-      r.error = p.error;
-      publish(robot_reply_channel(), r);
-    } else {
-      skillbus_msgs::sim_cmd_reply_t r{};
-      r.id = p.id;
-      r.accepted = p.error.empty();
-      r.error = p.error;
-      publish(reply_channel(), r);
+  const auto& robots = physics_->scene().robots;
+  skillbus_msgs::robot_objects_t objects{};
+  physics_->fill_objects(objects);  // (one camera view of the world, sent to each robot)
+  for (size_t i = 0; i < robots.size(); ++i) {
+    const std::string& robot = robots[i].bus_name;
+    for (const auto& p : pending_replies_) {
+      if (p.robot != i) continue;
+      if (p.command == "arm") {
+        skillbus_msgs::robot_cmd_reply_t r{};
+        r.id = p.id;
+        r.command = p.command;
+        r.accepted = p.error.empty();
+        r.error = p.error;
+        publish(robot_reply_channel(robot), r);
+      } else {
+        skillbus_msgs::sim_cmd_reply_t r{};
+        r.id = p.id;
+        r.accepted = p.error.empty();
+        r.error = p.error;
+        publish(reply_channel(robot), r);
+      }
     }
+    skillbus_msgs::robot_arm_state_t arm{};
+    physics_->fill_arm_state(i, arm);
+    publish(robot_arm_state_channel(robot), arm);
+    publish(robot_objects_channel(robot), objects);
+    skillbus_msgs::sim_state_t s{};
+    physics_->fill_state(i, s);
+    publish(state_channel(robot), s);
   }
   pending_replies_.clear();
-  skillbus_msgs::robot_arm_state_t arm{};
-  physics_->fill_arm_state(arm);
-  publish(robot_arm_state_channel(), arm);
-  skillbus_msgs::robot_objects_t objects{};
-  physics_->fill_objects(objects);
-  publish(robot_objects_channel(), objects);
-  skillbus_msgs::sim_state_t s{};
-  physics_->fill_state(s);
-  publish(state_channel(), s);
 }
 
 skillbus_msgs::sim_status_t SimServer::status() const {
@@ -228,6 +262,12 @@ void SimServer::add_services() {
     Scene s = load(path);  // a SceneError becomes the error reply; the old world stays
     if (!opt_.wall_clock && std::abs(s.physics.frame_ms - physics_->scene().physics.frame_ms) > 1e-9)
       throw RpcError("the scene's frame_ms differs from the running lockstep frame period");
+    // The robots' channels are subscribed for the session: a scene with other robots
+    // would leave commands unheard.
+    std::vector<std::string> now, then;
+    for (const auto& r : physics_->scene().robots) now.push_back(r.bus_name);
+    for (const auto& r : s.robots) then.push_back(r.bus_name);
+    if (now != then) throw RpcError("the scene's robots differ from the running scene's (their channels are fixed)");
     physics_ = std::make_unique<Physics>(s);
     SB_INFO(kLog, "loaded the scene " << s.path << " at frame " << frame_);
     return status();
@@ -271,18 +311,17 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   cfg.join_timeout = opt_.join_timeout;
   cfg.ack_timeout = opt_.ack_timeout;
   cfg.message_timeout = opt_.message_timeout;
+  cfg.end_when_asked_by = opt_.end_when_asked_by;
   LockstepMaster master(bus_, cfg);
   // Commands come through the master: delivered after every ack of their frame, in
   // canonical order, so the order of arrival never reaches the physics.
   if (opt_.pipeline) {
     // Kept in canonical order for the next frame's step (apply_pending).
     auto keep = [this](const StampedMessage& m) { pending_commands_.emplace_back(m.channel, m.data); };
-    master.subscribe(robot_arm_cmd_channel(), keep);
-    master.subscribe(gripper_channel(), keep);
+    for (const auto& ch : command_channels()) master.subscribe(ch, keep);
   } else {
-    master.subscribe(robot_arm_cmd_channel(), [this](const StampedMessage& m) { on_arm(m.data.data(), m.data.size(), m.channel); });
-    master.subscribe(gripper_channel(),
-                     [this](const StampedMessage& m) { on_gripper(m.data.data(), m.data.size(), m.channel); });
+    for (const auto& ch : command_channels())
+      master.subscribe(ch, [this](const StampedMessage& m) { on_command(m.channel, m.data.data(), m.data.size()); });
   }
   double start_s = 0, end_s = 0;
   using wall = std::chrono::steady_clock;
@@ -324,12 +363,9 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
 
 ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop) {
   using clock = std::chrono::steady_clock;
-  const int arm_sub = bus_.subscribe(robot_arm_cmd_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
-    on_arm(d, n, ch);
-  });
-  const int grip_sub = bus_.subscribe(gripper_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
-    on_gripper(d, n, ch);
-  });
+  std::vector<int> subs;
+  for (const auto& ch : command_channels())
+    subs.push_back(bus_.subscribe(ch, [this](const std::string& c, const uint8_t* d, size_t n) { on_command(c, d, n); }));
   FrameOutbox outbox(bus_, opt_.name);
   const int64_t period_ns = static_cast<int64_t>(std::llround(physics_->scene().physics.frame_ms * 1e6));
   const auto wall_period = std::chrono::nanoseconds(static_cast<int64_t>(period_ns / opt_.speed));
@@ -354,8 +390,7 @@ ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop)
     physics_->step_frame();
     ++frame;
   }
-  bus_.unsubscribe(arm_sub);
-  bus_.unsubscribe(grip_sub);
+  for (int sub : subs) bus_.unsubscribe(sub);
   r.frames = frame;
   r.sim_time_ns = frame * period_ns;
   r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();

@@ -1,6 +1,7 @@
 // The physics' outputs: the state messages every frame (the simulator's ground truth, and
 // the robot's arm state and camera as a real robot's drivers report them), and the
 // digest of the world.
+#include <algorithm>
 #include <cmath>
 #include <dart/collision/CollisionObject.hpp>
 #include <dart/collision/CollisionResult.hpp>
@@ -22,17 +23,17 @@ namespace skillbus::sim {
 using dart::dynamics::BodyNode;
 
 // The tool link moved by the scene's tool offset.
-void Physics::Impl::tool_pose(double* out) const {
+void RobotRig::tool_pose(double* out) const {
   Eigen::Isometry3d tcp = layout.tool->getWorldTransform();
-  tcp.translate(Eigen::Vector3d(0, 0, scene.robot.tool_offset));
+  tcp.translate(Eigen::Vector3d(0, 0, spec->tool_offset));
   from_iso(tcp, out);
 }
 
-double Physics::Impl::tracking_error() const {
+double RobotRig::tracking_error(int64_t total_steps) const {
   const std::vector<double> want = arm.reference_positions(total_steps);
   double err = 0;
   for (size_t k = 0; k < layout.arm_dofs.size(); ++k)
-    err = std::max(err, std::abs(want[k] - world.robot->getPosition(layout.arm_dofs[k])));
+    err = std::max(err, std::abs(want[k] - skeleton->getPosition(layout.arm_dofs[k])));
   return err;
 }
 
@@ -59,27 +60,33 @@ void fill_joints(const Robot& r, const Efforts& applied, const std::vector<size_
 
 }  // namespace
 
-void Physics::fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const {
-  const Impl& m = *impl_;
-  fill_joints(m.world.robot, m.applied, m.layout.arm_dofs, out);
-  m.tool_pose(out.tool_pose);
-  out.arm_command_id = m.arm.command_id();
-  out.arm_moving = m.arm.moving();
-  out.arm_tracking_error = m.tracking_error();
+void Physics::fill_arm_state(size_t robot, skillbus_msgs::robot_arm_state_t& out) const {
+  const RobotRig& r = impl_->rig(robot);
+  fill_joints(r.skeleton, r.applied, r.layout.arm_dofs, out);
+  r.tool_pose(out.tool_pose);
+  out.arm_command_id = r.arm.command_id();
+  out.arm_moving = r.arm.moving();
+  out.arm_tracking_error = r.tracking_error(impl_->total_steps);
 }
 
 // What each object rests on, from the last step's contacts (a perfect camera's reading
 // of the scene, as a perception pipeline would segment objects above support surfaces):
-// the gripper's label when both fingers touch it; else the fixture it touches at the most
+// the label of the gripper whose two fingers touch it; else the fixture it touches at the most
 // contact points (ties: the first name), which names the world model's Location by its
 // label; an object that touches only other objects rests on what they rest on; "" when
 // it touches nothing it could rest on (falling), or only the floor (no world model label).
 // Before the first step of a (re)built world: the scene's `on` of each object.
 std::vector<std::string> Physics::Impl::supports() const {
   const auto& objects = world.objects;
-  const auto& r = world.robot;
-  const BodyNode* fingers[2] = {r->getJoint(scene.robot.left_finger_joint)->getChildBodyNode(),
-                                r->getJoint(scene.robot.right_finger_joint)->getChildBodyNode()};
+  // Each robot's two fingers, and the labels of the grippers.
+  std::map<const BodyNode*, std::pair<size_t, int>> fingers;  // finger -> (robot, bit)
+  std::set<std::string> grippers;
+  for (size_t i = 0; i < robots.size(); ++i) {
+    const RobotRig& r = robots[i];
+    fingers[r.skeleton->getJoint(r.spec->left_finger_joint)->getChildBodyNode()] = {i, 1};
+    fingers[r.skeleton->getJoint(r.spec->right_finger_joint)->getChildBodyNode()] = {i, 2};
+    grippers.insert(r.spec->gripper);
+  }
   std::map<const dart::dynamics::Skeleton*, size_t> index;
   for (size_t k = 0; k < objects.size(); ++k) index[objects[k].get()] = k;
   std::set<std::string> fixtures;
@@ -89,7 +96,7 @@ std::vector<std::string> Physics::Impl::supports() const {
     for (const auto& o : scene.objects) out.push_back(o.on);
     return out;
   }
-  std::vector<int> finger_bits(objects.size(), 0);
+  std::vector<std::map<size_t, int>> finger_bits(objects.size());  // per object: robot -> fingers touching
   std::vector<std::map<std::string, int>> fixture_points(objects.size());
   std::vector<std::set<size_t>> touching(objects.size());
   auto body = [](const dart::collision::CollisionObject* o) {
@@ -99,8 +106,7 @@ std::vector<std::string> Physics::Impl::supports() const {
     const auto it = index.find(object->getSkeleton().get());
     if (it == index.end()) return;
     const size_t k = it->second;
-    if (other == fingers[0]) finger_bits[k] |= 1;
-    else if (other == fingers[1]) finger_bits[k] |= 2;
+    if (const auto f = fingers.find(other); f != fingers.end()) finger_bits[k][f->second.first] |= f->second.second;
     else if (const auto o = index.find(other->getSkeleton().get()); o != index.end()) touching[k].insert(o->second);
     else if (fixtures.count(other->getSkeleton()->getName())) fixture_points[k][other->getSkeleton()->getName()] += 1;
   };
@@ -112,8 +118,9 @@ std::vector<std::string> Physics::Impl::supports() const {
   }
   std::vector<std::string> out(objects.size());
   for (size_t k = 0; k < objects.size(); ++k) {
-    if (finger_bits[k] == 3) {
-      out[k] = scene.robot.gripper;
+    const auto held = std::find_if(finger_bits[k].begin(), finger_bits[k].end(), [](const auto& b) { return b.second == 3; });
+    if (held != finger_bits[k].end()) {  // (two grippers holding one object: the first robot's)
+      out[k] = robots[held->first].spec->gripper;
       continue;
     }
     int best = 0;
@@ -123,9 +130,9 @@ std::vector<std::string> Physics::Impl::supports() const {
   // Stacks: an object on objects rests where they rest (a few passes reach a stack's top).
   for (int pass = 0; pass < 3; ++pass)
     for (size_t k = 0; k < objects.size(); ++k)
-      if (out[k].empty() && finger_bits[k] == 0)
+      if (out[k].empty() && finger_bits[k].empty())
         for (size_t o : touching[k])
-          if (!out[o].empty() && out[o] != scene.robot.gripper) {
+          if (!out[o].empty() && !grippers.count(out[o])) {
             out[k] = out[o];
             break;
           }
@@ -144,19 +151,20 @@ void Physics::fill_objects(skillbus_msgs::robot_objects_t& out) const {
   }
 }
 
-void Physics::fill_state(skillbus_msgs::sim_state_t& out) const {
+void Physics::fill_state(size_t robot, skillbus_msgs::sim_state_t& out) const {
   const Impl& m = *impl_;
-  const auto& r = m.world.robot;
+  const RobotRig& rig = m.rig(robot);
+  const auto& r = rig.skeleton;
   std::vector<size_t> all(r->getNumDofs());
   for (size_t i = 0; i < all.size(); ++i) all[i] = i;
-  fill_joints(r, m.applied, all, out);
-  m.tool_pose(out.tool_pose);
-  out.finger_width = r->getPosition(m.layout.left_dof) + r->getPosition(m.layout.right_dof);
-  out.finger_force = -0.5 * (m.applied[m.layout.left_dof] + m.applied[m.layout.right_dof]);
-  out.finger_width_target = 2 * m.fingers.target();
-  out.arm_command_id = m.arm.command_id();
-  out.arm_moving = m.arm.moving();
-  out.arm_tracking_error = m.tracking_error();
+  fill_joints(r, rig.applied, all, out);
+  rig.tool_pose(out.tool_pose);
+  out.finger_width = r->getPosition(rig.layout.left_dof) + r->getPosition(rig.layout.right_dof);
+  out.finger_force = -0.5 * (rig.applied[rig.layout.left_dof] + rig.applied[rig.layout.right_dof]);
+  out.finger_width_target = 2 * rig.fingers.target();
+  out.arm_command_id = rig.arm.command_id();
+  out.arm_moving = rig.arm.moving();
+  out.arm_tracking_error = rig.tracking_error(m.total_steps);
 
   const auto& objects = m.world.objects;
   out.num_objects = static_cast<int32_t>(objects.size());
@@ -173,8 +181,8 @@ void Physics::fill_state(skillbus_msgs::sim_state_t& out) const {
     }
   }
   // Finger-object contacts of the last step, summed per pair in a fixed order.
-  const BodyNode* fingers[2] = {r->getJoint(m.scene.robot.left_finger_joint)->getChildBodyNode(),
-                                r->getJoint(m.scene.robot.right_finger_joint)->getChildBodyNode()};
+  const BodyNode* fingers[2] = {r->getJoint(rig.spec->left_finger_joint)->getChildBodyNode(),
+                                r->getJoint(rig.spec->right_finger_joint)->getChildBodyNode()};
   std::map<std::pair<std::string, std::string>, std::pair<int, double>> pairs;
   for (const auto& c : m.world.sim->getLastCollisionResult().getContacts()) {
     const BodyNode* a = c.collisionObject1->getShapeFrame()->asShapeNode()->getBodyNodePtr().get();

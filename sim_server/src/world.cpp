@@ -111,7 +111,8 @@ void from_iso(const Eigen::Isometry3d& T, double* out) {
   out[6] = q.w();
 }
 
-World build_world(const scene::Scene& scene, const std::function<void(dynamics::Skeleton& robot)>& set_up_robot) {
+World build_world(const scene::Scene& scene,
+                  const std::function<void(size_t index, dynamics::Skeleton& robot)>& set_up_robot) {
   World w;
   auto& world = w.sim;
   world = simulation::World::create(scene.name);
@@ -157,12 +158,15 @@ World build_world(const scene::Scene& scene, const std::function<void(dynamics::
     all.push_back(s);
   }
 
-  SkeletonPtr robot = load_urdf(scene.robot.urdf, scene.robot.name, scene.robot.pose);
-  w.robot = robot;
-  set_friction(robot, kRobotFriction);
-  fixed.insert(robot->getRootBodyNode());
-  set_up_robot(*robot);
-  all.push_back(robot);
+  for (size_t i = 0; i < scene.robots.size(); ++i) {
+    const scene::RobotSpec& spec = scene.robots[i];
+    SkeletonPtr robot = load_urdf(spec.urdf, spec.name, spec.pose);
+    w.robots.push_back(robot);
+    set_friction(robot, kRobotFriction);
+    fixed.insert(robot->getRootBodyNode());
+    set_up_robot(i, *robot);
+    all.push_back(robot);
+  }
 
   for (const auto& o : scene.objects) {
     SkeletonPtr s = dynamics::Skeleton::create(o.name);
@@ -189,15 +193,19 @@ World build_world(const scene::Scene& scene, const std::function<void(dynamics::
   return w;
 }
 
-RobotLayout set_up_robot(dynamics::Skeleton& robot, const scene::Scene& scene) {
-  const scene::RobotSpec& r = scene.robot;
+RobotLayout set_up_robot(dynamics::Skeleton& robot, const scene::Scene& scene, const scene::RobotSpec& r) {
+  // Errors name the robot's field as the scene file does: robot.X, or robots[i].X.
+  std::string field = "robot";
+  if (!r.bus_name.empty())
+    for (size_t i = 0; i < scene.robots.size(); ++i)
+      if (&scene.robots[i] == &r) field = "robots[" + std::to_string(i) + "]";
   RobotLayout out;
   auto* lj = robot.getJoint(r.left_finger_joint);
   auto* rj = robot.getJoint(r.right_finger_joint);
-  if (!lj || lj->getNumDofs() != 1) throw SceneError(scene.path + ": robot.left_finger_joint '" + r.left_finger_joint + "' is not a 1-DoF joint of " + r.urdf);
-  if (!rj || rj->getNumDofs() != 1) throw SceneError(scene.path + ": robot.right_finger_joint '" + r.right_finger_joint + "' is not a 1-DoF joint of " + r.urdf);
+  if (!lj || lj->getNumDofs() != 1) throw SceneError(scene.path + ": " + field + ".left_finger_joint '" + r.left_finger_joint + "' is not a 1-DoF joint of " + r.urdf);
+  if (!rj || rj->getNumDofs() != 1) throw SceneError(scene.path + ": " + field + ".right_finger_joint '" + r.right_finger_joint + "' is not a 1-DoF joint of " + r.urdf);
   out.tool = robot.getBodyNode(r.tool_link);
-  if (!out.tool) throw SceneError(scene.path + ": robot.tool_link '" + r.tool_link + "' is not a link of " + r.urdf);
+  if (!out.tool) throw SceneError(scene.path + ": " + field + ".tool_link '" + r.tool_link + "' is not a link of " + r.urdf);
   out.left_dof = lj->getDof(0)->getIndexInSkeleton();
   out.right_dof = rj->getDof(0)->getIndexInSkeleton();
   out.finger_limits.upper = std::min(lj->getPositionUpperLimit(0), rj->getPositionUpperLimit(0));
@@ -214,9 +222,9 @@ RobotLayout set_up_robot(dynamics::Skeleton& robot, const scene::Scene& scene) {
   }
   for (const auto& [name, q] : r.initial_joints) {
     auto* j = robot.getJoint(name);
-    if (!j || j->getNumDofs() != 1) throw SceneError(scene.path + ": robot.initial_joints names '" + name + "', not a 1-DoF joint of " + r.urdf);
+    if (!j || j->getNumDofs() != 1) throw SceneError(scene.path + ": " + field + ".initial_joints names '" + name + "', not a 1-DoF joint of " + r.urdf);
     if (q < j->getPositionLowerLimit(0) || q > j->getPositionUpperLimit(0))
-      throw SceneError(scene.path + ": robot.initial_joints." + name + " is outside the joint's limits");
+      throw SceneError(scene.path + ": " + field + ".initial_joints." + name + " is outside the joint's limits");
     j->setPosition(0, q);
   }
   for (const auto* sn : robot.getJoint(r.left_finger_joint)->getChildBodyNode()->getShapeNodesWith<dynamics::DynamicsAspect>())

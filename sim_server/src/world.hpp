@@ -18,16 +18,17 @@ namespace skillbus::sim {
 // The world as built from a scene.
 struct World {
   dart::simulation::WorldPtr sim;
-  dart::dynamics::SkeletonPtr robot;
+  std::vector<dart::dynamics::SkeletonPtr> robots;  // in scene order
   std::vector<dart::dynamics::SkeletonPtr> objects;
-  std::vector<dart::dynamics::SkeletonPtr> all;  // digest order: floor, fixtures, robot, objects
+  std::vector<dart::dynamics::SkeletonPtr> all;  // digest order: floor, fixtures, robots, objects
 };
 
 // Builds the world: the constraint solver and collision detector the scene names, the
-// floor, the fixtures and the robot (URDF), then the objects. `set_up_robot` is called
-// once the robot is loaded, before the objects are made and anything is added to the
-// world. Throws scene::SceneError when the scene cannot be built.
-World build_world(const scene::Scene& scene, const std::function<void(dart::dynamics::Skeleton& robot)>& set_up_robot);
+// floor, the fixtures and the robots (URDF), then the objects. `set_up_robot` is called
+// with each robot's index in the scene once it is loaded, before the objects are made and
+// anything is added to the world. Throws scene::SceneError when the scene cannot be built.
+World build_world(const scene::Scene& scene,
+                  const std::function<void(size_t index, dart::dynamics::Skeleton& robot)>& set_up_robot);
 
 // The robot's layout as the controllers see it.
 struct RobotLayout {
@@ -39,10 +40,10 @@ struct RobotLayout {
   dart::dynamics::BodyNode* tool = nullptr;
 };
 
-// Checks the scene's robot against its skeleton and sets it up: joint limits enforced,
+// Checks a robot of the scene against its skeleton and sets it up: joint limits enforced,
 // the initial joint positions, the fingers' friction. Throws scene::SceneError naming
 // the field that does not fit the URDF.
-RobotLayout set_up_robot(dart::dynamics::Skeleton& robot, const scene::Scene& scene);
+RobotLayout set_up_robot(dart::dynamics::Skeleton& robot, const scene::Scene& scene, const scene::RobotSpec& spec);
 
 // Between the scene's poses (x y z qx qy qz qw) and Eigen's.
 Eigen::Isometry3d to_iso(const scene::Pose& p);

@@ -29,7 +29,9 @@ int main(int argc, char** argv) {
                         "ontology files or folders (OWL in RDF/XML or Turtle) for its world copy (default: the "
                         "world model server's ontology, read with the world)");
   app.add_option("--start", o.start_at_first_tick, "a task started at the first tick: TYPE or TYPE:LABEL");
-  app.add_option("--robot", o.robot, "the element id of the agent this manager drives");
+  apps::add_robot_option(app);  // its channels (NAME/SB_SKILL_...) and, by label, its agent
+  app.add_option("--robot-element", o.robot,
+                 "the element id of the agent this manager drives (default: the skiros:Robot labelled --robot NAME)");
   app.add_option("--end-session-after-task", o.end_session_after_frames,
                  "lockstep: when the --start task ends, ask the clock master to end the session this many frames later");
   app.add_option("--liveness-ms", liveness_ms, "wall clock: drop a skill process's skills after this long without a heartbeat")
@@ -37,6 +39,7 @@ int main(int argc, char** argv) {
   apps::parse_or_exit(app, argc, argv);
   if (o.end_session_after_frames >= 0 && (o.start_at_first_tick.empty() || o.wall_clock))
     apps::usage_error(app, "--end-session-after-task needs --start and lockstep (no --wall-clock)");
+  o.robot_label = current_robot();
   o.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
   if (o.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
   o.tick_period_ns = static_cast<int64_t>(1e9 / hz);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "liveness.hpp"
+#include "skill_params.hpp"
 #include "param_check.hpp"
 #include "remote_primitive.hpp"
 #include "skill_nodes.hpp"
@@ -69,6 +70,17 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     starts_.emplace_back(next_task_++, req);
   }
   if (opt_.wall_clock) liveness_ = std::make_unique<Liveness>(bus_, registry_, opt_.name, opt_.liveness_timeout);
+  directory_ = std::make_unique<Directory>(bus_, [this] {
+    skillbus_msgs::skill_manager_info_t info{};
+    info.robot = current_robot();
+    info.name = opt_.name;
+    info.agent = opt_.robot;
+    if (info.agent.empty() && !opt_.robot_label.empty() && world_.ready())
+      find_robot(world_.store(), opt_.robot_label, &info.agent);  // (stays "" when it is not there)
+    info.incarnation = liveness_ ? liveness_->incarnation() : 0;
+    info.num_skills = static_cast<int32_t>(registry_.all().size());
+    return info;
+  });
   // RPC handlers only record requests: they can run while a tick waits for a skill
   // process, so they must not touch running trees.
   rpc_.add_method<skill_register_t, skill_register_t>("register", [this](const skill_register_t& reg) {
@@ -206,7 +218,8 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
   }
   t->ctx = std::unique_ptr<TaskContext>(new TaskContext{registry_, t->blackboard,
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
-                                                        opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot});
+                                                        opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot,
+                                                        opt_.robot_label});
   // (instance ids name running primitives in skill processes: unique across tasks)
   if (impls.empty() || !bad.empty()) {
     const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;

@@ -9,6 +9,7 @@
 
 #include "registry.hpp"
 #include "blackboard.hpp"
+#include "directory.hpp"
 #include "liveness.hpp"
 #include "task_context.hpp"
 #include "tree/node.hpp"
@@ -35,6 +36,7 @@ struct ManagerOptions {
   std::string start_at_first_tick;           // "TYPE" or "TYPE:LABEL": a task started at the first tick
   int64_t end_session_after_frames = -1;     // lockstep: when that task ends, end the session this many frames later
   std::string robot;                         // element id of the agent this manager drives
+  std::string robot_label;                   // else its label (the robot's name, --robot NAME)
   // Wall clock: a skill process without a heartbeat for this long has its skills dropped.
   std::chrono::milliseconds liveness_timeout{3000};
 };
@@ -85,6 +87,7 @@ class Manager {
   std::map<int64_t, std::string> results_;
   int64_t start_task_ = -1;  // the --start task's id
   std::unique_ptr<Liveness> liveness_;  // wall clock only
+  std::unique_ptr<Directory> directory_;  // answers "which managers are there"
   std::chrono::steady_clock::time_point last_world_try_{};
 };
 

@@ -97,6 +97,20 @@ std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, co
   return out;
 }
 
+std::string find_robot(const wm::WorldStore& world, const std::string& label, std::string* id) {
+  wm::Query q;
+  q.type = "sumo:Agent";  // (the Robot parameter's concept: skiros:Robot and SkiROS2's cora:Robot are below it)
+  q.label = label;
+  const auto found = world.query(q);
+  if (found.size() == 1) {
+    *id = found[0]->id;
+    return "";
+  }
+  return found.empty() ? "the world model has no robot (sumo:Agent) labelled '" + label + "' (this manager's --robot)"
+                       : "the world model has " + std::to_string(found.size()) + " robots (sumo:Agent) labelled '" +
+                             label + "' (this manager's --robot): name one with --robot-element";
+}
+
 std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Scope& scope, std::vector<Param>& params,
                           bool dry_run) {
   Blackboard scratch = ctx.blackboard;  // a dry run must leave the task's blackboard alone
@@ -108,6 +122,12 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
   // that skills run without a world model when nothing else needs one.
   std::set<std::string> skip;
   std::vector<std::string> unchecked;  // the manager's own Robot, when there is no world to check it in
+  if (ctx.robot.empty() && !ctx.robot_label.empty()) {
+    if (const wm::WorldStore* world = world_if_ready(ctx)) {
+      const std::string err = find_robot(*world, ctx.robot_label, &ctx.robot);
+      if (!err.empty()) return err;
+    }
+  }
   for (auto& p : params) {
     if (p.key != "Robot" || p.data_type != "element" || (!p.values.empty() && !p.values[0].element.id.empty())) continue;
     if (!ctx.robot.empty()) {
@@ -117,6 +137,8 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
       v.element.type = p.concept;
       p.values = {v};
       p.num_values = 1;
+      // On the blackboard, as grounding leaves what it found: the ticks read it there.
+      if (!scope.specified(p.key)) bb.set(scope.key(p.key), p);
       if (!world_if_ready(ctx)) unchecked.push_back(p.key);
     } else if (!world_if_ready(ctx)) {
       skip.insert(p.key);

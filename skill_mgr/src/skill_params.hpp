@@ -20,6 +20,9 @@ namespace skillbus::skills {
 // (a deleted element is dropped).
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope,
                                  Blackboard& bb, std::string* missing, const wm::WorldStore* world = nullptr);
+// The id of the one robot (a sumo:Agent: skiros:Robot, cora:Robot) labelled `label` in `world` into `id`;
+// "" or why not (none, several).
+std::string find_robot(const wm::WorldStore& world, const std::string& label, std::string* id);
 // At a skill's start: gather, check concrete elements against the world, ground abstract
 // ones, check pre- and hold-conditions. Returns "" or why the skill cannot start. With
 // `dry_run` the blackboard is not written (choosing among implementations).

@@ -21,6 +21,9 @@ struct TaskContext {
   int64_t next_instance = 1;
   WorldReplica* world = nullptr;  // for conditions and grounding
   std::string robot;              // the agent this manager drives: every skill's Robot parameter
+  // The label of that agent (a skiros:Robot) when only its name is known (--robot NAME):
+  // its id is looked up in the world replica once the replica is there.
+  std::string robot_label;
   int64_t frame = -1;             // the frame being ticked, passed to skill processes
   int64_t sim_time_ns = 0;
 };

@@ -110,6 +110,15 @@ TEST(Auth, ThePolicyDecidesWhoSendsOnAChannel) {
   EXPECT_TRUE(open(o, "SB_WM_REQ", s.seal("SB_WM_REQ", "x", 1)).ok);
 }
 
+TEST(Auth, APolicyRuleWithoutARobotCoversThatChannelOfEveryRobot) {
+  const Policy p = Policy::parse("r2/SB_ROBOT_ARM_CMD r2_skills\nSB_ROBOT_ARM_CMD skills\n", "test");
+  EXPECT_TRUE(p.allows("r2_skills", "r2/SB_ROBOT_ARM_CMD"));
+  EXPECT_FALSE(p.allows("r2_skills", "r1/SB_ROBOT_ARM_CMD"));  // another robot's arm
+  EXPECT_TRUE(p.allows("skills", "r1/SB_ROBOT_ARM_CMD"));
+  EXPECT_TRUE(p.allows("skills", "SB_ROBOT_ARM_CMD"));
+  EXPECT_FALSE(p.allows("skills", "r2/SB_ROBOT_ARM_CMD"));     // the first rule that matches decides
+}
+
 TEST(Auth, GlobPatterns) {
   EXPECT_TRUE(glob_match("*", ""));
   EXPECT_TRUE(glob_match("SB_*_REQ", "SB_A_B_REQ"));

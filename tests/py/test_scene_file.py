@@ -13,10 +13,21 @@ from skillbus import paths
 from skillbus.sim import scene
 
 
-def test_the_committed_demo_ttl_is_generated_from_the_demo_scene():
-    generated = scene.to_turtle(scene.load(paths.demo_scene()))
-    committed = (paths.REPO_ROOT / "deploy" / "scenes" / "demo.ttl").read_text()
-    assert committed == generated, "regenerate: skillbus scene turtle deploy/scenes/demo.scene.json -o deploy/scenes/demo.ttl"
+@pytest.mark.parametrize("name", ["demo", "two_arms"])
+def test_the_committed_ttl_is_generated_from_its_scene(name):
+    scenes = paths.REPO_ROOT / "deploy" / "scenes"
+    generated = scene.to_turtle(scene.load(scenes / f"{name}.scene.json"))
+    committed = (scenes / f"{name}.ttl").read_text()
+    assert committed == generated, (f"regenerate: skillbus scene turtle deploy/scenes/{name}.scene.json "
+                                    f"-o deploy/scenes/{name}.ttl")
+
+
+def test_two_robots_each_with_their_ids_after_everything_else():
+    ids = scene.element_ids(paths.REPO_ROOT / "deploy" / "scenes" / "two_arms.scene.json")
+    assert ids["r1"] == "skiros:Robot-11" and ids["r2_gripper"] == "skiros:Gripper-15" and ids["bin2"] == "skiros:Bin-10"
+    assert list(ids)[-6:] == ["r1", "r1_gripper", "r1_arm", "r2", "r2_gripper", "r2_arm"]
+    one = scene.element_ids(paths.demo_scene())  # one robot: the ids it always had
+    assert one["arm_robot"] == "skiros:Robot-6" and one["gripper"] == "skiros:Gripper-7" and one["arm"] == "skiros:Arm-8"
 
 
 def test_positions_become_relative_to_the_containing_fixture():
@@ -65,7 +76,7 @@ def test_mistakes_are_named_with_their_field(tmp_path):
     assert refused(tmp_path, d).startswith("objects[0].type must be a concept name")
     d = demo_doc()
     del d["robot"]
-    assert refused(tmp_path, d) == "robot is missing"
+    assert refused(tmp_path, d) == "robot is missing (or robots, for several)"
     assert refused(tmp_path, "{").startswith("not valid JSON: ")
     with pytest.raises(scene.SceneError, match=r"cannot open the scene file"):
         scene.load(tmp_path / "none.scene.json")

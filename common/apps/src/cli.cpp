@@ -6,6 +6,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "skillbus/bus.hpp"
+
 namespace skillbus::apps {
 
 namespace {
@@ -65,6 +67,28 @@ CLI::Option* add_url_option(CLI::App& app, std::string& url) {
       ->type_name("IFACE");
   return app.add_option("--url", url,
                         "the bus URL (empty: $SKILLBUS_BUS_URL, else udpm://239.255.76.67:7667?ttl=0)");
+}
+
+CLI::Option* add_robot_option(CLI::App& app) {
+  // Checked now, so that a wrong $SKILLBUS_ROBOT fails at start like a wrong --robot.
+  if (const char* env = std::getenv("SKILLBUS_ROBOT"); env && *env && !valid_robot_name(env)) {
+    std::fprintf(stderr, "%s: error: $SKILLBUS_ROBOT '%s': a robot name is a letter, then letters, digits or _\n",
+                 app.get_name().c_str(), env);
+    std::exit(kUsageError);
+  }
+  return app
+      .add_option_function<std::string>(
+          "--robot",
+          [&app](const std::string& robot) {
+            try {
+              set_robot(robot);
+            } catch (const std::invalid_argument& e) {
+              usage_error(app, std::string("--robot: ") + e.what());
+            }
+          },
+          "the robot whose channels it uses: NAME/SB_ROBOT_..., NAME/SB_SKILL_... (default: $SKILLBUS_ROBOT, "
+          "else the one robot, without a name)")
+      ->type_name("NAME");
 }
 
 CLI::Option* add_list_option(CLI::App& app, const std::string& name, std::vector<std::string>& out,

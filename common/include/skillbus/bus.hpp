@@ -59,9 +59,24 @@ void check_multicast_interface(const std::string& url);
 // Opens the backend that the URL names; throws BusError naming the URL when it cannot.
 std::unique_ptr<Bus> open_bus(const std::string& url = "");
 
-// Prefix for several robots on one bus: channel("SB_WM_REQ") -> "<ns>SB_WM_REQ" where
-// ns comes from $SKILLBUS_NAMESPACE (empty by default).
+// Channel names (docs/transport.md, "Several robots"). Several robots share one bus:
+// a robot's own channels (its arm, camera, fingers, skill manager, skill processes,
+// motion service, CAN sync: robot_scoped()) are "<robot>/<name>" for the process's
+// robot, while the world model, the lockstep, the physics server's control and the log
+// are shared. Everything goes behind $SKILLBUS_NAMESPACE (empty by default: a whole
+// system apart on one bus).
+//   channel("SB_WM_REQ")          -> "<ns>SB_WM_REQ"
+//   channel("SB_ROBOT_ARM_STATE") -> "<ns>r2/SB_ROBOT_ARM_STATE" in a process of robot r2
 std::string channel(const std::string& name);
+// The same for an explicit robot ("" for none): the physics server serves every robot.
+std::string robot_channel(const std::string& name, const std::string& robot);
+bool robot_scoped(const std::string& name);
+// The process's robot: set_robot() (a program's --robot), else $SKILLBUS_ROBOT, else "".
+std::string current_robot();
+// Throws std::invalid_argument unless valid_robot_name(robot) or robot is "".
+void set_robot(const std::string& robot);
+// A letter, then letters, digits or _: it becomes part of channel and DDS topic names.
+bool valid_robot_name(const std::string& robot);
 
 // Typed helpers over the generated LCM bindings.
 template <class T>

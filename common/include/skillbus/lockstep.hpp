@@ -15,6 +15,7 @@
 
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
@@ -37,6 +38,10 @@ struct MasterConfig {
   std::chrono::milliseconds ack_timeout{5000};
   std::chrono::milliseconds message_timeout{2000};
   std::chrono::milliseconds resend_interval{250};  // re-publish an unacknowledged clock
+  // Asked to end (lockstep_end_t): with names here, the session ends once each of them has
+  // asked, at the latest frame asked for (several robots, each ending its own task); empty:
+  // at the first frame anyone asks for.
+  std::vector<std::string> end_when_asked_by;
 };
 
 class LockstepMaster {
@@ -100,6 +105,7 @@ class LockstepMaster {
   bool stop_requested_ = false;
   std::string stop_reason_;
   int64_t end_at_ = -1;  // a participant asked to end after this frame (lockstep_end_t)
+  std::map<std::string, int64_t> end_asked_;  // with end_when_asked_by: who asked, for which frame
   std::chrono::steady_clock::time_point clock_sent_{};
   std::map<std::string, double> ack_seconds_;
   double wait_seconds_ = 0;

@@ -25,6 +25,8 @@ def add_parsers(sub) -> None:
     p.add_argument("--url", default=None)
     p.add_argument("--out", default=None, help="write the recorded states and replies here (JSON)")
     p.add_argument("--clock-timeout", type=float, default=10.0)
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help="the robot the script drives (its channels NAME/SB_ROBOT_..., NAME/SB_SIM_...)")
 
     sc = sub.add_parser("scene", help="scene files: check one, or turn it into the world model's Turtle scene")
     sc.add_argument("action", choices=["check", "turtle"],

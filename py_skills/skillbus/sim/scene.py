@@ -61,6 +61,12 @@ def load(path: str | Path) -> dict[str, Any]:
     return json.loads(_run("check", str(path), "--json"))
 
 
+def element_ids(path: str | Path) -> dict[str, str]:
+    """The world model's element ids of the scene file at `path`, by label
+    ({"table": "skiros:Table-1", ...}): what a task names the scene's things by."""
+    return json.loads(_run("ids", str(path)))
+
+
 def to_turtle(scene: dict[str, Any]) -> str:
     """The world model's Turtle scene for a scene document (from `load`, perhaps changed;
     relative URDF paths in it start from the current folder). Checked as a file is."""
@@ -72,7 +78,7 @@ def save(doc: dict[str, Any], path: str | Path, source: str | Path) -> Path:
     URDF paths made absolute, since they are relative to the file they came from."""
     base = Path(source).resolve().parent
     doc = json.loads(json.dumps(doc))
-    for part in [doc.get("robot", {}), *doc.get("fixtures", [])]:
+    for part in [doc.get("robot", {}), *doc.get("robots", []), *doc.get("fixtures", [])]:
         if isinstance(part, dict) and part.get("urdf"):
             part["urdf"] = str((base / part["urdf"]).resolve())
     Path(path).write_text(json.dumps(doc, indent=1))

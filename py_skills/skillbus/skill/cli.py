@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import json
 import math
+import os
 import signal
 import sys
 from typing import Any
@@ -108,9 +109,15 @@ def call(client: RpcClient, method: str, req, reply_type, intr: Interrupts | Non
             raise NoManager(timeout) from None
 
 
+ROBOT_HELP = ("the robot whose skill manager to use (its channels are NAME/SB_SKILL_...; default: "
+              "$SKILLBUS_ROBOT, else the manager without a robot name)")
+
+
 def add_parsers(sub) -> None:
     sp = sub.add_parser("skills-process", help="load skill libraries and serve them to a skill manager")
     sp.add_argument("--name", default=None, help="unique name of this process")
+    sp.add_argument("--robot", default=None, metavar="NAME",
+                    help="the robot it serves: its manager, arm, camera and gripper channels are NAME/SB_...")
     sp.add_argument("--library", action="append", default=None, help="a Python module of skills (repeatable)")
     sp.add_argument("--config", default=None, metavar="FILE.toml",
                     help="settings and [interfaces] from a file (docs/skills.md, 'Robot interfaces')")
@@ -128,8 +135,11 @@ def add_parsers(sub) -> None:
     sp.add_argument("--arm", action="store_true",
                     help="shortcut for --interface arm=skillbus.robot.arm (robot state, trajectories, motion service)")
     sp.add_argument("--world-model", action="store_true", help="give skills a world-model client (self.wmi)")
-    ls = sub.add_parser("skills", help="the skills the manager knows, with parameters and conditions")
+    ls = sub.add_parser("skills", help="the skills the managers know, with parameters and conditions (every "
+                                       "robot's, or --robot NAME's)")
     ls.add_argument("--url", default=None)
+    ls.add_argument("--robot", default=None, metavar="NAME",
+                    help="only this robot's manager (default: every manager that answers on the bus)")
     ls.add_argument("--json", action="store_true",
                     help="print a JSON list: each skill with its parameters (kind, type, defaults) and conditions")
     run = sub.add_parser("run", help="run a skill; exit 0 on success; interrupted (130, 143) or timed out (3): "
@@ -147,11 +157,13 @@ def add_parsers(sub) -> None:
                      help="print the result and the final tree as one JSON object (with --watch, each tree "
                           "shown before it as a JSON line)")
     run.add_argument("--url", default=None)
+    run.add_argument("--robot", default=None, metavar="NAME", help=ROBOT_HELP)
     for verb, text in (("stop", "preempt a running task"), ("pause", "stop ticking a task"),
                        ("resume", "tick a paused task again"), ("step", "tick a paused task once")):
         st = sub.add_parser(verb, help=text)
         st.add_argument("task", type=int)
         st.add_argument("--url", default=None)
+        st.add_argument("--robot", default=None, metavar="NAME", help=ROBOT_HELP)
 
 
 def skill_list(client: RpcClient) -> skill_list_t:
@@ -261,8 +273,21 @@ def _with_manager(command, args) -> int:
         try:
             return command(args, intr)
         except NoManager as e:
-            print(f"error: {e}", file=sys.stderr)
+            print(f"error: {e}{_other_managers(args)}", file=sys.stderr)
             return intr.exit_code if intr.signum else 1
+
+
+def _other_managers(args) -> str:
+    """When the manager asked for does not answer: which robots' managers do ("" if none)."""
+    from skillbus.channels import current_robot
+    from skillbus.skill.managers import discover, robots_text
+    try:
+        found = [m for m in discover(open_bus(args.url)) if m.robot != current_robot()]
+    except Exception:  # (only a hint: the error above stands either way)
+        return ""
+    if not found:
+        return ""
+    return f"; the skill managers on this bus are those of the robots {robots_text(found)}: name one with --robot NAME"
 
 
 class ManagerWatch:
@@ -453,7 +478,10 @@ def main(args: argparse.Namespace) -> int:
 
 def _command(args, intr: Interrupts) -> int:
     """skills, stop, pause, resume, step: one call to the manager each."""
-    client = RpcClient(open_bus(args.url), "SKILL", "cli")
+    bus = open_bus(args.url)
+    if args.command == "skills" and args.robot is None and not os.environ.get("SKILLBUS_ROBOT"):
+        return _every_managers_skills(bus, args, intr)
+    client = RpcClient(bus, "SKILL", "cli")
     if args.command == "skills":
         try:
             lst = call(client, "list", skill_start_t(), skill_list_t, intr)
@@ -475,3 +503,46 @@ def _command(args, intr: Interrupts) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 1
     return intr.exit_code if intr.signum else 0
+
+
+def _every_managers_skills(bus, args, intr: Interrupts) -> int:
+    """`skillbus skills` without --robot: the skills of every manager that answers a probe,
+    under a heading per robot. With one manager and no robot names, as before: its list
+    alone (and a manager too old to answer the probe is asked directly)."""
+    from skillbus.skill.managers import discover
+    managers = discover(bus)
+    if intr.signum:
+        return intr.exit_code
+    if not managers or (len(managers) == 1 and not managers[0].robot):
+        try:
+            lst = call(RpcClient(bus, "SKILL", "cli", robot=""), "list", skill_start_t(), skill_list_t, intr)
+        except RpcError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
+        if intr.signum:
+            return intr.exit_code
+        if args.json:
+            print(json.dumps(skills_json(lst)))
+        else:
+            print_skills(lst)
+        return 0
+    out: list[dict[str, Any]] = []
+    failed = 0
+    for m in managers:
+        try:
+            lst = call(RpcClient(bus, "SKILL", "cli", robot=m.robot), "list", skill_start_t(), skill_list_t, intr)
+        except (NoManager, RpcError) as e:
+            print(f"error: robot {m.robot or '(none)'}: {e}", file=sys.stderr)
+            failed += 1
+            continue
+        if intr.signum:
+            return intr.exit_code
+        if args.json:
+            out += [dict(skill, robot=m.robot, manager=m.name) for skill in skills_json(lst)]
+        else:
+            agent = f", driving {m.agent}" if m.agent else ""
+            print(f"== robot {m.robot or '(none)'}: skill manager {m.name}{agent}, {len(lst.skills)} skills ==")
+            print_skills(lst)
+    if args.json:
+        print(json.dumps(out))
+    return 1 if failed else 0

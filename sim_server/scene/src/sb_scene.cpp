@@ -7,6 +7,8 @@
 //                                   normalized scene (every default filled in, URDF paths
 //                                   absolute, unit quaternions) as a scene file
 //   sb_scene turtle FILE [-o OUT]   the world model's Turtle scene (standard output without -o)
+//   sb_scene ids FILE               the world model's element ids by label, as one JSON object
+//                                   ({"table": "skiros:Table-1", ...}): what a task names them by
 //
 // FILE "-" is standard input (relative URDF paths then start from the current folder).
 // Exit codes: 0; 2 a scene file that does not pass ("sb_scene: error: FILE: field ..." on
@@ -15,6 +17,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/scene/scene.hpp"
@@ -54,8 +57,11 @@ int main(int argc, char** argv) {
   CLI::App* turtle = app.add_subcommand("turtle", "write the world model's Turtle scene for a scene file");
   turtle->add_option("FILE", file, "the scene file ('-': standard input)")->required();
   turtle->add_option("-o,--output", out, "write here instead of standard output")->type_name("OUT");
+  CLI::App* ids = app.add_subcommand("ids", "the world model's element ids of a scene file by label, as JSON");
+  ids->add_option("FILE", file, "the scene file ('-': standard input)")->required();
   apps::parse_or_exit(app, argc, argv);
-  if (!check->parsed() && !turtle->parsed()) apps::usage_error(app, "a subcommand is required: check or turtle");
+  if (!check->parsed() && !turtle->parsed() && !ids->parsed())
+    apps::usage_error(app, "a subcommand is required: check, turtle or ids");
 
   scene::Scene s;
   std::string text;
@@ -63,11 +69,17 @@ int main(int argc, char** argv) {
     s = read(file);
     if (turtle->parsed()) {
       text = scene::to_turtle(s);
+    } else if (ids->parsed()) {
+      nlohmann::ordered_json j = nlohmann::ordered_json::object();
+      for (const auto& e : scene::world_elements(s)) j[e.label] = "skiros:" + e.id;
+      text = j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
     } else if (as_json) {
       text = scene::to_json(s, 1) + "\n";
     } else {
-      text = (file == "-" ? std::string("<stdin>") : file) + ": a valid scene ('" + one_line(s.name) + "': robot '" +
-             one_line(s.robot.name) + "', " + std::to_string(s.fixtures.size()) + " fixture(s), " +
+      std::string robots;
+      for (const auto& r : s.robots) robots += (robots.empty() ? "'" : ", '") + one_line(r.name) + "'";
+      text = (file == "-" ? std::string("<stdin>") : file) + ": a valid scene ('" + one_line(s.name) + "': robot" +
+             (s.robots.size() > 1 ? "s " : " ") + robots + ", " + std::to_string(s.fixtures.size()) + " fixture(s), " +
              std::to_string(s.objects.size()) + " object(s))\n";
     }
   } catch (const std::exception& e) {

@@ -15,6 +15,13 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
+bool valid_bus_name(const std::string& n) {
+  if (n.empty() || !std::isalpha(static_cast<unsigned char>(n[0]))) return false;
+  for (char c : n)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+
 // Reads fields of one JSON object and names the offending field in every error.
 class Reader {
  public:
@@ -130,31 +137,64 @@ Scene parse_scene(const std::string& text, const std::string& path) {
       p.fail_field("collision_detector", "must be one of bullet, dart, fcl");
   }
 
-  if (!top.has("robot")) top.fail_field("robot", "is missing");
-  {
-    Reader r(top.sub("robot"), "robot", file);
-    s.robot.name = r.str("name", "robot", true);
-    s.robot.urdf = resolve(base, r.str("urdf", "", true));
-    check_file(r, "urdf", s.robot.urdf);
-    s.robot.pose = r.pose("pose");
-    s.robot.tool_link = r.str("tool_link", "", true);
-    s.robot.tool_offset = r.num("tool_offset", 0.0);
-    s.robot.left_finger_joint = r.str("left_finger_joint", "", true);
-    s.robot.right_finger_joint = r.str("right_finger_joint", "", true);
-    s.robot.arm = r.str("arm", "arm");
-    s.robot.gripper = r.str("gripper", "gripper");
+  // One robot ("robot": {...}, on the bus without a namespace) or several ("robots":
+  // [...], each on the bus under its name).
+  if (top.has("robot") == top.has("robots"))
+    throw SceneError(file + ": " + (top.has("robot") ? std::string("give either robot or robots, not both")
+                                                     : std::string("robot is missing (or robots, for several)")));
+  auto read_robot = [&](const json& j, const std::string& where) {
+    Reader r(j, where, file);
+    RobotSpec robot;
+    robot.name = r.str("name", "robot", true);
+    robot.urdf = resolve(base, r.str("urdf", "", true));
+    check_file(r, "urdf", robot.urdf);
+    robot.pose = r.pose("pose");
+    robot.tool_link = r.str("tool_link", "", true);
+    robot.tool_offset = r.num("tool_offset", 0.0);
+    robot.left_finger_joint = r.str("left_finger_joint", "", true);
+    robot.right_finger_joint = r.str("right_finger_joint", "", true);
+    robot.arm = r.str("arm", "arm");
+    robot.gripper = r.str("gripper", "gripper");
     if (r.has("initial_joints")) {
       const json& ij = r.sub("initial_joints");
       if (!ij.is_object()) r.fail_field("initial_joints", "must be an object {joint: position}");
       for (auto it = ij.begin(); it != ij.end(); ++it) {
         if (!it.value().is_number() || !std::isfinite(it.value().get<double>()))
           r.fail_field("initial_joints." + it.key(), "must be a finite number");
-        s.robot.initial_joints[it.key()] = it.value().get<double>();
+        robot.initial_joints[it.key()] = it.value().get<double>();
       }
+    }
+    return robot;
+  };
+  if (top.has("robot")) {
+    s.robots.push_back(read_robot(top.sub("robot"), "robot"));
+  } else {
+    const json& arr = top.sub("robots");
+    if (!arr.is_array() || arr.empty()) top.fail_field("robots", "must be a non-empty array");
+    for (size_t i = 0; i < arr.size(); ++i) {
+      const std::string where = "robots[" + std::to_string(i) + "]";
+      RobotSpec robot = read_robot(arr[i], where);
+      // The name is a bus namespace: channel and DDS topic names take it as it is.
+      if (!valid_bus_name(robot.name))
+        throw SceneError(file + ": " + where + ".name '" + robot.name +
+                         "' must be a letter then letters, digits or _ (it names the robot's channels)");
+      robot.bus_name = robot.name;
+      s.robots.push_back(std::move(robot));
     }
   }
 
-  std::set<std::string> names{s.robot.name};
+  std::set<std::string> names, robot_labels;
+  for (size_t i = 0; i < s.robots.size(); ++i) {
+    const RobotSpec& r = s.robots[i];
+    const std::string where = top.has("robot") ? "robot" : "robots[" + std::to_string(i) + "]";
+    if (!names.insert(r.name).second) throw SceneError(file + ": " + where + ".name '" + r.name + "' is used twice in the scene");
+    // The robots' arm and gripper labels: the physics reports an object held by naming its
+    // gripper's label, which must say which robot holds it.
+    for (const std::string* label : {&r.arm, &r.gripper})
+      if (!robot_labels.insert(*label).second)
+        throw SceneError(file + ": " + where + (label == &r.arm ? ".arm" : ".gripper") + " '" + *label +
+                         "' is used twice among the robots");
+  }
   auto unique_name = [&](const Reader& r, const std::string& n) {
     if (!names.insert(n).second) r.fail_field("name", "'" + n + "' is used twice in the scene");
   };
@@ -227,18 +267,26 @@ std::string to_json(const Scene& s, int indent) {
                   {"gravity", std::vector<double>(s.physics.gravity.begin(), s.physics.gravity.end())},
                   {"collision_detector", s.physics.collision_detector},
                   {"lcp_solver", s.physics.lcp_solver}};
-  oj joints = oj::object();
-  for (const auto& [name, q] : s.robot.initial_joints) joints[name] = q;
-  j["robot"] = {{"name", s.robot.name},
-                {"urdf", s.robot.urdf},
-                {"pose", pose(s.robot.pose)},
-                {"tool_link", s.robot.tool_link},
-                {"tool_offset", s.robot.tool_offset},
-                {"left_finger_joint", s.robot.left_finger_joint},
-                {"right_finger_joint", s.robot.right_finger_joint},
-                {"initial_joints", joints},
-                {"arm", s.robot.arm},
-                {"gripper", s.robot.gripper}};
+  auto robot_json = [&](const RobotSpec& r) {
+    oj joints = oj::object();
+    for (const auto& [name, q] : r.initial_joints) joints[name] = q;
+    return oj{{"name", r.name},
+              {"urdf", r.urdf},
+              {"pose", pose(r.pose)},
+              {"tool_link", r.tool_link},
+              {"tool_offset", r.tool_offset},
+              {"left_finger_joint", r.left_finger_joint},
+              {"right_finger_joint", r.right_finger_joint},
+              {"initial_joints", joints},
+              {"arm", r.arm},
+              {"gripper", r.gripper}};
+  };
+  if (s.robots.size() == 1 && s.robots[0].bus_name.empty()) {
+    j["robot"] = robot_json(s.robots[0]);
+  } else {
+    j["robots"] = oj::array();
+    for (const auto& r : s.robots) j["robots"].push_back(robot_json(r));
+  }
   j["fixtures"] = oj::array();
   for (const auto& f : s.fixtures)
     j["fixtures"].push_back(
@@ -259,6 +307,15 @@ std::string to_json(const Scene& s, int indent) {
     j["objects"].push_back(e);
   }
   return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
+const RobotSpec& robot_on_bus(const Scene& scene, const std::string& bus_name) {
+  std::string known;
+  for (const auto& r : scene.robots) {
+    if (r.bus_name == bus_name) return r;
+    known += (known.empty() ? "" : ", ") + (r.bus_name.empty() ? std::string("(none: the one robot)") : r.bus_name);
+  }
+  throw SceneError(scene.path + ": no robot '" + bus_name + "' (robots: " + known + ")");
 }
 
 Scene load_scene(const std::string& path) {

@@ -87,11 +87,13 @@ std::vector<WorldElement> world_elements(const Scene& scene) {
   }
   for (const auto& o : scene.objects)
     if (o.on.empty()) out.push_back({WorldElement::Object, id(o.type), o.type, o.name, "Scene-0", o.pose, &o});
-  const std::string rid = id("Robot");
   const Pose identity{0, 0, 0, 0, 0, 0, 1};
-  out.push_back({WorldElement::Robot, rid, "Robot", scene.robot.name, "Scene-0", scene.robot.pose, nullptr});
-  out.push_back({WorldElement::Gripper, id("Gripper"), "Gripper", scene.robot.gripper, rid, identity, nullptr});
-  out.push_back({WorldElement::Arm, id("Arm"), "Arm", scene.robot.arm, rid, identity, nullptr});
+  for (const auto& robot : scene.robots) {  // after everything else: one robot's ids stay as they were
+    const std::string rid = id("Robot");
+    out.push_back({WorldElement::Robot, rid, "Robot", robot.name, "Scene-0", robot.pose, nullptr});
+    out.push_back({WorldElement::Gripper, id("Gripper"), "Gripper", robot.gripper, rid, identity, nullptr});
+    out.push_back({WorldElement::Arm, id("Arm"), "Arm", robot.arm, rid, identity, nullptr});
+  }
   return out;
 }
 

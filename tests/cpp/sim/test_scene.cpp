@@ -35,8 +35,54 @@ TEST(Scene, TheDemoSceneLoads) {
   EXPECT_DOUBLE_EQ(s.objects[1].pose[2], 0.425);
   ASSERT_EQ(s.fixtures.size(), 2u);
   EXPECT_EQ(s.physics.collision_detector, "bullet");
-  EXPECT_EQ(s.robot.tool_link, "link6");
-  EXPECT_NE(s.robot.urdf.find("sim_server/models/arm6.urdf"), std::string::npos);
+  ASSERT_EQ(s.robots.size(), 1u);
+  EXPECT_EQ(s.robots[0].tool_link, "link6");
+  EXPECT_EQ(s.robots[0].bus_name, "");  // one robot: its channels have no namespace
+  EXPECT_NE(s.robots[0].urdf.find("sim_server/models/arm6.urdf"), std::string::npos);
+  EXPECT_EQ(&robot_on_bus(s, ""), &s.robots[0]);
+  EXPECT_THROW(robot_on_bus(s, "r2"), SceneError);
+}
+
+TEST(Scene, SeveralRobotsEachOnTheirOwnBusName) {
+  const Scene s = load_scene(kDir + "/two_arms.scene.json");
+  ASSERT_EQ(s.robots.size(), 2u);
+  EXPECT_EQ(s.robots[0].bus_name, "r1");
+  EXPECT_EQ(s.robots[1].bus_name, "r2");
+  EXPECT_DOUBLE_EQ(s.robots[1].pose[1], -1.6);
+  EXPECT_EQ(robot_on_bus(s, "r2").gripper, "r2_gripper");
+  try {
+    robot_on_bus(s, "r3");
+    ADD_FAILURE() << "no robot r3";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("no robot 'r3' (robots: r1, r2)"), std::string::npos) << e.what();
+  }
+  // Written out and read back: the same robots, still a list.
+  const Scene again = parse_scene(to_json(s), s.path);
+  ASSERT_EQ(again.robots.size(), 2u);
+  EXPECT_EQ(again.robots[1].bus_name, "r2");
+}
+
+TEST(Scene, SeveralRobotsMistakesAreNamed) {
+  const std::string robot = R"({"name": "NAME", "urdf": "../../sim_server/models/arm6.urdf", "tool_link": "link6",
+      "left_finger_joint": "finger_left_joint", "right_finger_joint": "finger_right_joint", "arm": "ARM", "gripper": "GRIP"})";
+  auto with = [&](std::string name, std::string arm, std::string grip) {
+    std::string r = robot;
+    r.replace(r.find("NAME"), 4, name);
+    r.replace(r.find("ARM"), 3, arm);
+    r.replace(r.find("GRIP"), 4, grip);
+    return r;
+  };
+  auto scene = [](const std::string& robots) { return R"({"name": "t", "robots": [)" + robots + "]}"; };
+  EXPECT_EQ(error_of(scene(with("a", "a_arm", "a_grip") + "," + with("b", "b_arm", "b_grip"))), "");
+  EXPECT_NE(error_of(scene("")).find("robots must be a non-empty array"), std::string::npos);
+  EXPECT_NE(error_of(scene(with("a", "x", "y") + "," + with("a", "z", "w"))).find("robots[1].name 'a' is used twice"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene(with("a", "arm", "g1") + "," + with("b", "arm", "g2"))).find("robots[1].arm 'arm' is used twice among the robots"),
+            std::string::npos);
+  EXPECT_NE(error_of(scene(with("a/b", "x", "y"))).find("robots[0].name 'a/b' must be a letter"), std::string::npos);
+  EXPECT_NE(error_of(scene(with("1a", "x", "y"))).find("must be a letter"), std::string::npos);
+  const std::string both = R"({"name": "t", "robot": )" + with("a", "x", "y") + R"(, "robots": [])" + "}";
+  EXPECT_NE(error_of(both).find("either robot or robots, not both"), std::string::npos);
 }
 
 TEST(Scene, MistakesAreNamedWithTheirField) {

@@ -19,10 +19,15 @@ struct JointInfo {
 
 class Kinematics {
  public:
-  explicit Kinematics(const scene::Scene& scene);  // throws scene::SceneError
+  // The robot of the scene with that bus name ("": the one robot of a one-robot scene);
+  // throws scene::SceneError (no such robot, a URDF that does not fit).
+  explicit Kinematics(const scene::Scene& scene, const std::string& robot = "");
   ~Kinematics();
   const std::vector<JointInfo>& joints() const { return joints_; }
   Eigen::Isometry3d tool_pose(const Eigen::VectorXd& q) const;
+  // Where the robot stands (its URDF's root link in the world): a target's direction
+  // from the robot is taken in this frame, not the world's.
+  const Eigen::Isometry3d& base() const { return base_; }
   // 6 x n: rows 0-2 linear velocity of the tool point, rows 3-5 angular, world frame.
   Eigen::MatrixXd jacobian(const Eigen::VectorXd& q) const;
 
@@ -30,6 +35,7 @@ class Kinematics {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<JointInfo> joints_;
+  Eigen::Isometry3d base_ = Eigen::Isometry3d::Identity();
 };
 
 }  // namespace skillbus::motion

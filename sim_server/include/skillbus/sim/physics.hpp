@@ -1,4 +1,4 @@
-// The simulated robot and world: a DART world built from a scene file, the arm's joint
+// The simulated robots and world: a DART world built from a scene file, each arm's joint
 // controller (arm_controller.hpp: computed torque with PID on a joint trajectory) and the
 // finger controller (finger_controller.hpp: position ramp with a force limit), stepped a
 // frame at a time. DART stays behind this header (pimpl) so nothing else compiles it:
@@ -30,18 +30,24 @@ class Physics {
   // Back to the scene's initial state (time keeps running; the world restarts).
   void reset();
 
-  // Validate and take a command; the error (empty when accepted) names what was wrong.
-  // A rejected command changes nothing: the robot holds its targets.
-  std::string command_arm(const ArmCommand& cmd);
-  std::string command_gripper(const GripperCommand& cmd);
+  // Robots are numbered in scene order (scene().robots); every per-robot call throws
+  // std::out_of_range for a number the scene does not have.
+  size_t num_robots() const;
+
+  // Validate and take a command for a robot; the error (empty when accepted) names what
+  // was wrong. A rejected command changes nothing: the robot holds its targets.
+  std::string command_arm(size_t robot, const ArmCommand& cmd);
+  std::string command_gripper(size_t robot, const GripperCommand& cmd);
 
   void step_frame();  // frame_ms / step_ms physics steps with the controllers
-  // The simulator's ground truth (SB_SIM_STATE): every joint, fingers, objects, contacts.
-  void fill_state(skillbus_msgs::sim_state_t& out) const;
-  // The robot as a real arm's driver would report it (SB_ROBOT_ARM_STATE): the arm's
+  // The simulator's ground truth for a robot (SB_SIM_STATE): every joint of that robot,
+  // its fingers, the objects, its fingers' contacts.
+  void fill_state(size_t robot, skillbus_msgs::sim_state_t& out) const;
+  // A robot as a real arm's driver would report it (SB_ROBOT_ARM_STATE): the arm's
   // joints only, the tool pose, the trajectory being tracked.
-  void fill_arm_state(skillbus_msgs::robot_arm_state_t& out) const;
-  // A perfect camera (SB_ROBOT_OBJECTS): every free object's name and exact pose.
+  void fill_arm_state(size_t robot, skillbus_msgs::robot_arm_state_t& out) const;
+  // A perfect camera (SB_ROBOT_OBJECTS): every free object's name, exact pose and what it
+  // rests on (a fixture, or the gripper that holds it, by their world-model labels).
   void fill_objects(skillbus_msgs::robot_objects_t& out) const;
   // SHA-256 over every skeleton's positions and velocities (bit patterns), in scene order.
   Digest digest() const;
@@ -51,6 +57,8 @@ class Physics {
   int64_t step_count() const;
   std::string collision_detector() const;
   double physics_seconds() const;  // wall time spent inside DART's step (benchmarks only)
+  // Steps in which two robots touched (only counted with several robots; never reset).
+  int64_t robot_contact_steps() const;
 
  private:
   struct Impl;

@@ -14,6 +14,7 @@ namespace skillbus::sim {
 
 struct ScriptStep {
   int64_t at_ns = 0;
+  std::string robot;  // the robot's bus name ("robot" in the step; "" for a one-robot scene)
   bool is_arm = false;
   ArmCommand arm;
   GripperCommand gripper;

@@ -10,6 +10,8 @@
 //          SB_ROBOT_CMD_REPLY (robot_cmd_reply_t, arm commands), SB_SIM_STATE (sim_state_t),
 //          SB_SIM_CMD_REPLY (sim_cmd_reply_t, finger commands), SB_SIM_REP,
 //          SB_LOCKSTEP_CLOCK (as master)
+// With several robots in the scene, each robot's channels (all but SB_SIM_REQ/REP and the
+// lockstep's) are under its name: r2/SB_ROBOT_ARM_CMD (skillbus/bus.hpp, robot_channel()).
 #pragma once
 
 #include <chrono>
@@ -28,15 +30,16 @@
 
 namespace skillbus::sim {
 
-// The robot's channels (any robot: this server, or a real robot's drivers).
-std::string robot_arm_state_channel();  // SB_ROBOT_ARM_STATE
-std::string robot_arm_cmd_channel();    // SB_ROBOT_ARM_CMD
-std::string robot_reply_channel();      // SB_ROBOT_CMD_REPLY
-std::string robot_objects_channel();    // SB_ROBOT_OBJECTS
-// The simulator's own: its ground truth and the simulated fingers.
-std::string state_channel();    // SB_SIM_STATE
-std::string gripper_channel();  // SB_SIM_GRIPPER_CMD
-std::string reply_channel();    // SB_SIM_CMD_REPLY
+// A robot's channels (any robot: this server, or a real robot's drivers), for the robot
+// with that bus name ("": the one robot of a one-robot scene).
+std::string robot_arm_state_channel(const std::string& robot = "");  // SB_ROBOT_ARM_STATE
+std::string robot_arm_cmd_channel(const std::string& robot = "");    // SB_ROBOT_ARM_CMD
+std::string robot_reply_channel(const std::string& robot = "");      // SB_ROBOT_CMD_REPLY
+std::string robot_objects_channel(const std::string& robot = "");    // SB_ROBOT_OBJECTS
+// The simulator's own: its ground truth and the simulated fingers, per robot.
+std::string state_channel(const std::string& robot = "");    // SB_SIM_STATE
+std::string gripper_channel(const std::string& robot = "");  // SB_SIM_GRIPPER_CMD
+std::string reply_channel(const std::string& robot = "");    // SB_SIM_CMD_REPLY
 
 struct ServerOptions {
   std::string scene_file;
@@ -45,6 +48,9 @@ struct ServerOptions {
   std::string record_script;               // write every accepted command here, as a script
   std::string name = "sim";
   std::vector<std::string> participants;  // lockstep: who must join and ack every frame
+  // Lockstep: a session asked to end by a participant ends when each of these has asked
+  // (at the latest frame asked for); empty: when the first asks.
+  std::vector<std::string> end_when_asked_by;
   bool wall_clock = false;
   double speed = 1.0;                      // wall-clock mode: sim seconds per wall second
   int64_t frames = -1;                     // -1: until stopped
@@ -77,9 +83,12 @@ class SimServer {
 
  private:
   scene::Scene load(const std::string& path) const;  // the file, with the command-line overrides
-  void on_arm(const uint8_t* data, size_t size, const std::string& ch);
-  void on_gripper(const uint8_t* data, size_t size, const std::string& ch);
-  void reply(const std::string& id, const std::string& command, const std::string& error);
+  void on_arm(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
+  void on_gripper(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
+  void on_command(const std::string& ch, const uint8_t* data, size_t size);  // by the channel's robot and kind
+  void reply(size_t robot, const std::string& id, const std::string& command, const std::string& error);
+  std::vector<std::string> command_channels() const;  // every robot's arm and finger command channels
+  size_t robot_of_script_step(const ScriptStep& s) const;
   template <class Publish>
   void publish_frame(Publish&& publish);
   ServerReport run_lockstep(const std::function<bool()>& should_stop);
@@ -96,6 +105,7 @@ class SimServer {
   std::unique_ptr<RpcServer> rpc_;
   BadInputCounter bad_{"sim_server"};
   struct Reply {
+    size_t robot = 0;
     std::string id, command, error;  // command: "arm" (SB_ROBOT_CMD_REPLY) or "gripper" (SB_SIM_CMD_REPLY)
   };
   std::vector<Reply> pending_replies_;  // published at the next frame's start, in this order
@@ -107,7 +117,7 @@ class SimServer {
   std::vector<std::pair<std::string, Bytes>> pending_commands_;
   void apply_pending();
   std::vector<std::string> recorded_;  // script steps (JSON) of the accepted commands
-  void record(const ArmCommand* arm, const GripperCommand* gripper);
+  void record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper);
   void write_recording() const;
   size_t script_next_ = 0;
 };

@@ -32,6 +32,11 @@ void parse_or_exit(CLI::App& app, int argc, char** argv);
 // --url, the bus every program opens ("" = $SKILLBUS_BUS_URL, else the default URL).
 CLI::Option* add_url_option(CLI::App& app, std::string& url);
 
+// --robot NAME: the robot whose channels this program uses (skillbus/bus.hpp, channel();
+// default $SKILLBUS_ROBOT, else none). A name that cannot be part of a channel name is a
+// usage error, from the option or from the environment.
+CLI::Option* add_robot_option(CLI::App& app);
+
 // Checks a number option: finite and > 0 ("--period-ms: must be a positive number, not 0").
 // Programs check required options after parsing (with usage_error), so that a wrong
 // option is named before a missing one.

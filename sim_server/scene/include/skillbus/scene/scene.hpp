@@ -1,4 +1,4 @@
-// The scene file: one JSON document that lists the robot, the fixtures (table, bin) and
+// The scene file: one JSON document that lists the robot(s), the fixtures (table, bin) and
 // the graspable objects with their poses. The physics server builds its world from it,
 // and `skillbus scene turtle` turns the same file into the world model's Turtle scene,
 // so belief and truth start from one source. Format: docs/scene.md. The physics server
@@ -30,6 +30,10 @@ struct RobotSpec {
   double tool_offset = 0.0;                 // m along that link's z axis
   std::string left_finger_joint, right_finger_joint;
   std::string arm = "arm", gripper = "gripper";  // labels of the world model's Arm and Gripper
+  // The robot's bus namespace: its processes run with `--robot <bus_name>` and its
+  // channels are "<bus_name>/SB_ROBOT_..." (docs/transport.md, "Several robots"). Empty
+  // for the one robot of a scene's "robot" field; the robot's name in a "robots" list.
+  std::string bus_name;
 };
 
 struct FixtureSpec {
@@ -63,10 +67,14 @@ struct Scene {
   std::string path;  // the file it came from
   std::string name;
   PhysicsSpec physics;
-  RobotSpec robot;
+  std::vector<RobotSpec> robots;  // at least one; names, arm and gripper labels all distinct
   std::vector<FixtureSpec> fixtures;
   std::vector<ObjectSpec> objects;
 };
+
+// The robot whose bus name is `bus_name` ("" for the one robot of a "robot" scene);
+// throws SceneError naming the robots there are.
+const RobotSpec& robot_on_bus(const Scene& scene, const std::string& bus_name);
 
 // Reads and checks a scene file. Throws SceneError naming the file and the offending
 // field (e.g. "scene.json: objects[1].mass must be > 0").

@@ -1,0 +1,63 @@
+// Channel names: the shared ones and each robot's own (skillbus/bus.hpp, channel()).
+#include <cctype>
+#include <cstdlib>
+#include <mutex>
+#include <stdexcept>
+
+#include "skillbus/bus.hpp"
+
+namespace skillbus {
+
+namespace {
+
+std::mutex robot_mutex;
+std::string robot_set;  // by set_robot()
+bool robot_was_set = false;
+
+bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+}  // namespace
+
+bool robot_scoped(const std::string& name) {
+  // The managers' discovery channel is shared: it is how a client finds every robot.
+  if (name == "SB_SKILL_MANAGERS") return false;
+  for (const char* p : {"SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_"})
+    if (starts_with(name, p)) return true;
+  return name == "SB_SIM_STATE" || name == "SB_SIM_GRIPPER_CMD" || name == "SB_SIM_CMD_REPLY";
+}
+
+bool valid_robot_name(const std::string& robot) {
+  if (robot.empty() || !std::isalpha(static_cast<unsigned char>(robot[0]))) return false;
+  for (char c : robot)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
+  return true;
+}
+
+void set_robot(const std::string& robot) {
+  if (!robot.empty() && !valid_robot_name(robot))
+    throw std::invalid_argument("robot name '" + robot +
+                                "': a letter, then letters, digits or _ (it becomes part of channel names)");
+  std::lock_guard<std::mutex> lock(robot_mutex);
+  robot_set = robot;
+  robot_was_set = true;
+}
+
+std::string current_robot() {
+  {
+    std::lock_guard<std::mutex> lock(robot_mutex);
+    if (robot_was_set) return robot_set;
+  }
+  const char* env = std::getenv("SKILLBUS_ROBOT");
+  return env ? env : "";
+}
+
+std::string robot_channel(const std::string& name, const std::string& robot) {
+  const char* ns = std::getenv("SKILLBUS_NAMESPACE");
+  std::string out = ns ? ns : "";
+  if (!robot.empty() && robot_scoped(name)) out += robot + "/";
+  return out + name;
+}
+
+std::string channel(const std::string& name) { return robot_channel(name, current_robot()); }
+
+}  // namespace skillbus

@@ -1,0 +1,63 @@
+"""Channel names, shared and per robot (docs/transport.md, "Several robots").
+
+Several robots share one bus: a robot's own channels (its arm, camera, fingers, skill
+manager, skill processes, motion service, CAN sync) are ``<robot>/<name>`` for the
+process's robot, while the world model, the lockstep, the physics server's control and
+the log are shared. ``$SKILLBUS_NAMESPACE`` goes in front of everything (a whole system
+apart on one bus). The C++ side (common/src/channels.cpp) names them the same way.
+
+>>> robot_channel("SB_ROBOT_ARM_CMD", "r2"), robot_channel("SB_WM_REQ", "r2")
+('r2/SB_ROBOT_ARM_CMD', 'SB_WM_REQ')
+>>> robot_scoped("SB_SKPROC_SKILLS_REQ"), robot_scoped("SB_MANAGERS")
+(True, False)
+>>> valid_robot_name("r2"), valid_robot_name("r/2"), valid_robot_name("2r")
+(True, False, False)
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+_SCOPED_PREFIXES = ("SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_")
+_SCOPED = frozenset({"SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY"})
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+_robot: str | None = None  # set_robot(); None: $SKILLBUS_ROBOT
+
+
+def robot_scoped(name: str) -> bool:
+    """Whether `name` is one of a robot's own channels (else shared by all robots)."""
+    return name.startswith(_SCOPED_PREFIXES) or name in _SCOPED
+
+
+def valid_robot_name(robot: str) -> bool:
+    """A letter, then letters, digits or _: it becomes part of channel and DDS topic names."""
+    return bool(_NAME.fullmatch(robot))
+
+
+def set_robot(robot: str) -> None:
+    """This process's robot (a program's --robot; "" for none, whatever the environment
+    says). Raises ValueError for a name that cannot be part of a channel name."""
+    global _robot
+    if robot and not valid_robot_name(robot):
+        raise ValueError(f"robot name {robot!r}: a letter, then letters, digits or _ "
+                         f"(it becomes part of channel names)")
+    _robot = robot
+
+
+def current_robot() -> str:
+    """The process's robot: set_robot(), else $SKILLBUS_ROBOT, else ""."""
+    return _robot if _robot is not None else os.environ.get("SKILLBUS_ROBOT", "")
+
+
+def robot_channel(name: str, robot: str) -> str:
+    """`name` for an explicit robot ("" for none)."""
+    prefix = os.environ.get("SKILLBUS_NAMESPACE", "")
+    return prefix + (f"{robot}/" if robot and robot_scoped(name) else "") + name
+
+
+def channel(name: str) -> str:
+    """`name` as this process names it: behind $SKILLBUS_NAMESPACE, and under the
+    process's robot when it is one of a robot's own channels."""
+    return robot_channel(name, current_robot())

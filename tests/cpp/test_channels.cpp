@@ -1,0 +1,65 @@
+// Channel names with several robots: a robot's own channels go under its name, the shared
+// ones do not; robot names that cannot be part of a channel are refused.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <stdexcept>
+
+#include "skillbus/bus.hpp"
+
+using namespace skillbus;
+
+namespace {
+struct RobotReset {
+  ~RobotReset() {
+    set_robot("");
+    ::unsetenv("SKILLBUS_ROBOT");
+    ::unsetenv("SKILLBUS_NAMESPACE");
+  }
+};
+}  // namespace
+
+TEST(Channels, ARobotsOwnChannelsGoUnderItsName) {
+  RobotReset reset;
+  for (const char* own : {"SB_ROBOT_ARM_STATE", "SB_ROBOT_ARM_CMD", "SB_SKILL_REQ", "SB_SKILL_PROGRESS",
+                          "SB_SKPROC_SKILLS_REQ", "SB_MOTION_REP", "SB_CAN_SYNC", "SB_SIM_STATE",
+                          "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SKILL_MANAGER", "SB_SKILL_HEARTBEAT"}) {
+    EXPECT_TRUE(robot_scoped(own)) << own;
+    EXPECT_EQ(robot_channel(own, "r2"), std::string("r2/") + own);
+    EXPECT_EQ(robot_channel(own, ""), own);
+  }
+  for (const char* shared : {"SB_WM_REQ", "SB_WM_CHANGES", "SB_WM_TXN", "SB_LOCKSTEP_CLOCK", "SB_LOCKSTEP_ACK",
+                             "SB_LOCKSTEP_END", "SB_SIM_REQ", "SB_SIM_REP", "SB_MANAGERS", "SB_MANAGERS_PROBE",
+                             "SB_LOG_MARK"}) {
+    EXPECT_FALSE(robot_scoped(shared)) << shared;
+    EXPECT_EQ(robot_channel(shared, "r2"), shared);
+  }
+}
+
+TEST(Channels, TheProcesssRobotComesFromSetRobotElseTheEnvironment) {
+  RobotReset reset;
+  ::setenv("SKILLBUS_ROBOT", "envbot", 1);
+  EXPECT_EQ(current_robot(), "envbot");
+  EXPECT_EQ(channel("SB_ROBOT_ARM_CMD"), "envbot/SB_ROBOT_ARM_CMD");
+  set_robot("r1");
+  EXPECT_EQ(current_robot(), "r1");
+  EXPECT_EQ(channel("SB_SKILL_REQ"), "r1/SB_SKILL_REQ");
+  EXPECT_EQ(channel("SB_WM_REQ"), "SB_WM_REQ");
+  ::setenv("SKILLBUS_NAMESPACE", "lab_", 1);  // a whole system apart: in front of everything
+  EXPECT_EQ(channel("SB_SKILL_REQ"), "lab_r1/SB_SKILL_REQ");
+  EXPECT_EQ(channel("SB_WM_REQ"), "lab_SB_WM_REQ");
+  set_robot("");  // explicitly none, whatever the environment says
+  EXPECT_EQ(channel("SB_SKILL_REQ"), "lab_SB_SKILL_REQ");
+}
+
+TEST(Channels, RobotNamesThatCannotNameAChannelAreRefused) {
+  RobotReset reset;
+  for (const char* good : {"r1", "left_arm", "A"}) EXPECT_TRUE(valid_robot_name(good)) << good;
+  for (const char* bad : {"", "1r", "r/2", "r 2", "r-2", "_r", "r.2", "ü"}) {
+    EXPECT_FALSE(valid_robot_name(bad)) << bad;
+    if (*bad) {
+      EXPECT_THROW(set_robot(bad), std::invalid_argument) << bad;
+    }
+  }
+  EXPECT_EQ(current_robot(), "");  // a refused name changed nothing
+}

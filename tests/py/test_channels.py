@@ -1,0 +1,57 @@
+"""Channel names with several robots: the same as the C++ side (tests/cpp/test_channels.cpp),
+and robot names that cannot be part of a channel are refused."""
+
+import pytest
+
+from skillbus import channels
+from skillbus.channels import channel, current_robot, robot_channel, robot_scoped, set_robot, valid_robot_name
+
+OWN = ["SB_ROBOT_ARM_STATE", "SB_ROBOT_ARM_CMD", "SB_ROBOT_OBJECTS", "SB_ROBOT_CMD_REPLY", "SB_SKILL_REQ",
+       "SB_SKILL_PROGRESS", "SB_SKILL_MANAGER", "SB_SKILL_HEARTBEAT", "SB_SKPROC_SKILLS_REQ", "SB_MOTION_REP",
+       "SB_CAN_SYNC", "SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY"]
+SHARED = ["SB_WM_REQ", "SB_WM_CHANGES", "SB_WM_TXN", "SB_LOCKSTEP_CLOCK", "SB_LOCKSTEP_ACK", "SB_LOCKSTEP_END",
+          "SB_SIM_REQ", "SB_SIM_REP", "SB_MANAGERS", "SB_MANAGERS_PROBE", "SB_LOG_MARK"]
+
+
+@pytest.fixture(autouse=True)
+def no_robot(monkeypatch):
+    monkeypatch.delenv("SKILLBUS_ROBOT", raising=False)
+    monkeypatch.delenv("SKILLBUS_NAMESPACE", raising=False)
+    monkeypatch.setattr(channels, "_robot", None)
+
+
+@pytest.mark.parametrize("name", OWN)
+def test_a_robots_own_channels_go_under_its_name(name):
+    assert robot_scoped(name)
+    assert robot_channel(name, "r2") == f"r2/{name}" and robot_channel(name, "") == name
+
+
+@pytest.mark.parametrize("name", SHARED)
+def test_shared_channels_have_no_robot(name):
+    assert not robot_scoped(name) and robot_channel(name, "r2") == name
+
+
+def test_the_process_robot_comes_from_set_robot_else_the_environment(monkeypatch):
+    monkeypatch.setenv("SKILLBUS_ROBOT", "envbot")
+    assert current_robot() == "envbot" and channel("SB_ROBOT_ARM_CMD") == "envbot/SB_ROBOT_ARM_CMD"
+    set_robot("r1")
+    assert channel("SB_SKILL_REQ") == "r1/SB_SKILL_REQ" and channel("SB_WM_REQ") == "SB_WM_REQ"
+    monkeypatch.setenv("SKILLBUS_NAMESPACE", "lab_")
+    assert channel("SB_SKILL_REQ") == "lab_r1/SB_SKILL_REQ" and channel("SB_WM_REQ") == "lab_SB_WM_REQ"
+    set_robot("")  # explicitly none, whatever the environment says
+    assert channel("SB_SKILL_REQ") == "lab_SB_SKILL_REQ"
+
+
+@pytest.mark.parametrize("bad", ["1r", "r/2", "r 2", "r-2", "_r", "r.2", "ü"])
+def test_names_that_cannot_name_a_channel_are_refused(bad):
+    assert not valid_robot_name(bad)
+    with pytest.raises(ValueError, match="a letter, then letters, digits or _"):
+        set_robot(bad)
+    assert current_robot() == ""
+
+
+def test_rpc_areas_follow_the_robot():
+    from skillbus.rpc import reply_channel, request_channel
+    set_robot("r2")
+    assert request_channel("SKILL") == "r2/SB_SKILL_REQ" and reply_channel("SKPROC_SKILLS") == "r2/SB_SKPROC_SKILLS_REP"
+    assert request_channel("WM") == "SB_WM_REQ" and request_channel("SIM") == "SB_SIM_REQ"
