@@ -10,7 +10,8 @@ interoperate for this octet payload (an int8/uint8 field would not; keep it so).
 Quality of service per channel class (docs/transport.md, "DDS"):
 
 * everything by default (RPC, lockstep, the world model's change stream, skills):
-  reliable, keep-all, volatile: nothing published to a matched reader is lost;
+  reliable, keep-all, transient-local with the last 16 kept for readers that match
+  later: nothing published to a matched reader is lost;
 * state (names ending in ``_STATE``): reliable keep-last 32 (a reader that falls 32
   behind gets the latest), or with ``state=best-effort`` best-effort keep-last 32, for
   wall-clock state on a real network (never under lockstep: a lost state stops a run).

@@ -72,8 +72,9 @@ void SimServer::reply(size_t robot, const std::string& id, const std::string& co
     ++accepted_;
   } else {
     ++rejected_;
-    const std::string& name = physics_->scene().robots[robot].name;
-    SB_WARN(kLog, "rejected " << command << " command '" << id << "' for " << name << ": " << error);
+    const std::string& bus_name = physics_->scene().robots[robot].bus_name;  // (several robots: which one)
+    SB_WARN(kLog, "rejected " << command << " command '" << id << "'" << (bus_name.empty() ? "" : " of robot " + bus_name)
+                              << ": " << error);
   }
   pending_replies_.push_back({robot, id, command, error});
 }

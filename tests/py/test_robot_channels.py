@@ -25,7 +25,8 @@ out = {"sim_modules": sorted(m for m in sys.modules if m == "skillbus.sim" or m.
                             or m.startswith("skillbus.can.device"))}  # the simulated gripper device too
 out["naming_sb_sim"] = sorted(
     name for name, m in sys.modules.items()
-    if (name == "skillbus" or name.startswith("skillbus.")) and getattr(m, "__file__", None) and "SB_SIM_" in Path(m.__file__).read_text())
+    if (name == "skillbus" or name.startswith("skillbus.")) and getattr(m, "__file__", None) and "SB_SIM_" in Path(m.__file__).read_text()
+    and name != "skillbus.channels")  # (the bus's naming rule lists which channels are a robot's own; it uses none)
 
 
 class Bus:  # records what the interfaces do with the bus (wall clock)
