@@ -39,6 +39,10 @@ def build_parser() -> argparse.ArgumentParser:
     sd.add_argument("--run-dir", default="runs/launch")
     sp = sub.add_parser("spy", help="lcm-spy with every skillbus message type decodable")
     sp.add_argument("--url", default=None)
+    dr = sub.add_parser("dds-record", help="record every skillbus channel of a DDS domain into an LCM log file")
+    dr.add_argument("file", help="the LCM log to write")
+    dr.add_argument("--url", default=None, help="the DDS bus (default: $SKILLBUS_BUS_URL)")
+    dr.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
     rp = sub.add_parser("replay", help="play a recorded LCM log back onto the bus")
     rp.add_argument("log")
     rp.add_argument("--url", default=None)
@@ -174,6 +178,9 @@ def dispatch(args: argparse.Namespace) -> int:
             from skillbus.system import TASK
             args.task = TASK
         return launch.main_launch(args)
+    if args.command == "dds-record":
+        from skillbus import dds_record
+        return dds_record.main(args)
     if args.command in ("spy", "replay"):
         from skillbus import monitor
         return monitor.main_spy(args) if args.command == "spy" else monitor.main_replay(args)

@@ -190,9 +190,11 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -
     robot_names = [""] if robots == 1 else list(TWO_ARMS_REGIONS)
     participants = [p.name for p in progs if p.participant]
     managers = [p.name for p in progs if p.name.endswith("skill_mgr")]
-    lcm_log = bus == "lcm"  # (lcm-logger records udpm://; on DDS nothing is recorded yet)
-    if lcm_log:
+    # The run's LCM log: lcm-logger on LCM; on DDS skillbus dds-record, which writes the same format.
+    if bus == "lcm":
         progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
+    else:
+        progs.append(Program("logger", [sys.executable, "-m", "skillbus.cli", "dds-record", str(run_dir / "demo.lcmlog")]))
     url = f"dds://{DDS_DOMAIN}" if bus == "dds" else None
     if url:
         os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
@@ -208,11 +210,10 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -
                        interval=0.2)
             poll_until(lambda: not any(launch.status(conf).get(n) == "RUNNING" for n in participants), 30,
                        interval=0.2)
-            if lcm_log:
-                try:  # the logger has written all of the run before it is stopped
-                    mark_log(run_dir / "demo.lcmlog")
-                except TimeoutError as e:
-                    print(f"warning: the LCM log may lack the end of the run: {e}", file=sys.stderr)
+            try:  # the logger has written all of the run before it is stopped
+                mark_log(run_dir / "demo.lcmlog")
+            except TimeoutError as e:
+                print(f"warning: the LCM log may lack the end of the run: {e}", file=sys.stderr)
         finally:
             held = signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, signal.SIGTERM))
             try:
@@ -282,7 +283,9 @@ def print_summary(r: dict[str, Any]) -> None:
     if r.get("bus", "lcm") == "lcm":
         print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (skillbus replay; skillbus spy)")
     else:
-        print(f"  bus               Cyclone DDS, domain {DDS_DOMAIN} (no LCM log is recorded on DDS)")
+        print(f"  bus               Cyclone DDS, domain {DDS_DOMAIN}")
+        print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (recorded by skillbus dds-record; "
+              f"skillbus replay plays it on LCM)")
     print(f"  logs              {Path(r['run_dir']) / 'logs'}")
 
 

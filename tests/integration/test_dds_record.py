@@ -1,0 +1,67 @@
+"""`skillbus dds-record`: an LCM log of a DDS domain. Every skillbus topic that appears,
+found by discovery (also one that appears after the recorder started), is recorded in
+order, with its bytes as sent, and the file reads as an LCM log. A topic that carried a
+burst before the recorder found it keeps what its writer holds for late readers (the
+last 16)."""
+
+import sys
+import textwrap
+
+import lcm
+
+from conftest import last_json
+from skillbus.waiting import wait_until
+
+WRITER = textwrap.dedent('''
+    import sys, time
+    from skillbus.bus import open_bus
+    bus = open_bus()
+    time.sleep(float(sys.argv[1]))  # (the recorder finds the topic meanwhile, or not: it must not matter)
+    for i in range(50):
+        bus.publish("SB_TEST_A", b"a%d" % i)
+        if i % 5 == 0:
+            bus.publish("SB_TEST_B", bytes(3000 + i))
+        # A topic exists from its first message on: the recorder has its writer's last 16
+        # (skillbus.dds) while it finds and matches it; here it has the time.
+        time.sleep(0.3 if i == 0 and sys.argv[1] != "0" else 0.002)
+    time.sleep(1.0)  # (stays matched until the recorder has it all)
+''')
+
+
+def test_every_topic_is_recorded_in_order_as_an_lcm_log(tmp_path):
+    from skillbus.netns import Sandbox
+    log = tmp_path / "run.lcmlog"
+    with Sandbox(log_dir=tmp_path / "logs", transport="dds") as box:
+        rec = box.start("rec", [sys.executable, "-m", "skillbus.cli", "dds-record", str(log)],
+                        env={"SKILLBUS_KEY_FILE": "none"})
+        early = box.start("early", [sys.executable, "-c", WRITER, "1.0"], env={"SKILLBUS_KEY_FILE": "none"})
+        assert box.wait(early, 60) == 0, early.stderr()
+        late = box.start("late", [sys.executable, "-c", WRITER.replace("SB_TEST_A", "SB_TEST_C"), "1.0"],
+                         env={"SKILLBUS_KEY_FILE": "none"})
+        burst = box.start("burst", [sys.executable, "-c", WRITER.replace("SB_TEST_A", "SB_TEST_D")
+                                    .replace("SB_TEST_B", "SB_TEST_E"), "0"], env={"SKILLBUS_KEY_FILE": "none"})
+        assert box.wait(late, 60) == 0, late.stderr()
+        assert box.wait(burst, 60) == 0, burst.stderr()
+        wait_until(lambda: log.stat().st_size > 0, 10, "the log to be written")
+        box.kill(rec, 15)  # (SIGTERM: it closes the log and prints its summary)
+        assert box.wait(rec, 20) == 0, rec.stderr()
+        summary = last_json(rec.stdout())
+    events = list(lcm.EventLog(str(log), "r"))
+    by_channel: dict[str, list[bytes]] = {}
+    for ev in events:
+        by_channel.setdefault(ev.channel, []).append(bytes(ev.data))
+    assert by_channel["SB_TEST_A"] == [b"a%d" % i for i in range(50)]
+    assert by_channel["SB_TEST_C"] == [b"a%d" % i for i in range(50)]
+    assert by_channel["SB_TEST_B"] == 2 * [bytes(3000 + i) for i in range(0, 50, 5)]
+    burst = by_channel["SB_TEST_D"]  # written before the recorder could know the topic
+    assert len(burst) >= 16 and burst == [b"a%d" % i for i in range(50 - len(burst), 50)], burst
+    assert summary["events"] == len(events) and summary["channels"] == 5
+    assert [ev.eventnum for ev in events] == list(range(len(events)))
+    assert all(a.timestamp <= b.timestamp + 1000 for a, b in zip(events, events[1:]))
+
+
+def test_it_refuses_a_bus_that_is_not_dds(tmp_path):
+    import subprocess
+    r = subprocess.run([sys.executable, "-m", "skillbus.cli", "dds-record", str(tmp_path / "x.lcmlog"),
+                        "--url", "udpm://239.255.76.67:7667?ttl=0"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "records a DDS domain" in r.stderr and "lcm-logger" in r.stderr
