@@ -38,7 +38,7 @@ def priority(name: str) -> int:
     several robots: skillbus.system.robots_programs) as their part's."""
     if name in PRIORITY:
         return PRIORITY[name]
-    head, _, tail = name.partition("_")
+    _, _, tail = name.partition("_")
     return PRIORITY.get(tail, PRIORITY.get(name.rpartition("_")[0], 70))
 
 

@@ -483,18 +483,7 @@ def _command(args, intr: Interrupts) -> int:
         return _every_managers_skills(bus, args, intr)
     client = RpcClient(bus, "SKILL", "cli")
     if args.command == "skills":
-        try:
-            lst = call(client, "list", skill_start_t(), skill_list_t, intr)
-        except RpcError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 1
-        if intr.signum:
-            return intr.exit_code
-        if args.json:
-            print(json.dumps(skills_json(lst)))
-        else:
-            print_skills(lst)
-        return 0
+        return _one_managers_skills(client, args, intr)
     req = skill_start_t()
     req.task = args.task
     try:
@@ -503,6 +492,22 @@ def _command(args, intr: Interrupts) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 1
     return intr.exit_code if intr.signum else 0
+
+
+def _one_managers_skills(client: RpcClient, args, intr: Interrupts) -> int:
+    """`skillbus skills` of the manager `client` talks to: its list, or JSON."""
+    try:
+        lst = call(client, "list", skill_start_t(), skill_list_t, intr)
+    except RpcError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    if intr.signum:
+        return intr.exit_code
+    if args.json:
+        print(json.dumps(skills_json(lst)))
+    else:
+        print_skills(lst)
+    return 0
 
 
 def _every_managers_skills(bus, args, intr: Interrupts) -> int:
@@ -514,18 +519,7 @@ def _every_managers_skills(bus, args, intr: Interrupts) -> int:
     if intr.signum:
         return intr.exit_code
     if not managers or (len(managers) == 1 and not managers[0].robot):
-        try:
-            lst = call(RpcClient(bus, "SKILL", "cli", robot=""), "list", skill_start_t(), skill_list_t, intr)
-        except RpcError as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 1
-        if intr.signum:
-            return intr.exit_code
-        if args.json:
-            print(json.dumps(skills_json(lst)))
-        else:
-            print_skills(lst)
-        return 0
+        return _one_managers_skills(RpcClient(bus, "SKILL", "cli", robot=""), args, intr)
     out: list[dict[str, Any]] = []
     failed = 0
     for m in managers:
