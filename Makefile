@@ -5,7 +5,7 @@ PY     := $(VENV)/bin/python
 BUILD  := build
 JOBS   ?= 2
 
-.PHONY: setup build test test-cpp test-py faults fuzz fuzz-asan demo bench clean
+.PHONY: setup build test test-cpp test-py test-dds faults fuzz fuzz-asan demo bench clean
 
 setup:
 	@deploy/setup.sh
@@ -32,6 +32,12 @@ test-cpp: build
 test-py: build
 	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
 	$(PY) -m pytest -q -rs tests
+
+# Every multi-process test on Cyclone DDS instead of LCM (the `sandbox` fixture's
+# transport; `make test` runs the transport tests on both). Tests about LCM itself (its
+# wire, lcm-spy, lcm-logger) are skipped, saying so. About 20 minutes.
+test-dds: build
+	SKILLBUS_TEST_TRANSPORT=dds $(PY) -m pytest -q -rs tests/integration
 
 # The long fault runs: the world model's journal under simulated power loss at 1,000
 # random points of a write sequence (`make test` runs 50; docs/world_model.md), then

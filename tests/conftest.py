@@ -5,6 +5,7 @@ cannot run (no namespace can be made) fails, naming why, unless SKILLBUS_ALLOW_S
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -32,9 +33,24 @@ def _sandbox(tmp_path: Path, transport: str = "lcm"):
         box.__exit__(None, None, None)
 
 
+# The transport of the plain `sandbox` fixture: LCM, or every multi-process test on DDS
+# with SKILLBUS_TEST_TRANSPORT=dds (`make test-dds`, docs/testing.md).
+SANDBOX_TRANSPORT = os.environ.get("SKILLBUS_TEST_TRANSPORT", "lcm")
+
+
 @pytest.fixture
 def sandbox(tmp_path):
-    yield from _sandbox(tmp_path)
+    yield from _sandbox(tmp_path, SANDBOX_TRANSPORT)
+
+
+def lcm_only(why: str):
+    """Marks a test that is about LCM itself (its wire, its tools): it runs on LCM only, and
+    under `make test-dds` it is skipped, saying why (a skip the policy allows: there is
+    nothing of it to run on DDS)."""
+    def mark(test):
+        test = pytest.mark.skipif(SANDBOX_TRANSPORT != "lcm", reason=f"about LCM: {why}")(test)
+        return pytest.mark.allow_skip(test)
+    return mark
 
 
 TRANSPORTS = ("lcm", "dds")

@@ -131,6 +131,11 @@ dds_entity_t DdsBus::topic(const std::string& channel) {
   auto it = topics_.find(channel);
   if (it != topics_.end()) return it->second;
   dds_qos_t* q = qos(channel);
+  if (channel.find_first_of(".*+?[](){}|^$\\") != std::string::npos) {
+    dds_delete_qos(q);
+    throw BusError("DDS topic '" + channel + "': a channel name, not a pattern (DDS has no LCM-style regular-"
+                   "expression subscriptions: subscribe to each channel)");
+  }
   const dds_entity_t t = dds_create_topic(participant_, &skillbus_Envelope_desc, channel.c_str(), q, nullptr);
   dds_delete_qos(q);
   if (t < 0) throw BusError("DDS topic '" + channel + "': " + dds_error(t));
@@ -152,6 +157,17 @@ void DdsBus::publish(const std::string& channel, const void* data, size_t size) 
   e.data._length = e.data._maximum = static_cast<uint32_t>(size);
   e.data._release = false;
   const dds_return_t r = dds_write(it->second, &e);
+  if (r == DDS_RETCODE_TIMEOUT) {
+    // A reliable writer waits (up to its blocking time) while a matched reader has not
+    // taken what it holds: a stopped process, or a killed one until its lease ends. The
+    // message is lost, as a datagram can be on LCM, and the protocols above notice and
+    // retry (RPC, lockstep resends) or report it. Counted and logged, never fatal.
+    ++lost_sends_;
+    if (lost_sends_ <= 5 || lost_sends_ % 1000 == 0)
+      SB_WARN("bus", "sending on " << channel << " timed out: a reader takes nothing (stopped, or killed and "
+                                   << "still matched): message lost (#" << lost_sends_ << ")");
+    return;
+  }
   if (r < 0) throw BusError("DDS write on " + channel + " (" + std::to_string(size) + " bytes): " + dds_error(r));
 }
 

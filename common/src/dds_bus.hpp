@@ -40,6 +40,9 @@ class DdsBus : public Bus {
   void unsubscribe(int subscription_id) override;
   bool handle(std::chrono::milliseconds timeout) override;
   std::string url() const override { return url_; }
+  // Messages not sent because a matched reader took none for the writer's blocking time
+  // (a stopped process, or a killed one until its lease ends): lost, as on LCM.
+  long lost_sends() const { return lost_sends_; }
 
  private:
   struct Reader {
@@ -62,6 +65,7 @@ class DdsBus : public Bus {
   std::map<int, std::string> subs_;
   int next_id_ = 1;
   long handler_failures_ = 0;  // logged rate-limited
+  long lost_sends_ = 0;
 };
 
 }  // namespace skillbus

@@ -95,15 +95,22 @@ def open_bus(url: str | None = None) -> Bus:
     """The bus the URL names; with a key ($SKILLBUS_KEY_FILE) every message is
     authenticated (AuthenticatedBus), and with a policy ($SKILLBUS_POLICY_FILE) only the
     identities it names may send on a channel."""
+    return authenticated(open_raw_bus(url))
+
+
+def open_raw_bus(url: str | None = None) -> Bus:
+    """The backend the URL names (LCM or DDS) without the deployment's key: messages as
+    they are on the wire. For what must see or forge those (a recorder, the tests' forgers
+    and fuzzers); everything else uses open_bus."""
     url = resolve_url(url)
     scheme = url.split("://", 1)[0] if "://" in url else ""
     if scheme == "udpm":
         check_multicast_interface(url)
     if scheme in ("udpm", "memq", "file", "tcpq"):
-        return authenticated(LcmBus(url))
+        return LcmBus(url)
     if scheme == "dds":
         from skillbus.dds import DdsBus
-        return authenticated(DdsBus(url))
+        return DdsBus(url)
     raise BusError(f"bus URL '{url}': unknown scheme (expected udpm://, memq:// or dds://)")
 
 

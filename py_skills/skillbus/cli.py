@@ -22,8 +22,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--json", action="store_true", help="print the result as JSON")
     d.add_argument("--robots", type=int, choices=(1, 2), default=1,
                    help="2: two arms, each with its gripper, CAN bus and skill manager, clear six cubes at once")
-    d.add_argument("--bus", choices=("lcm", "dds"), default="lcm",
-                   help="the transport: LCM (udpm://, recorded in an LCM log) or Cyclone DDS (dds://; docs/transport.md)")
+    d.add_argument("--bus", choices=("lcm", "dds"), default=None,
+                   help="the transport: LCM (udpm://) or Cyclone DDS (dds://; docs/transport.md); default: the one "
+                        "$SKILLBUS_BUS_URL names, else LCM")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
     ls.add_argument("--frames", type=int, default=1000)
     ls.add_argument("--python", type=int, default=3, help="Python participants")

@@ -56,6 +56,8 @@ MAX_PARTICIPANTS = 120  # per host and domain (Cyclone's participant index: port
 # reliable writer keeps what it sent for that process's readers until then, and blocks
 # once too much is unacknowledged. Cyclone's default is 10 s.
 LEASE_S = 3
+_RETCODE_TIMEOUT = -10  # DDS_RETCODE_TIMEOUT
+_PATTERN = re.compile(r"[.*+?\[\](){}|^$\\]")  # (what makes an LCM channel a regular expression)
 _URL = re.compile(r"^dds://(\d+)(?:\?(.*))?$")
 _LEN_LE, _LEN_BE = struct.Struct("<I"), struct.Struct(">I")
 _CDR_HEADER = b"\x00\x01\x00\x00"  # CDR, little-endian (XCDR1: what a final struct of octets is in both)
@@ -188,6 +190,7 @@ class DdsBus(Bus):
         self._readers: dict[str, tuple[object, object]] = {}  # channel -> (reader, read condition)
         self._handlers: dict[str, dict[int, Handler]] = {}
         self.undecodable = 0  # samples that were no Envelope
+        self.lost_sends = 0  # writes that timed out (see publish)
         self._since: dict[str, int] = {}  # channel -> the oldest source time delivered to its reader
         self._subs: dict[int, str] = {}
         self._next_id = 1
@@ -216,6 +219,9 @@ class DdsBus(Bus):
     def _topic(self, channel: str):
         t = self._topics.get(channel)
         if t is None:
+            if _PATTERN.search(channel):
+                raise self._error(f"DDS topic '{channel}': a channel name, not a pattern (DDS has no LCM-style "
+                                  f"regular-expression subscriptions: subscribe to each channel)")
             from cyclonedds.topic import Topic
             try:
                 t = self._topics[channel] = Topic(self._dp, channel, self._envelope, qos=self._qos(channel))
@@ -229,6 +235,16 @@ class DdsBus(Bus):
             from cyclonedds.pub import DataWriter
             w = self._writers[channel] = DataWriter(self._dp, self._topic(channel), qos=self._qos(channel))
         ret = self._write(w._ref, wrap(bytes(data)))
+        if ret == _RETCODE_TIMEOUT:
+            # A reliable writer waits (up to its blocking time) while a matched reader has
+            # not taken what it holds: a stopped process, or a killed one until its lease
+            # ends. The message is lost, as a datagram can be on LCM, and the protocols
+            # above notice and retry (RPC, lockstep resends) or report it: counted, logged.
+            self.lost_sends += 1
+            if self.lost_sends <= 5 or self.lost_sends % 1000 == 0:
+                log.warning("sending on %s timed out: a reader takes nothing (stopped, or killed and still "
+                            "matched): message lost (#%d)", channel, self.lost_sends)
+            return
         if ret < 0:
             raise self._error(f"DDS write on {channel} failed ({ret})")
 

@@ -179,6 +179,22 @@ def world_model_after(run_dir: Path) -> dict[str, dict[str, Any]]:
 DDS_DOMAIN = 42  # the demo's DDS domain (its private network namespace is its own anyway)
 
 
+def default_transport() -> str:
+    """The transport $SKILLBUS_BUS_URL names ("dds" for dds://, else "lcm")."""
+    return "dds" if os.environ.get("SKILLBUS_BUS_URL", "").startswith("dds://") else "lcm"
+
+
+def bus_url(bus: str) -> str:
+    """The URL of the demo's bus on that transport: $SKILLBUS_BUS_URL when it names the
+    same transport (a test's own domain or port), else the default (udpm://'s, or DDS
+    domain 42). `--bus lcm` never inherits a DDS URL, nor `--bus dds` an LCM one."""
+    from skillbus.bus import DEFAULT_URL
+    env = os.environ.get("SKILLBUS_BUS_URL", "")
+    if bus == "dds":
+        return env if env.startswith("dds://") else f"dds://{DDS_DOMAIN}"
+    return env if env.startswith("udpm://") else DEFAULT_URL
+
+
 def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
@@ -195,9 +211,8 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -
         progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
     else:
         progs.append(Program("logger", [sys.executable, "-m", "skillbus.cli", "dds-record", str(run_dir / "demo.lcmlog")]))
-    url = f"dds://{DDS_DOMAIN}" if bus == "dds" else None
-    if url:
-        os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
+    url = bus_url(bus)
+    os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
     conf = launch.write_config(run_dir, progs, lockstep=True, bus_url=url)
     watcher = None if quiet else Watcher(robot_names).start()
     t0 = time.monotonic()
@@ -226,7 +241,7 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -
     wall = time.monotonic() - t0
     sim = _last_json(logs / "sim.out")
     mgrs = {m: _last_json(logs / f"{m}.out") for m in managers}
-    result = {"sim": sim, "mgr": mgrs[managers[0]], "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus,
+    result = {"sim": sim, "mgr": mgrs[managers[0]], "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus, "url": url,
               "robots": robots,
               "participants": {n: _last_json(logs / f"{n}.out") for n in participants if n not in managers}}
     result["world_model"] = world_model_after(run_dir)
@@ -283,7 +298,7 @@ def print_summary(r: dict[str, Any]) -> None:
     if r.get("bus", "lcm") == "lcm":
         print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (skillbus replay; skillbus spy)")
     else:
-        print(f"  bus               Cyclone DDS, domain {DDS_DOMAIN}")
+        print(f"  bus               Cyclone DDS, {r.get('url', '')}")
         print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (recorded by skillbus dds-record; "
               f"skillbus replay plays it on LCM)")
     print(f"  logs              {Path(r['run_dir']) / 'logs'}")
@@ -305,13 +320,13 @@ def main(args) -> int:
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
         from skillbus.monitor import run_foreground
         return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
-                               str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", "lcm"),
+                               str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", None) or default_transport(),
                                "--robots", str(getattr(args, "robots", 1))]
                               + (["--json"] if args.json else []))
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        bus = getattr(args, "bus", "lcm")
+        bus = getattr(args, "bus", None) or default_transport()
         robots = getattr(args, "robots", 1)
         print(f"skillbus demo: launching the pick-and-place system under supervisord (lockstep, "
               f"{'Cyclone DDS' if bus == 'dds' else 'LCM'}{f', {robots} robots' if robots > 1 else ''}) ...",

@@ -191,11 +191,11 @@ class Hang(Exception):
 class Flood:
     def __init__(self, args) -> None:
         from skillbus import auth
-        from skillbus.bus import AuthenticatedBus, LcmBus, resolve_url
+        from skillbus.bus import AuthenticatedBus, open_raw_bus, resolve_url
         self.args = args
         self.channels, self.ctx, self.probe_kind = TARGETS[args.target]
         self.gen = Generator(args.seed, self.channels, self.ctx)
-        self.raw = LcmBus(resolve_url(None))
+        self.raw = open_raw_bus(resolve_url(None))
         keys = auth.load_keys(auth.key_path())
         self.identity = "fuzz"
         self.sealer = auth.Sealer(keys[0], self.identity)

@@ -49,8 +49,12 @@ class Driver:
         self.sim_messages: dict[str, int] = {}
         self.commands: list[dict] = []
         bus.subscribe(arm_cmd_channel(), lambda ch, d: self.on_command(d))
-        bus.subscribe(channel("SB_SIM_") + ".*", lambda ch, d: self.sim_messages.__setitem__(
-            ch, self.sim_messages.get(ch, 0) + 1))
+        count = (lambda ch, d: self.sim_messages.__setitem__(ch, self.sim_messages.get(ch, 0) + 1))
+        if bus.url.startswith("dds://"):  # (no patterns on DDS: each of the simulator's channels)
+            for name in ("SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SIM_REQ", "SB_SIM_REP"):
+                bus.subscribe(channel(name), count)
+        else:  # every channel of the simulator's, by LCM's regular expression
+            bus.subscribe(channel("SB_SIM_") + ".*", count)
 
     def check(self, m: robot_arm_cmd_t) -> str:
         if not m.joint_names or not m.points:

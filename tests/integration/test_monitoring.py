@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import last_json
+from conftest import last_json, lcm_only
 from skillbus import paths
 from skillbus.netns import Sandbox
 from skillbus.system import programs, start
@@ -83,6 +83,7 @@ def test_every_message_of_a_run_decodes_with_the_types_jar(demo_log, tmp_path):
 
 @pytest.mark.skipif(not shutil.which("Xvfb") or not shutil.which("import"),
                     reason="Xvfb and ImageMagick's import are needed to run lcm-spy headless")
+@lcm_only("lcm-spy and lcm-logplayer speak LCM only")
 def test_lcm_spy_finds_every_type_and_shows_the_replayed_channels(demo_log, sandbox, tmp_path):
     display = start_xvfb(sandbox)
     spy = sandbox.start("spy", [sys.executable, "-m", "skillbus.cli", "spy"], env={"DISPLAY": display})

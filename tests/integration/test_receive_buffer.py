@@ -11,6 +11,7 @@ import sys
 import textwrap
 
 from skillbus.bus import RECEIVE_BUFFER, kernel_receive_buffer_cap
+from conftest import lcm_only
 
 COUNT, SIZE = 40, 50_000  # 2 MB: ten times the kernel's default buffer
 
@@ -48,6 +49,7 @@ def burst_into(sandbox, url: str) -> int:
     return int(rx.stdout().split("got")[-1].split()[0])
 
 
+@lcm_only("the udpm:// socket's kernel receive buffer")
 def test_a_burst_waits_in_the_large_receive_buffer(sandbox):
     cap = kernel_receive_buffer_cap()
     assert cap is not None and cap >= RECEIVE_BUFFER, (

@@ -10,6 +10,7 @@ import textwrap
 
 from skillbus.netns import last_json
 from skillbus.paths import binary
+from conftest import lcm_only
 
 NO_KEY = {"SKILLBUS_KEY_FILE": "none"}
 # One datagram, one just under LCM's limit for one, fragmented ones up to 4 MB.
@@ -40,6 +41,7 @@ SCRIPT = textwrap.dedent("""
 """)
 
 
+@lcm_only("LCM's wire format on udpm://")
 def test_messages_of_every_size_arrive_whole_in_python_and_in_cpp(sandbox):
     echo = sandbox.start("echo", [binary("codec_peer"), "--echo", "60"], env=NO_KEY)
     echo.wait_for("ready", 20, stream="stdout")
@@ -90,6 +92,7 @@ RECEIVER = textwrap.dedent("""
 """)
 
 
+@lcm_only("LCM's wire format on udpm://")
 def test_datagrams_that_are_no_lcm_message_are_counted_and_dropped(sandbox):
     echo = sandbox.start("echo", [binary("codec_peer"), "--echo", "30"], env=NO_KEY)
     echo.wait_for("ready", 20, stream="stdout")
