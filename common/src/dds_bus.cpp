@@ -10,7 +10,10 @@
 namespace skillbus {
 
 namespace {
-constexpr int kStateDepth = 32;
+// A state reader keeps this many samples it has not taken (like LCM's 4 MB receive buffer,
+// so a burst, a flood of forgeries included, does not push a frame's state out before it
+// is read); keep-last, so a slow reader never holds its writer back.
+constexpr int kStateDepth = 1024;
 constexpr int kMaxParticipants = 120;  // per host and domain (Cyclone's participant index)
 // How long a process that vanished without saying so (killed) is still matched: a reliable
 // writer keeps what it sent for that process's readers until then, and blocks once too
@@ -18,6 +21,13 @@ constexpr int kMaxParticipants = 120;  // per host and domain (Cyclone's partici
 constexpr int kLeaseSeconds = 3;
 constexpr int kLateJoinerDepth = 16;   // samples a writer keeps for readers that match it later
 constexpr dds_duration_t kLateJoinerWindow = DDS_SECS(2);  // of those, only what was written this long before the reader
+
+// An RPC request written before a server's reader existed is never delivered to it: a
+// restarted server must not execute its predecessor's requests (the client's retry
+// reaches it), as on LCM.
+bool is_request(const std::string& channel) {
+  return channel.size() >= 4 && channel.compare(channel.size() - 4, 4, "_REQ") == 0;
+}
 
 bool is_state(const std::string& channel) {
   return channel.size() >= 6 && channel.compare(channel.size() - 6, 6, "_STATE") == 0;
@@ -182,7 +192,7 @@ int DdsBus::subscribe(const std::string& channel, Handler handler, int /*queue_c
     r.condition = dds_create_readcondition(r.reader, DDS_ANY_STATE);
     if (r.condition < 0 || dds_waitset_attach(waitset_, r.condition, r.condition) < 0)
       throw BusError("DDS read condition for " + channel);
-    r.since = dds_time() - kLateJoinerWindow;
+    r.since = dds_time() - (is_request(channel) ? 0 : kLateJoinerWindow);
     it = readers_.emplace(channel, std::move(r)).first;
     order_.push_back(channel);
   }

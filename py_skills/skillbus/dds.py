@@ -48,7 +48,10 @@ try:
 except ImportError as _e:
     _IMPORT_ERROR = _e
 
-STATE_DEPTH = 32
+# A state reader keeps this many samples it has not taken (like LCM's 4 MB receive buffer, so a
+# burst, a flood of forgeries included, does not push a frame's state out before it is
+# read); keep-last, so a slow reader never holds its writer back.
+STATE_DEPTH = 1024
 LATE_JOINER_DEPTH = 16  # samples a writer keeps for readers that match it later
 LATE_JOINER_WINDOW_NS = 2_000_000_000  # of those, only what was written this long before the reader
 MAX_PARTICIPANTS = 120  # per host and domain (Cyclone's participant index: ports 7410 + 2 * index ...)
@@ -255,7 +258,10 @@ class DdsBus(Bus):
             cond = self._core.ReadCondition(r, self._mask)
             self._waitset.attach(cond)
             self._readers[channel] = (r, cond)
-            self._since[channel] = time.time_ns() - LATE_JOINER_WINDOW_NS
+            # An RPC request written before this reader existed is never delivered: a
+            # restarted server must not execute its predecessor's requests (the client's
+            # retry reaches it), as on LCM.
+            self._since[channel] = time.time_ns() - (0 if channel.endswith("_REQ") else LATE_JOINER_WINDOW_NS)
             self._order.append(channel)
         sid = self._next_id
         self._next_id += 1

@@ -64,8 +64,11 @@ def test_clear_table_is_reproducible_bit_for_bit_even_under_load(tmp_path):
     assert runs[2]["load_ran_throughout"] and not runs[0]["load_ran_throughout"]
 
 
-def test_a_skill_process_killed_during_pick_fails_the_task_and_is_restarted(sandbox, tmp_path):
-    """Under supervisord on the wall clock, as on a robot."""
+def test_a_skill_process_killed_during_pick_fails_the_task_and_is_restarted(transport_sandbox, tmp_path):
+    """Under supervisord on the wall clock, as on a robot; on LCM and on DDS (where the
+    restarted process once ran the killed one's last tick request, which its writer still
+    held for late readers, and the task went on as if nothing had happened)."""
+    sandbox = transport_sandbox
     run = tmp_path / "sup"
     run.mkdir()
     scenario = sandbox.start("scenario", python_tool("fault_scenario.py", str(run)))
