@@ -1,6 +1,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <thread>
 
 #include "skillbus/lockstep.hpp"
@@ -44,6 +45,10 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
   auto& enders = cfg_.end_when_asked_by;
   std::sort(enders.begin(), enders.end());
   enders.erase(std::unique(enders.begin(), enders.end()), enders.end());
+  // A name that is no participant would never ask: the session could end only by --frames.
+  for (const auto& name : enders)
+    if (!std::binary_search(expected_.begin(), expected_.end(), name))
+      throw std::invalid_argument("end_when_asked_by names '" + name + "', who is not a participant");
   subs_.push_back(bus_.subscribe(join_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_join(d, n, ch);
   }));

@@ -1,5 +1,6 @@
 #include "skillbus/sim/server.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -36,6 +37,9 @@ std::string reply_channel(const std::string& robot) { return robot_channel("SB_S
 
 SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::move(options)) {
   if (!(opt_.speed > 0) || !std::isfinite(opt_.speed)) throw SceneError("--speed must be a positive number");
+  for (const auto& name : opt_.end_when_asked_by)  // (the master checks it too; here it fails at start)
+    if (std::find(opt_.participants.begin(), opt_.participants.end(), name) == opt_.participants.end())
+      throw SceneError("--end-when-asked-by names '" + name + "', who is not among --participants");
   physics_ = std::make_unique<Physics>(load(opt_.scene_file));
   scenes_dir_ = opt_.scenes_dir;
   if (scenes_dir_.empty()) {

@@ -71,6 +71,19 @@ def test_robot_names_that_cannot_name_a_channel_are_refused(sandbox):
     assert rc == 2 and "a letter, then letters, digits or _" in err, err
     p = sandbox.start("mgr", [mgr_binary(), "--wall-clock", "--robot", "2r"])
     assert sandbox.wait(p, 10) == 2 and "--robot" in p.stderr(), p.stderr()
+    p = sandbox.start("mgr-env", [mgr_binary(), "--wall-clock"], env={"SKILLBUS_ROBOT": "r/2"})
+    assert sandbox.wait(p, 10) == 2 and "$SKILLBUS_ROBOT 'r/2'" in p.stderr(), p.stderr()
+    rc, _, err = cli(sandbox, "skills", "--robot", "r 2")
+    assert rc == 2 and "a letter, then letters, digits or _" in err, err
+
+
+def test_a_session_end_waiting_for_someone_who_is_no_participant_is_refused_at_start(sandbox):
+    """Else the session could never end when its tasks do (skillbus demo --robots 2 names
+    both managers)."""
+    p = sandbox.start("sim", [paths.binary("sim_server"), "--scene", str(SCENE), "--participants", "r1_skill_mgr",
+                              "--end-when-asked-by", "r1_skill_mgr,r2_skill_mgr"])
+    assert sandbox.wait(p, 30) != 0
+    assert "--end-when-asked-by names 'r2_skill_mgr', who is not among --participants" in p.stderr(), p.stderr()
 
 
 def last_json_list(text: str) -> list:

@@ -283,7 +283,7 @@ def _other_managers(args) -> str:
     from skillbus.skill.managers import discover, robots_text
     try:
         found = [m for m in discover(open_bus(args.url)) if m.robot != current_robot()]
-    except Exception:  # (only a hint: the error above stands either way)
+    except (BusError, OSError):  # (only a hint: the error above stands either way)
         return ""
     if not found:
         return ""

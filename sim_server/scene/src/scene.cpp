@@ -8,19 +8,14 @@
 #include <set>
 #include <sstream>
 
+#include "skillbus/bus.hpp"
+
 namespace skillbus::scene {
 
 namespace {
 
 using nlohmann::json;
 namespace fs = std::filesystem;
-
-bool valid_bus_name(const std::string& n) {
-  if (n.empty() || !std::isalpha(static_cast<unsigned char>(n[0]))) return false;
-  for (char c : n)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
-  return true;
-}
 
 // Reads fields of one JSON object and names the offending field in every error.
 class Reader {
@@ -175,7 +170,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
       const std::string where = "robots[" + std::to_string(i) + "]";
       RobotSpec robot = read_robot(arr[i], where);
       // The name is a bus namespace: channel and DDS topic names take it as it is.
-      if (!valid_bus_name(robot.name))
+      if (!valid_robot_name(robot.name))  // (the bus's rule: skillbus/bus.hpp)
         throw SceneError(file + ": " + where + ".name '" + robot.name +
                          "' must be a letter then letters, digits or _ (it names the robot's channels)");
       robot.bus_name = robot.name;
