@@ -34,6 +34,7 @@ void Physics::Impl::build() {
     robots[i].skeleton = world.robots[i];
     robots[i].applied = Eigen::VectorXd::Zero(world.robots[i]->getNumDofs());
   }
+  build_cameras();
 }
 
 void RobotRig::control(int64_t total_steps) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -31,6 +32,13 @@ struct RobotRig {
   double opening() const;             // m, the mean of the two fingers' positions
 };
 
+// A depth camera of the scene: where it is (fixed, or on a robot's link).
+struct CameraRig {
+  const scene::CameraSpec* spec = nullptr;  // in Impl::scene
+  dart::dynamics::BodyNode* link = nullptr;  // null: fixed in the world
+  Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();  // world pose, or pose on the link
+};
+
 struct Physics::Impl {
   scene::Scene scene;
   World world;
@@ -41,9 +49,11 @@ struct Physics::Impl {
   int64_t steps_since_build = 0;  // no step yet: no contacts to read supports from
   int64_t robot_contact_steps = 0;  // steps in which two robots touched (never reset)
   double physics_seconds = 0;
+  std::vector<CameraRig> cameras;  // in scene order
 
   void build();    // the world and the controllers from the scene (again on reset)
   void step();
+  void build_cameras();  // after the world (camera.cpp)
   void count_robot_contacts();  // after a step, with several robots
   RobotRig& rig(size_t robot);  // throws std::out_of_range naming the robots there are
   const RobotRig& rig(size_t robot) const;

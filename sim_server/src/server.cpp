@@ -12,6 +12,8 @@
 #include "skillbus_msgs/robot_arm_state_t.hpp"
 #include "skillbus_msgs/robot_cmd_reply_t.hpp"
 #include "skillbus_msgs/robot_objects_t.hpp"
+#include "skillbus_msgs/camera_capture_t.hpp"
+#include "skillbus_msgs/camera_cloud_t.hpp"
 #include "skillbus/files.hpp"
 #include "skillbus_msgs/sim_cmd_reply_t.hpp"
 #include "skillbus_msgs/sim_control_t.hpp"
@@ -34,6 +36,8 @@ std::string robot_objects_channel(const std::string& robot) { return robot_chann
 std::string state_channel(const std::string& robot) { return robot_channel("SB_SIM_STATE", robot); }
 std::string gripper_channel(const std::string& robot) { return robot_channel("SB_SIM_GRIPPER_CMD", robot); }
 std::string reply_channel(const std::string& robot) { return robot_channel("SB_SIM_CMD_REPLY", robot); }
+std::string camera_capture_channel() { return channel("SB_CAMERA_CAPTURE"); }
+std::string camera_cloud_channel() { return channel("SB_CAMERA_CLOUD"); }
 
 SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::move(options)) {
   if (!(opt_.speed > 0) || !std::isfinite(opt_.speed)) throw SceneError("--speed must be a positive number");
@@ -89,6 +93,7 @@ std::vector<std::string> SimServer::command_channels() const {
     out.push_back(robot_arm_cmd_channel(r.bus_name));
     out.push_back(gripper_channel(r.bus_name));
   }
+  out.push_back(camera_capture_channel());
   return out;
 }
 
@@ -99,7 +104,60 @@ void SimServer::on_command(const std::string& ch, const uint8_t* data, size_t si
     if (ch == robot_arm_cmd_channel(robots[i].bus_name)) return on_arm(i, data, size, ch);
     if (ch == gripper_channel(robots[i].bus_name)) return on_gripper(i, data, size, ch);
   }
+  if (ch == camera_capture_channel()) return on_capture(data, size, ch);
   bad_.record(ch, "a command on a channel of no robot of the scene", size);
+}
+
+// A capture request is answered at the next frame's start: its cloud, or the reason why not.
+void SimServer::on_capture(const uint8_t* data, size_t size, const std::string& ch) {
+  skillbus_msgs::camera_capture_t m;
+  if (!decode_msg(data, size, m)) {
+    bad_.record(ch, "does not decode as camera_capture_t", size);
+    return;
+  }
+  const auto& cams = physics_->scene().cameras;
+  for (size_t i = 0; i < cams.size(); ++i)
+    if (cams[i].name == m.camera) {
+      pending_captures_.push_back({i, m.id, m.camera, ""});
+      return;
+    }
+  std::string known;
+  for (const auto& c : cams) known += (known.empty() ? "" : ", ") + c.name;
+  const std::string error = "no camera '" + m.camera + "' in the scene (cameras: " + (known.empty() ? "none" : known) + ")";
+  SB_WARN(kLog, "capture request '" << m.id << "': " << error);
+  pending_captures_.push_back({cams.size(), m.id, m.camera, error});
+}
+
+// This frame's captures: the requests since the last frame (in the order the frame
+// delivered them), then every camera whose rate makes one due at this sim time.
+template <class Publish>
+void SimServer::publish_captures(Publish&& publish) {
+  const auto& cams = physics_->scene().cameras;
+  captures_.resize(cams.size(), 0);
+  last_rate_capture_.resize(cams.size(), -1);
+  auto capture = [&](size_t i, const std::string& request_id) {
+    const DepthCapture c = physics_->capture(i, captures_[i]);
+    for (auto& part : cloud_parts(c, request_id, captures_[i])) publish(camera_cloud_channel(), part);
+    ++captures_[i];
+  };
+  for (const auto& p : pending_captures_) {
+    if (!p.error.empty()) {
+      publish(camera_cloud_channel(), cloud_error(p.camera, p.id, p.error));
+      continue;
+    }
+    capture(p.camera_index, p.id);
+  }
+  pending_captures_.clear();
+  const double frame_s = physics_->scene().physics.frame_ms * 1e-3;
+  const int64_t frame_ns = static_cast<int64_t>(std::llround(frame_s * 1e9));
+  const int64_t sim_frame = frame_ns > 0 ? sim_time_ns_ / frame_ns : 0;  // (frames of sim time: a paused frame repeats it)
+  for (size_t i = 0; i < cams.size(); ++i) {
+    if (!(cams[i].rate_hz > 0)) continue;
+    const int64_t every = std::max<int64_t>(1, std::llround(1.0 / (cams[i].rate_hz * frame_s)));
+    if (sim_frame % every != 0 || sim_frame == last_rate_capture_[i]) continue;
+    last_rate_capture_[i] = sim_frame;
+    capture(i, "");
+  }
 }
 
 size_t SimServer::robot_of_script_step(const ScriptStep& s) const {
@@ -227,6 +285,7 @@ void SimServer::publish_frame(Publish&& publish) {
     publish(state_channel(robot), s);
   }
   pending_replies_.clear();
+  publish_captures(publish);
 }
 
 skillbus_msgs::sim_status_t SimServer::status() const {
@@ -274,6 +333,9 @@ void SimServer::add_services() {
     for (const auto& r : s.robots) then.push_back(r.bus_name);
     if (now != then) throw RpcError("the scene's robots differ from the running scene's (their channels are fixed)");
     physics_ = std::make_unique<Physics>(s);
+    captures_.clear();  // (the new scene's cameras count from 0)
+    last_rate_capture_.clear();
+    pending_captures_.clear();
     SB_INFO(kLog, "loaded the scene " << s.path << " at frame " << frame_);
     return status();
   });

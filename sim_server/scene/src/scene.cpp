@@ -98,6 +98,70 @@ std::string concept_type(const Reader& r, const std::string& def) {
   return t;
 }
 
+// The largest image a capture may have: every pixel is a ray cast, and the cloud is
+// published whole in one frame.
+constexpr int kMaxPixels = 1 << 20;
+
+void read_intrinsics(const Reader& r, CameraSpec& c) {
+  if (r.has("intrinsics") && r.has("fov_deg")) r.fail_field("fov_deg", "and intrinsics both given: give one");
+  if (r.has("intrinsics")) {
+    const auto k = r.vec<4>("intrinsics", {});
+    c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
+    if (c.fx <= 0 || c.fy <= 0) r.fail_field("intrinsics", "must have fx > 0 and fy > 0 ([fx, fy, cx, cy], pixels)");
+    return;
+  }
+  // The vertical field of view; square pixels, the principal point at the image's centre.
+  const double fov = r.num("fov_deg", 60.0);
+  if (fov <= 0 || fov >= 180) r.fail_field("fov_deg", "must be between 0 and 180 (exclusive)");
+  c.fy = c.fx = 0.5 * c.height / std::tan(0.5 * fov * M_PI / 180.0);
+  c.cx = 0.5 * c.width;
+  c.cy = 0.5 * c.height;
+}
+
+void read_cameras(const Reader& top, Scene& s, const std::string& file) {
+  const json& arr = top.sub("cameras");
+  if (!arr.is_array()) top.fail_field("cameras", "must be an array");
+  std::set<std::string> names;
+  for (size_t i = 0; i < arr.size(); ++i) {
+    Reader r(arr[i], "cameras[" + std::to_string(i) + "]", file);
+    CameraSpec c;
+    c.name = r.str("name", "", true);
+    if (!valid_robot_name(c.name))  // (it is written in messages and on the command line)
+      r.fail_field("name", "'" + c.name + "' must be a letter then letters, digits or _");
+    if (!names.insert(c.name).second) r.fail_field("name", "'" + c.name + "' is used twice among the cameras");
+    c.robot = r.str("robot", "");
+    c.link = r.str("link", "");
+    if (c.robot.empty() != c.link.empty())
+      r.fail_field(c.robot.empty() ? "link" : "robot", "needs robot and link both (a camera mounted on a robot's link)");
+    if (!c.robot.empty()) {
+      bool found = false;
+      for (const auto& robot : s.robots) found = found || robot.name == c.robot;
+      if (!found) r.fail_field("robot", "names '" + c.robot + "', which is not a robot of the scene");
+    }
+    c.pose = r.pose("pose");
+    const double w = r.num("width", 160), h = r.num("height", 120);
+    if (w < 1 || h < 1 || w != std::floor(w) || h != std::floor(h))
+      r.fail_field(w < 1 || w != std::floor(w) ? "width" : "height", "must be a whole number of pixels >= 1");
+    if (w * h > kMaxPixels) r.fail_field("width", "times height must be at most " + std::to_string(kMaxPixels));
+    c.width = static_cast<int>(w);
+    c.height = static_cast<int>(h);
+    read_intrinsics(r, c);
+    c.near = r.num("near", c.near);
+    c.far = r.num("far", c.far);
+    if (c.near <= 0) r.fail_field("near", "must be > 0 (m)");
+    if (c.far <= c.near) r.fail_field("far", "must be > near (m)");
+    c.rate_hz = r.num("rate_hz", 0);
+    if (c.rate_hz < 0) r.fail_field("rate_hz", "must be >= 0 (0: on request only)");
+    c.noise_stddev_m = r.num("noise_stddev_m", 0);
+    if (c.noise_stddev_m < 0) r.fail_field("noise_stddev_m", "must be >= 0");
+    const double seed = r.num("seed", 1);
+    if (seed < 0 || seed != std::floor(seed) || seed > 9007199254740992.0)
+      r.fail_field("seed", "must be a whole number >= 0");
+    c.seed = static_cast<uint64_t>(seed);
+    s.cameras.push_back(c);
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& path) {
@@ -249,6 +313,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
         throw SceneError(file + ": objects[" + std::to_string(i) + "].on names '" + o.on + "', which is not a fixture");
     }
   }
+  if (top.has("cameras")) read_cameras(top, s, file);
   return s;
 }
 
@@ -300,6 +365,23 @@ std::string to_json(const Scene& s, int indent) {
     e["pose"] = pose(o.pose);
     if (!o.on.empty()) e["on"] = o.on;
     j["objects"].push_back(e);
+  }
+  if (!s.cameras.empty()) {
+    j["cameras"] = oj::array();
+    for (const auto& c : s.cameras) {
+      oj e = {{"name", c.name}};
+      if (!c.robot.empty()) e["robot"] = c.robot, e["link"] = c.link;
+      e["pose"] = pose(c.pose);
+      e["width"] = c.width;
+      e["height"] = c.height;
+      e["intrinsics"] = {c.fx, c.fy, c.cx, c.cy};
+      e["near"] = c.near;
+      e["far"] = c.far;
+      e["rate_hz"] = c.rate_hz;
+      e["noise_stddev_m"] = c.noise_stddev_m;
+      e["seed"] = c.seed;
+      j["cameras"].push_back(e);
+    }
   }
   return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }

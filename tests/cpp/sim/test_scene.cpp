@@ -1,6 +1,8 @@
 // Scene files: the demo scene loads; every kind of mistake is named with its field.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "skillbus/scene/scene.hpp"
 
 using namespace skillbus::scene;
@@ -108,4 +110,65 @@ TEST(Scene, MistakesAreNamedWithTheirField) {
   std::string missing = scene_with("[]");
   missing.replace(missing.find("arm6.urdf"), 9, "nope.urdf");
   EXPECT_NE(error_of(missing).find("robot.urdf names a file that does not exist"), std::string::npos);
+}
+
+namespace {
+// The test scene's objects "[]" with `cameras` added.
+std::string with_cameras(const std::string& cameras) {
+  std::string s = scene_with("[]");
+  s.insert(s.rfind('}'), R"(, "cameras": )" + cameras);
+  return s;
+}
+}  // namespace
+
+TEST(Scene, CamerasTakeTheirDefaultsAndComeBackFromJson) {
+  const Scene s = parse_scene(with_cameras(R"([{"name": "overhead", "pose": [0.5, 0, 1.2, 1, 0, 0, 0]},
+      {"name": "wrist", "robot": "r", "link": "link6", "width": 64, "height": 48,
+       "intrinsics": [50, 51, 31.5, 23.5], "rate_hz": 2, "noise_stddev_m": 0.001, "seed": 9}])"),
+                              kDir + "/test.scene.json");
+  ASSERT_EQ(s.cameras.size(), 2u);
+  const CameraSpec& a = s.cameras[0];
+  EXPECT_EQ(a.width, 160);
+  EXPECT_EQ(a.height, 120);
+  EXPECT_NEAR(a.fy, 60.0 / std::tan(30.0 * M_PI / 180.0), 1e-9);  // 60 degrees vertical
+  EXPECT_DOUBLE_EQ(a.fx, a.fy);
+  EXPECT_DOUBLE_EQ(a.cx, 80);
+  EXPECT_DOUBLE_EQ(a.cy, 60);
+  EXPECT_EQ(a.rate_hz, 0);  // on request only
+  EXPECT_EQ(a.noise_stddev_m, 0);
+  const CameraSpec& b = s.cameras[1];
+  EXPECT_EQ(b.robot, "r");
+  EXPECT_EQ(b.link, "link6");
+  EXPECT_DOUBLE_EQ(b.fy, 51);
+  EXPECT_EQ(b.seed, 9u);
+  const Scene again = parse_scene(to_json(s), s.path);
+  ASSERT_EQ(again.cameras.size(), 2u);
+  EXPECT_EQ(again.cameras[1].link, "link6");
+  EXPECT_DOUBLE_EQ(again.cameras[0].fx, a.fx);
+  EXPECT_EQ(again.cameras[1].seed, 9u);
+  EXPECT_EQ(to_json(again), to_json(s));
+}
+
+TEST(Scene, CameraMistakesAreNamedWithTheirField) {
+  auto err = [](const std::string& cams) { return error_of(with_cameras(cams)); };
+  EXPECT_EQ(err(R"([{"name": "c"}])"), "");
+  EXPECT_NE(err(R"({"name": "c"})").find("cameras must be an array"), std::string::npos);
+  EXPECT_NE(err(R"([{}])").find("cameras[0].name is missing"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "a b"}])").find("cameras[0].name 'a b' must be a letter"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c"}, {"name": "c"}])").find("cameras[1].name 'c' is used twice"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "link": "link6"}])").find("cameras[0].link needs robot and link"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "robot": "zz", "link": "l"}])").find("cameras[0].robot names 'zz'"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "width": 0}])").find("cameras[0].width must be a whole number"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "height": 2.5}])").find("cameras[0].height must be a whole number"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "width": 4096, "height": 4096}])").find("times height must be at most"),
+            std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "fov_deg": 180}])").find("cameras[0].fov_deg must be between"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "fov_deg": 60, "intrinsics": [1, 1, 0, 0]}])").find("both given"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "intrinsics": [0, 1, 0, 0]}])").find("fx > 0"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "near": 0}])").find("cameras[0].near must be > 0"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "near": 1, "far": 1}])").find("cameras[0].far must be > near"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "rate_hz": -1}])").find("cameras[0].rate_hz must be >= 0"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "noise_stddev_m": -0.1}])").find("noise_stddev_m must be >= 0"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "seed": 1.5}])").find("cameras[0].seed must be a whole number"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "width": "wide"}])").find("cameras[0].width must be a number"), std::string::npos);
 }

@@ -13,6 +13,7 @@
 
 #include "skillbus/digest.hpp"
 #include "skillbus/scene/scene.hpp"
+#include "skillbus/sim/camera.hpp"
 #include "skillbus/sim/commands.hpp"
 #include "skillbus_msgs/robot_arm_state_t.hpp"
 #include "skillbus_msgs/robot_objects_t.hpp"
@@ -49,6 +50,11 @@ class Physics {
   // A perfect camera (SB_ROBOT_OBJECTS): every free object's name, exact pose and what it
   // rests on (a fixture, or the gripper that holds it, by their world-model labels).
   void fill_objects(skillbus_msgs::robot_objects_t& out) const;
+  // The scene's depth cameras (scene().cameras, in order). A capture casts a ray per pixel
+  // against the world as it is now; `capture_index` picks the noise (the same index gives
+  // the same cloud). Throws std::out_of_range for a camera the scene does not have.
+  size_t num_cameras() const;
+  DepthCapture capture(size_t camera, int64_t capture_index);
   // SHA-256 over every skeleton's positions and velocities (bit patterns), in scene order.
   Digest digest() const;
 

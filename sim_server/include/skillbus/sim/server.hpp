@@ -5,10 +5,12 @@
 // SIM), and the clock: lockstep master with the participants named at launch, or paced
 // to the wall clock.
 //
-// Reads:   SB_ROBOT_ARM_CMD (robot_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t), SB_SIM_REQ
+// Reads:   SB_ROBOT_ARM_CMD (robot_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t), SB_SIM_REQ,
+//          SB_CAMERA_CAPTURE (camera_capture_t)
 // Writes:  SB_ROBOT_ARM_STATE (robot_arm_state_t), SB_ROBOT_OBJECTS (robot_objects_t),
 //          SB_ROBOT_CMD_REPLY (robot_cmd_reply_t, arm commands), SB_SIM_STATE (sim_state_t),
 //          SB_SIM_CMD_REPLY (sim_cmd_reply_t, finger commands), SB_SIM_REP,
+//          SB_CAMERA_CLOUD (camera_cloud_t: the depth cameras' clouds, on request and at their rate),
 //          SB_LOCKSTEP_CLOCK (as master)
 // With several robots in the scene, each robot's channels (all but SB_SIM_REQ/REP and the
 // lockstep's) are under its name: r2/SB_ROBOT_ARM_CMD (skillbus/bus.hpp, robot_channel()).
@@ -85,6 +87,9 @@ class SimServer {
   scene::Scene load(const std::string& path) const;  // the file, with the command-line overrides
   void on_arm(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
   void on_gripper(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
+  void on_capture(const uint8_t* data, size_t size, const std::string& ch);
+  template <class Publish>
+  void publish_captures(Publish&& publish);
   void on_command(const std::string& ch, const uint8_t* data, size_t size);  // by the channel's robot and kind
   void reply(size_t robot, const std::string& id, const std::string& command, const std::string& error);
   std::vector<std::string> command_channels() const;  // every robot's arm and finger command channels
@@ -109,6 +114,13 @@ class SimServer {
     std::string id, command, error;  // command: "arm" (SB_ROBOT_CMD_REPLY) or "gripper" (SB_SIM_CMD_REPLY)
   };
   std::vector<Reply> pending_replies_;  // published at the next frame's start, in this order
+  struct CaptureRequest {
+    size_t camera_index = 0;
+    std::string id, camera, error;  // error: the request is refused with it
+  };
+  std::vector<CaptureRequest> pending_captures_;  // captured at the next frame's start
+  std::vector<int64_t> captures_;                 // per camera: captures so far
+  std::vector<int64_t> last_rate_capture_;        // per camera: the sim frame of its last rate capture
   long accepted_ = 0, rejected_ = 0;
   int64_t frame_ = -1, sim_time_ns_ = 0;
   bool paused_ = false;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -55,6 +56,22 @@ struct ObjectSpec {
   std::string on;                           // the fixture it starts on (world model containment)
 };
 
+// A simulated depth camera (docs/scene.md, "Cameras"). Its frame is the optical frame:
+// z along the view, x to the right of the image, y down it. Fixed in the world (`pose` in
+// the world frame), or mounted on a robot's link (`robot` and `link`; `pose` relative to
+// that link) and moving with it.
+struct CameraSpec {
+  std::string name;
+  std::string robot, link;                  // both empty: fixed in the world
+  Pose pose{0, 0, 0, 0, 0, 0, 1};
+  int width = 160, height = 120;            // pixels
+  double fx = 0, fy = 0, cx = 0, cy = 0;    // pixels (from fov_deg unless given as intrinsics)
+  double near = 0.05, far = 3.0;            // m: returns outside [near, far] are no return
+  double rate_hz = 0;                       // captures per second of sim time; 0: on request only
+  double noise_stddev_m = 0;                // Gaussian noise along each ray (m); 0: exact
+  uint64_t seed = 1;                        // of the noise: the same seed gives the same clouds
+};
+
 struct PhysicsSpec {
   double step_ms = 2.0;   // the default: see docs/sim_server.md, "Choosing the step"
   double frame_ms = 10.0;
@@ -70,6 +87,7 @@ struct Scene {
   std::vector<RobotSpec> robots;  // at least one; names, arm and gripper labels all distinct
   std::vector<FixtureSpec> fixtures;
   std::vector<ObjectSpec> objects;
+  std::vector<CameraSpec> cameras;
 };
 
 // The robot whose bus name is `bus_name` ("" for the one robot of a "robot" scene);
