@@ -7,7 +7,7 @@ import argparse
 import json
 import sys
 
-COMMANDS = ("sim", "sim-script", "scene")
+COMMANDS = ("sim", "sim-script", "scene", "camera")
 
 
 def add_parsers(sub) -> None:
@@ -28,6 +28,16 @@ def add_parsers(sub) -> None:
     p.add_argument("--robot", default=None, metavar="NAME",
                    help="the robot the script drives (its channels NAME/SB_ROBOT_..., NAME/SB_SIM_...)")
 
+    cam = sub.add_parser("camera", help="a depth camera's capture: ask for one (wall clock) or wait for the next")
+    cam.add_argument("action", choices=["capture"])
+    cam.add_argument("camera", help="the camera's name in the scene (its \"cameras\")")
+    cam.add_argument("--out", default=None, help="write the returns (world frame) here: .ply (ASCII) or .npy "
+                                                 "(the organized cloud, height x width x 3, optical frame)")
+    cam.add_argument("--next", action="store_true",
+                     help="do not ask: wait for the camera's next capture (its rate_hz; works under lockstep)")
+    cam.add_argument("--timeout", type=float, default=5.0)
+    cam.add_argument("--url", default=None)
+
     sc = sub.add_parser("scene", help="scene files: check one, or turn it into the world model's Turtle scene")
     sc.add_argument("action", choices=["check", "turtle"],
                     help="check: the physics server's checks (one line, or --json the normalized scene); "
@@ -37,7 +47,31 @@ def add_parsers(sub) -> None:
     sc.add_argument("--json", action="store_true", help="check: print the normalized scene (JSON)")
 
 
+def camera_main(args: argparse.Namespace) -> int:
+    from skillbus.bus import open_bus
+    from skillbus.perception.depth_camera import CameraError, DepthCamera
+    import numpy as np
+    if args.out and not args.out.endswith((".ply", ".npy")):
+        print(f"error: --out {args.out}: write .ply or .npy", file=sys.stderr)
+        return 2
+    cam = DepthCamera(open_bus(args.url), name="skillbus-camera")
+    try:
+        cloud = cam.next_cloud(args.camera, args.timeout) if args.next else cam.capture(args.camera, args.timeout)
+    except CameraError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    if args.out and args.out.endswith(".npy"):
+        np.save(args.out, cloud.points)
+    elif args.out:
+        cloud.write_ply(args.out)
+    print(json.dumps({"camera": cloud.camera, "capture": cloud.capture, "width": cloud.width, "height": cloud.height,
+                      "returns": cloud.returns, "pose": list(cloud.pose), "out": args.out}))
+    return 0
+
+
 def main(args: argparse.Namespace) -> int:
+    if args.command == "camera":
+        return camera_main(args)
     if args.command == "sim-script":
         from skillbus.sim import script
         return script.main(args)
