@@ -89,9 +89,6 @@ Compared compare(const sim::DepthCapture& c) {
       // The point lies on its pixel's ray...
       EXPECT_LT((p.normalized() - dir).norm(), 1e-6) << "pixel " << u << "," << v;
       // ...at the analytic range.
-      if (std::abs(p.norm() - expected) > 0.5e-3 && getenv("CAMDEBUG"))
-        printf("px %d,%d got %.4f expected %.4f (table %.4f cube %.4f) world %.4f %.4f %.4f\n", u, v, p.norm(), expected,
-               t_table, t_cube, (T * p).x(), (T * p).y(), (T * p).z());
       out.worst = std::max(out.worst, std::abs(p.norm() - expected));
       ++out.pixels;
       if (t_cube < t_table) {
@@ -104,7 +101,9 @@ Compared compare(const sim::DepthCapture& c) {
 }
 }  // namespace
 
-TEST(DepthCamera, RangesMatchThePlaneAndTheBoxWithinAFractionOfAMillimetre) {
+// (The issue asks for sub-millimetre; the exact intersection gives float32 rounding, about
+// 20 nm here. Bullet's convex ray test, tried first, was 57 mm off at worst.)
+TEST(DepthCamera, RangesMatchThePlaneAndTheBoxWithinAMicrometre) {
   sim::Physics physics(make_scene());
   ASSERT_EQ(physics.num_cameras(), 1u);
   const sim::DepthCapture c = physics.capture(0, 0);
@@ -115,7 +114,7 @@ TEST(DepthCamera, RangesMatchThePlaneAndTheBoxWithinAFractionOfAMillimetre) {
   EXPECT_EQ(r.pixels, 64 * 48);
   EXPECT_GT(r.on_cube, 10);      // the cube's top is in view...
   EXPECT_GT(r.on_cube_side, 0);  // ...and its side facing the camera
-  EXPECT_LT(r.worst, 0.5e-3) << "worst range error " << r.worst * 1e3 << " mm";
+  EXPECT_LT(r.worst, 1e-6) << "worst range error " << r.worst * 1e3 << " mm";
 }
 
 TEST(DepthCamera, TheSameCaptureIsTheSameBitForBit) {
