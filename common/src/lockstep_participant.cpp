@@ -190,6 +190,8 @@ RunResult LockstepParticipant::run_lockstep() {
     }
     ++r.frames;
     r.sim_time_ns = clk.sim_time_ns + 0;
+    completed_ = clk.frame;
+    if (after_frame) after_frame(clk.frame);
   }
   if (stop_seen_ && !stop_reason_.empty()) fail("lockstep stopped by the master: " + stop_reason_);
   r.digest = running_digest_;

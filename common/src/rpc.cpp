@@ -95,6 +95,10 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
     send_chunk(a, req.chunk);
     return;
   }
+  if (req.chunk == 0 && std::any_of(deferred_.begin(), deferred_.end(), [&](const auto& d) { return d.first == key; })) {
+    ++duplicates_;  // a retry of a deferred call: it is answered when it can be
+    return;
+  }
   if (req.chunk == 0 && running_.count(key)) {
     // A retry of a call still running: a method that waits (a nested call pumps the bus)
     // would otherwise run twice. Its answer goes out when it ends.
@@ -130,6 +134,13 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
     } done{running_, key};
     try {
       a.payload = m->second(req.payload.data(), req.payload.size());
+    } catch (const RpcDefer&) {
+      deferred_.emplace_back(key, std::make_pair(ch, Bytes(data, data + size)));
+      while (deferred_.size() > kMaxDeferred) {
+        bad_.record(ch, "too many deferred requests: the oldest was dropped", 0);
+        deferred_.pop_front();
+      }
+      return;
     } catch (const RpcBadRequest& e) {
       a.status = rpc_reply_t::BAD_REQUEST;
       a.error = e.what();
@@ -141,6 +152,12 @@ void RpcServer::on_request(const std::string& ch, const uint8_t* data, size_t si
   ++served_;
   send_chunk(a, 0);
   remember(key, std::move(a));
+}
+
+void RpcServer::retry_deferred() {
+  auto pending = std::move(deferred_);
+  deferred_.clear();
+  for (const auto& [key, request] : pending) on_request(request.first, request.second.data(), request.second.size());
 }
 
 void RpcServer::remember(const std::string& key, Answer answer) {

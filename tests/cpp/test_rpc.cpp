@@ -173,3 +173,40 @@ TEST(Rpc, ARetryThatArrivesWhileTheCallStillRunsDoesNotRunItAgain) {
   EXPECT_EQ(runs, 1);
   EXPECT_GE(server.duplicates(), 1);
 }
+
+// A method that cannot answer yet defers: the request is kept, its retries run nothing,
+// and it runs once, answering the waiting client, when the server retries it.
+TEST(Rpc, ADeferredCallRunsOnceWhenRetriedAndItsRetriesMeanwhileRunNothing) {
+  CounterFixture f;
+  bool ready = false;
+  int deferrals = 0, runs = 0, seen = 0;
+  f.server.add_method<rpc_counter_t, rpc_counter_t>("when_ready", [&](const rpc_counter_t& r) {
+    if (!ready) {
+      ++deferrals;
+      throw RpcDefer();
+    }
+    ++runs;
+    rpc_counter_t out = r;
+    out.value = 42;
+    return out;
+  });
+  // Stands in for a participant finishing its frame: on the third request (two retries
+  // later) the method can answer.
+  const int side = f.bus->subscribe(rpc_request_channel("counter"), [&](const std::string&, const uint8_t*, size_t) {
+    if (++seen == 3) {
+      ready = true;
+      f.server.retry_deferred();
+    }
+  });
+  RpcClient client(*f.bus, "counter", "test");
+  CallOptions o;
+  o.retry_interval = 20ms;
+  o.timeout = 3000ms;
+  const auto r = client.call<rpc_counter_t>("when_ready", CounterFixture::add("x", 1), o);
+  EXPECT_EQ(r.value, 42);
+  EXPECT_EQ(deferrals, 1);
+  EXPECT_EQ(runs, 1);
+  EXPECT_EQ(f.server.deferred(), 0u);
+  EXPECT_GE(f.server.duplicates(), 1);
+  f.bus->unsubscribe(side);
+}

@@ -143,6 +143,11 @@ class LockstepParticipant {
   // with this frame, so the end is at a frame the participant's work decides).
   void request_end(int64_t after_frames, const std::string& why);
   int64_t frame() const { return outbox_.frame(); }
+  // The last frame this participant finished and acknowledged (-1 before the first).
+  int64_t completed_frame() const { return completed_; }
+  // Runs after each frame's ack (lockstep): e.g. answering the RPC requests that waited
+  // for that frame (RpcServer::retry_deferred).
+  std::function<void(int64_t frame)> after_frame;
   const BadInputCounter& bad_input() const { return bad_; }
   const std::string& name() const { return cfg_.name; }
 
@@ -168,6 +173,7 @@ class LockstepParticipant {
   };
   std::string master_;  // name of the master whose clock we follow (from the first clock)
   bool have_clock_ = false;
+  int64_t completed_ = -1;
   Clock next_clock_;
   bool stop_seen_ = false;
   std::string stop_reason_;

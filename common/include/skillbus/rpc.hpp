@@ -59,6 +59,14 @@ class RpcBadRequest : public RpcError {
   using RpcError::RpcError;
 };
 
+// Thrown by a method that cannot answer yet: the server keeps the request unanswered and
+// runs it again at retry_deferred() (a lockstep participant answers a query "as of frame
+// n" only once it has finished its own frame n). A client's retries meanwhile are ignored.
+class RpcDefer : public std::exception {
+ public:
+  const char* what() const noexcept override { return "deferred"; }
+};
+
 class RpcServer {
  public:
   using RawMethod = std::function<Bytes(const uint8_t* payload, size_t size)>;
@@ -78,6 +86,10 @@ class RpcServer {
       return encode_msg(fn(req));
     });
   }
+
+  // Runs the deferred requests again, oldest first (each may defer again).
+  void retry_deferred();
+  size_t deferred() const { return deferred_.size(); }
 
   long served() const { return served_; }
   long duplicates() const { return duplicates_; }
@@ -109,6 +121,10 @@ class RpcServer {
   std::list<std::string> order_;  // oldest first
   std::unordered_map<std::string, Answer> answered_;
   std::set<std::string> running_;  // calls whose method is running (a retry meanwhile waits for it)
+  // Requests a method deferred, oldest first, by call key: (channel, request bytes).
+  // Bounded: past kMaxDeferred the oldest is dropped, as if it had been lost.
+  static constexpr size_t kMaxDeferred = 1024;
+  std::list<std::pair<std::string, std::pair<std::string, Bytes>>> deferred_;
   long served_ = 0, duplicates_ = 0, expired_ = 0, pulled_ = 0;
   BadInputCounter bad_;
 };
