@@ -22,6 +22,7 @@ _PROGRAMS = {
     "sim_server": "sim_server",
     "sb_scene": "sim_server",
     "motion_server": "motion_server",
+    "map_server": "map_server",
     "codec_peer": "tests/cpp",
 }
 

@@ -179,6 +179,8 @@ DepthCapture Physics::capture(size_t camera, int64_t capture_index) {
   out.width = c.width;
   out.height = c.height;
   out.intrinsics = {c.fx, c.fy, c.cx, c.cy};
+  out.near = c.near;
+  out.far = c.far;
   from_iso(T, out.pose.data());
   out.xyz.assign(static_cast<size_t>(c.width) * c.height * 3, std::numeric_limits<float>::quiet_NaN());
 

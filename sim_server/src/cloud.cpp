@@ -44,6 +44,8 @@ std::vector<skillbus_msgs::camera_cloud_t> cloud_parts(const DepthCapture& c, co
     m.width = c.width;
     m.height = c.height;
     for (int i = 0; i < 4; ++i) m.intrinsics[i] = c.intrinsics[i];
+    m.range[0] = c.near;
+    m.range[1] = c.far;
     for (int i = 0; i < 7; ++i) m.pose[i] = c.pose[i];
     m.part = p;
     m.num_parts = parts;

@@ -24,6 +24,7 @@ def parts(rows_per_part=2, capture=0, request_id="", pose=(1.0, 2.0, 3.0, 0.0, 0
         m = camera_cloud_t()
         m.camera, m.request_id, m.capture, m.error = "cam", request_id, capture, ""
         m.width, m.height, m.intrinsics, m.pose = W, H, [10.0, 10.0, 1.5, 2.0], list(pose)
+        m.range = [0.05, 3.0]
         m.part, m.num_parts, m.row_start = i, len(starts), r
         m.num_rows = min(rows_per_part, H - r)
         m.points = pts[r:r + m.num_rows].tobytes()
@@ -61,6 +62,7 @@ def test_a_rotated_camera_maps_its_view_axis_into_the_world():
     ("width", 0, "is no image size"),
     ("intrinsics", [0.0, 10.0, 1.0, 1.0], "focal length"),
     ("pose", [float("nan")] * 7, "not finite"),
+    ("range", [0.5, 0.5], "not 0 < near < far"),
 ])
 def test_a_part_that_cannot_be_is_refused_saying_why(field, value, why):
     ps, _ = parts()

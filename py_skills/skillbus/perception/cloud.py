@@ -32,6 +32,7 @@ class Cloud:
     width: int
     height: int
     intrinsics: tuple[float, float, float, float]  # fx fy cx cy
+    range_m: tuple[float, float]  # near far (m along a ray)
     pose: tuple[float, ...]  # the optical frame in the world: x y z qx qy qz qw
     points: np.ndarray  # (height, width, 3) float32, optical frame, NaN: no return
     frame: int = -1  # the lockstep frame it was published in
@@ -73,8 +74,11 @@ def _check_part(m: camera_cloud_t) -> None:
         raise CloudError(f"rows {m.row_start}..{m.row_start + m.num_rows - 1} of a {m.height}-row image")
     if m.num_bytes != m.num_rows * m.width * 12 or len(m.points) != m.num_bytes:
         raise CloudError(f"{len(m.points)} bytes of points for {m.num_rows} rows of {m.width} (12 bytes a point)")
-    if not all(math.isfinite(v) for v in (*m.intrinsics, *m.pose)) or m.intrinsics[0] <= 0 or m.intrinsics[1] <= 0:
-        raise CloudError("intrinsics or pose not finite (or a focal length <= 0)")
+    if not all(math.isfinite(v) for v in (*m.intrinsics, *m.pose, *m.range)) or m.intrinsics[0] <= 0 or \
+            m.intrinsics[1] <= 0:
+        raise CloudError("intrinsics, range or pose not finite (or a focal length <= 0)")
+    if not 0 < m.range[0] < m.range[1]:
+        raise CloudError(f"range {m.range[0]}..{m.range[1]} m is not 0 < near < far")
 
 
 class CloudAssembler:
@@ -117,5 +121,5 @@ class CloudAssembler:
             raise CloudError(f"capture {m.capture} of camera {m.camera}: its parts hold {rows} of {m.height} rows")
         data = b"".join(p.points for p in ordered)
         points = np.frombuffer(data, dtype=POINT_DTYPE).reshape(m.height, m.width, 3)
-        return Cloud(m.camera, m.capture, m.request_id, m.width, m.height, tuple(m.intrinsics), tuple(m.pose),
-                     points, frame)
+        return Cloud(m.camera, m.capture, m.request_id, m.width, m.height, tuple(m.intrinsics), tuple(m.range),
+                     tuple(m.pose), points, frame)

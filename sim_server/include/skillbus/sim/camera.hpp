@@ -18,6 +18,7 @@ struct DepthCapture {
   std::string camera;
   int width = 0, height = 0;
   std::array<double, 4> intrinsics{};  // fx fy cx cy
+  double near = 0, far = 0;            // m along a ray
   scene::Pose pose{};                  // the optical frame in the world at the capture
   // width * height * 3: x y z per pixel, row-major, optical frame (m); NaN: no return.
   std::vector<float> xyz;

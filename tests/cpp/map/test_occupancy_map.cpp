@@ -1,0 +1,104 @@
+// The occupancy map alone: a sensor 1 m over a floor sees it; the floor's voxels become
+// occupied, the space above free, what is under it stays unknown; box counts, the free
+// area of a region, rays without a return, and the .bt round trip.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "skillbus/map/occupancy_map.hpp"
+
+using namespace skillbus::map;
+
+namespace {
+// A grid of returns on the floor z = 0 over x, y in [-0.3, 0.3], seen from (0, 0, 1); a
+// 10 cm cube's top (z = 0.1) replaces the floor over x, y in [0.1, 0.2].
+std::vector<Vec3> floor_with_a_block() {
+  std::vector<Vec3> hits;
+  for (double x = -0.3; x <= 0.3001; x += 0.005)
+    for (double y = -0.3; y <= 0.3001; y += 0.005) {
+      const bool on_block = x >= 0.1 && x <= 0.2 && y >= 0.1 && y <= 0.2;
+      hits.push_back({x, y, on_block ? 0.1 : 0.0});
+    }
+  return hits;
+}
+const Vec3 kOrigin{0, 0, 1};
+}  // namespace
+
+TEST(OccupancyMap, WhatASensorSawIsOccupiedTheWayToItFreeAndBehindItUnknown) {
+  OccupancyMap m(0.01);
+  m.insert(floor_with_a_block(), {}, kOrigin, 3.0);
+  EXPECT_EQ(m.state({0.0, 0.0, 0.001}), Cell::Occupied);   // the floor
+  EXPECT_EQ(m.state({0.15, 0.15, 0.105}), Cell::Occupied);  // the block's top (its voxel: z 0.10-0.11)
+  EXPECT_EQ(m.state({0.0, 0.0, 0.5}), Cell::Free);          // between sensor and floor
+  EXPECT_EQ(m.state({0.15, 0.15, 0.3}), Cell::Free);        // above the block
+  EXPECT_EQ(m.state({0.0, 0.0, -0.2}), Cell::Unknown);      // under the floor
+  EXPECT_EQ(m.state({0.15, 0.15, 0.05}), Cell::Unknown);    // inside the block, never seen
+  EXPECT_EQ(m.state({2.0, 2.0, 0.5}), Cell::Unknown);       // out of view
+}
+
+TEST(OccupancyMap, BoxCountsAndTheFreeAreaOfARegion) {
+  OccupancyMap m(0.01);
+  m.insert(floor_with_a_block(), {}, kOrigin, 3.0);
+  // A 20 x 20 cm slab 2-6 cm over the floor, around the block: free except where the block is.
+  const Vec3 lo{0.0, 0.0, 0.021}, hi{0.199, 0.199, 0.059};
+  const BoxCounts c = m.box(lo, hi);
+  EXPECT_EQ(c.occupied + c.free + c.unknown, 20 * 20 * 4);
+  EXPECT_EQ(c.occupied, 0);
+  EXPECT_GT(c.unknown, 80);  // the block's inside, 10 x 10 x 4 voxels (its edges blur a little)
+  double area = 0;
+  const double free = m.free_area(lo, hi, &area);
+  EXPECT_NEAR(area, 0.04, 1e-9);
+  EXPECT_NEAR(free, 0.04 - 0.01, 0.003);  // the block's 10 x 10 cm are not free
+  // The floor itself: occupied voxels.
+  EXPECT_GT(m.box({-0.2, -0.2, 0.0001}, {0.0, 0.0, 0.009}).occupied, 300);
+}
+
+TEST(OccupancyMap, ARayWithoutAReturnClearsSpaceButMarksNothingOccupied) {
+  OccupancyMap m(0.01);
+  // Straight down, nothing seen within 0.5 m: a point beyond max_range along the ray.
+  m.insert({}, {{0.0, 0.0, -5.0}}, kOrigin, 0.5);
+  EXPECT_EQ(m.state({0.0, 0.0, 0.7}), Cell::Free);
+  EXPECT_EQ(m.state({0.0, 0.0, 0.3}), Cell::Unknown);  // beyond the range
+  EXPECT_EQ(m.box({-0.5, -0.5, -1.0}, {0.5, 0.5, 1.0}).occupied, 0);
+}
+
+TEST(OccupancyMap, SavedAndLoadedItIsTheSameMap) {
+  OccupancyMap m(0.02);
+  m.insert(floor_with_a_block(), {}, kOrigin, 3.0);
+  const auto dir = std::filesystem::temp_directory_path() / ("sb_map_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "floor.bt").string();
+  m.save(file);
+  const OccupancyMap back = OccupancyMap::load(file);
+  EXPECT_EQ(back.resolution(), 0.02);
+  EXPECT_EQ(back.digest(), m.digest());
+  EXPECT_EQ(back.leaves(), m.leaves());
+  for (const Vec3& p : {Vec3{0, 0, 0.001}, Vec3{0, 0, 0.5}, Vec3{0.15, 0.15, 0.05}, Vec3{0.15, 0.15, 0.105}})
+    EXPECT_EQ(back.state(p), m.state(p));
+  EXPECT_THROW(OccupancyMap::load((dir / "none.bt").string()), std::runtime_error);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(OccupancyMap, TheSameCloudsGiveTheSameMapBitForBit) {
+  OccupancyMap a(0.01), b(0.01);
+  for (auto* m : {&a, &b}) m->insert(floor_with_a_block(), {}, kOrigin, 3.0);
+  EXPECT_EQ(a.digest(), b.digest());
+  b.insert({{0.25, -0.25, 0.3}}, {}, kOrigin, 3.0);
+  EXPECT_NE(a.digest(), b.digest());
+}
+
+TEST(OccupancyMap, BadArgumentsAreRefusedSayingWhy) {
+  EXPECT_THROW(OccupancyMap(0.0), std::invalid_argument);
+  EXPECT_THROW(OccupancyMap(-1), std::invalid_argument);
+  OccupancyMap m(0.01);
+  try {
+    m.box({0, 0, 0}, {10, 10, 10});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 20000000 are looked at"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(m.box({1, 0, 0}, {0, 1, 1}), std::invalid_argument);
+  EXPECT_THROW(m.free_area({0, 0, 0}, {1e6, 0, 0}), std::invalid_argument);  // beyond the map's range
+  m.clear();
+  EXPECT_EQ(m.leaves(), 0u);
+}
