@@ -7,7 +7,7 @@ import argparse
 import json
 import sys
 
-COMMANDS = ("sim", "sim-script", "scene", "camera")
+COMMANDS = ("sim", "sim-script", "scene", "camera", "map")
 
 
 def add_parsers(sub) -> None:
@@ -37,6 +37,14 @@ def add_parsers(sub) -> None:
                      help="do not ask: wait for the camera's next capture (its rate_hz; works under lockstep)")
     cam.add_argument("--timeout", type=float, default=5.0)
     cam.add_argument("--url", default=None)
+
+    mp = sub.add_parser("map", help="the occupancy map (map_server): what it holds, the state at points, "
+                                    "a box's voxels, a region's free area; save, load, clear")
+    mp.add_argument("action", choices=["info", "state", "box", "free-area", "save", "load", "clear"])
+    mp.add_argument("args", nargs="*", help="state: X Y Z [X Y Z ...]; box and free-area: XMIN YMIN ZMIN XMAX YMAX "
+                                            "ZMAX; save and load: a map's name in the server's --maps folder")
+    mp.add_argument("--timeout", type=float, default=5.0)
+    mp.add_argument("--url", default=None)
 
     sc = sub.add_parser("scene", help="scene files: check one, or turn it into the world model's Turtle scene")
     sc.add_argument("action", choices=["check", "turtle"],
@@ -69,7 +77,54 @@ def camera_main(args: argparse.Namespace) -> int:
     return 0
 
 
+def map_main(args: argparse.Namespace) -> int:
+    from skillbus.bus import open_bus
+    from skillbus.perception.map_client import MapClient
+    from skillbus.rpc import RpcError, RpcTimeout
+    a = args.args
+    try:
+        nums = [float(x) for x in a] if args.action in ("state", "box", "free-area") else []
+    except ValueError:
+        print(f"error: map {args.action}: numbers expected, got {' '.join(a)}", file=sys.stderr)
+        return 2
+    if args.action == "state" and (not nums or len(nums) % 3):
+        print("error: map state: give points as X Y Z [X Y Z ...]", file=sys.stderr)
+        return 2
+    if args.action in ("box", "free-area") and len(nums) != 6:
+        print(f"error: map {args.action}: give XMIN YMIN ZMIN XMAX YMAX ZMAX", file=sys.stderr)
+        return 2
+    if args.action in ("save", "load") and len(a) != 1:
+        print(f"error: map {args.action}: give one map name", file=sys.stderr)
+        return 2
+    c = MapClient(open_bus(args.url), name="skillbus-map", timeout=args.timeout)
+    try:
+        if args.action == "state":
+            pts = [nums[i:i + 3] for i in range(0, len(nums), 3)]
+            out: object = [{"point": p, "state": s} for p, s in zip(pts, c.states(pts))]
+        elif args.action == "box":
+            out = c.box(nums[:3], nums[3:])
+        elif args.action == "free-area":
+            free, area = c.free_area(nums[:3], nums[3:])
+            out = {"free_m2": free, "area_m2": area}
+        elif args.action == "save":
+            out = {"file": c.save(a[0])}
+        elif args.action == "load":
+            out = c.load(a[0])
+        else:
+            out = getattr(c, args.action)()
+    except RpcTimeout as e:
+        print(f"error: {e.no_answer()} (is map_server running?)", file=sys.stderr)
+        return 1
+    except RpcError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    print(json.dumps(out))
+    return 0
+
+
 def main(args: argparse.Namespace) -> int:
+    if args.command == "map":
+        return map_main(args)
     if args.command == "camera":
         return camera_main(args)
     if args.command == "sim-script":

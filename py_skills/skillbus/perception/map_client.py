@@ -1,0 +1,85 @@
+"""The occupancy map's client (map_server, RPC area MAP; docs/perception.md).
+
+Under lockstep a query carries the asker's frame (a skill's tick, or the participant's
+frame) and the map server answers it once it has finished that frame: the answer is the
+same on every run. Without a participant the map answers as it is.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable, Sequence
+
+from skillbus import tick_context as context
+from skillbus.bus import Bus
+from skillbus.msgs import map_query_t, map_reply_t
+from skillbus.rpc import RpcClient
+
+STATES = {map_reply_t.FREE: "free", map_reply_t.OCCUPIED: "occupied", map_reply_t.UNKNOWN: "unknown"}
+
+
+def _triple(v: Sequence[float], what: str) -> list[float]:
+    out = [float(x) for x in v]
+    if len(out) != 3:
+        raise ValueError(f"{what} needs x y z, got {len(out)} numbers")
+    return out
+
+
+class MapClient:
+    def __init__(self, bus: Bus, participant: Any = None, name: str = "map-client", timeout: float = 5.0) -> None:
+        self.rpc = RpcClient(bus, "MAP", name)
+        self.participant, self.timeout = participant, timeout
+
+    def as_of_frame(self) -> int:
+        tick = context.current_tick()
+        if tick is not None:
+            return tick.frame
+        if self.participant is not None and self.participant.frame >= 0:
+            return self.participant.frame
+        return -1
+
+    def _call(self, method: str, q: map_query_t) -> map_reply_t:
+        q.as_of_frame = self.as_of_frame()
+        return self.rpc.call(method, q, map_reply_t, timeout=self.timeout)
+
+    @staticmethod
+    def _query(points: Iterable[Sequence[float]] = (), lo: Sequence[float] | None = None,
+               hi: Sequence[float] | None = None, name: str = "") -> map_query_t:
+        q = map_query_t()
+        q.points = [_triple(p, "a point") for p in points]
+        q.num_points = len(q.points)
+        q.box_min = _triple(lo, "the box's min") if lo is not None else [0.0] * 3
+        q.box_max = _triple(hi, "the box's max") if hi is not None else [0.0] * 3
+        q.name = name
+        return q
+
+    def info(self) -> dict[str, Any]:
+        return reply_dict(self._call("info", self._query()))
+
+    def states(self, points: Iterable[Sequence[float]]) -> list[str]:
+        """"free", "occupied" or "unknown" for each point (world frame, m)."""
+        rep = self._call("state", self._query(points))
+        return [STATES[s] for s in rep.states]
+
+    def box(self, lo: Sequence[float], hi: Sequence[float]) -> dict[str, int]:
+        """Voxels in the box by state."""
+        rep = self._call("box", self._query(lo=lo, hi=hi))
+        return {"occupied": rep.occupied, "free": rep.free, "unknown": rep.unknown}
+
+    def free_area(self, lo: Sequence[float], hi: Sequence[float]) -> tuple[float, float]:
+        """(free m2, footprint m2) of the box: the columns whose voxels in the box are all known free."""
+        rep = self._call("free_area", self._query(lo=lo, hi=hi))
+        return rep.free_area_m2, rep.area_m2
+
+    def save(self, name: str) -> str:
+        return self._call("save", self._query(name=name)).file
+
+    def load(self, name: str) -> dict[str, Any]:
+        return reply_dict(self._call("load", self._query(name=name)))
+
+    def clear(self) -> dict[str, Any]:
+        return reply_dict(self._call("clear", self._query()))
+
+
+def reply_dict(r: map_reply_t) -> dict[str, Any]:
+    return {"frame": r.frame, "resolution": r.resolution, "clouds": r.clouds, "leaves": r.leaves,
+            "captures": dict(zip(r.cameras, r.captures)), **({"file": r.file} if r.file else {})}
