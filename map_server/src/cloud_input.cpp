@@ -20,6 +20,9 @@ void check(const skillbus_msgs::camera_cloud_t& m) {
   if (m.row_start < 0 || m.num_rows <= 0 || int64_t{m.row_start} + m.num_rows > m.height) bad("rows out of the image");
   if (int64_t{m.num_bytes} != int64_t{m.num_rows} * m.width * 12 || m.points.size() != static_cast<size_t>(m.num_bytes))
     bad("the points' bytes do not match its rows");
+  if (int64_t{m.num_mask_bytes} != (int64_t{m.num_rows} * m.width + 7) / 8 ||
+      m.robot_mask.size() != static_cast<size_t>(m.num_mask_bytes))
+    bad("the robot mask's bytes do not match its rows");
   for (double v : m.pose)
     if (!std::isfinite(v)) bad("pose not finite");
   if (!(m.range[0] > 0 && m.range[0] < m.range[1] && std::isfinite(m.range[1]))) bad("range not 0 < near < far");
@@ -79,7 +82,9 @@ std::optional<WorldCloud> CloudParts::add(const skillbus_msgs::camera_cloud_t& m
                                   std::to_string(row));
     for (int32_t r = 0; r < p.num_rows; ++r)
       for (int32_t u = 0; u < p.width; ++u) {
-        const size_t k = (static_cast<size_t>(r) * p.width + u) * 3;
+        const size_t px = static_cast<size_t>(r) * p.width + u, k = px * 3;
+        // The robot's own returns (the self filter) are left out: the map is the world's.
+        if (p.robot_mask[px / 8] & (1u << (px % 8))) continue;
         const Eigen::Vector3d q(float_at(p.points, k), float_at(p.points, k + 1), float_at(p.points, k + 2));
         if (std::isnan(q.z())) {  // nothing seen along this pixel's ray up to far
           const int32_t v = p.row_start + r;

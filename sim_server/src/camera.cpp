@@ -9,6 +9,7 @@
 // are the same with or without cameras.
 #include <cmath>
 #include <dart/collision/CollisionGroup.hpp>
+#include <dart/collision/CollisionObject.hpp>
 #include <dart/collision/RaycastOption.hpp>
 #include <dart/collision/RaycastResult.hpp>
 #include <dart/collision/bullet/BulletCollisionDetector.hpp>
@@ -18,6 +19,7 @@
 #include <dart/dynamics/ShapeNode.hpp>
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/dynamics/SphereShape.hpp>
+#include <algorithm>
 #include <limits>
 
 #include "physics_impl.hpp"
@@ -83,6 +85,7 @@ double ray_cylinder(const Vector3d& o, const Vector3d& d, double r, double h, do
 // ray must pass through first.
 struct Target {
   enum Kind { kBox, kCylinder, kSphere } kind;
+  bool robot;  // a shape of a robot's links
   Eigen::Isometry3d to_local;
   Vector3d size;  // box: half extents; cylinder: radius, height; sphere: radius
   Vector3d centre;
@@ -90,6 +93,7 @@ struct Target {
 };
 
 std::vector<Target> targets_of(const std::vector<dart::dynamics::SkeletonPtr>& skeletons,
+                               const std::vector<dart::dynamics::SkeletonPtr>& robots,
                                dart::collision::CollisionGroup* others) {
   using namespace dart::dynamics;
   std::vector<Target> out;
@@ -114,6 +118,7 @@ std::vector<Target> targets_of(const std::vector<dart::dynamics::SkeletonPtr>& s
           if (others) others->addShapeFrame(sn);
           continue;
         }
+        t.robot = std::find(robots.begin(), robots.end(), s) != robots.end();
         const Eigen::Isometry3d T = sn->getWorldTransform();
         t.to_local = T.inverse();
         t.centre = T.translation();
@@ -122,8 +127,10 @@ std::vector<Target> targets_of(const std::vector<dart::dynamics::SkeletonPtr>& s
   return out;
 }
 
-// The nearest hit along the unit ray o + t d, t in [t_min, t_max] (kNone: none).
-double cast(const std::vector<Target>& targets, const Vector3d& o, const Vector3d& d, double t_min, double t_max) {
+// The nearest hit along the unit ray o + t d, t in [t_min, t_max] (kNone: none), and
+// whether it is on a robot.
+double cast(const std::vector<Target>& targets, const Vector3d& o, const Vector3d& d, double t_min, double t_max,
+            bool& on_robot) {
   double best = t_max;
   bool hit = false;
   for (const Target& g : targets) {
@@ -142,6 +149,7 @@ double cast(const std::vector<Target>& targets, const Vector3d& o, const Vector3
     if (t <= best) {
       best = t;
       hit = true;
+      on_robot = g.robot;
     }
   }
   return hit ? best : kNone;
@@ -187,7 +195,8 @@ DepthCapture Physics::capture(size_t camera, int64_t capture_index) {
   // The shapes where they are now; the ones without an exact intersection go to Bullet.
   auto detector = dart::collision::BulletCollisionDetector::create();
   auto others = detector->createCollisionGroup();
-  const std::vector<Target> targets = targets_of(impl_->world.all, others.get());
+  const std::vector<Target> targets = targets_of(impl_->world.all, impl_->world.robots, others.get());
+  out.on_robot.assign(static_cast<size_t>(c.width) * c.height, 0);
   const bool use_bullet = others->getNumShapeFrames() > 0;
   const dart::collision::RaycastOption closest(false, false);
   dart::collision::RaycastResult hit;
@@ -200,12 +209,21 @@ DepthCapture Physics::capture(size_t camera, int64_t capture_index) {
       const Vector3d world_dir = T.linear() * dir;
       // From the near plane on: a mounted camera's own link (the ray starts inside it)
       // is never in the way.
-      double range = cast(targets, origin, world_dir, c.near, c.far);
+      bool on_robot = false;
+      double range = cast(targets, origin, world_dir, c.near, c.far, on_robot);
       if (use_bullet) {
         hit.clear();
         if (detector->raycast(others.get(), origin + c.near * world_dir, origin + c.far * world_dir, closest, &hit) &&
-            hit.hasHit())
-          range = std::min(range, c.near + hit.mRayHits.front().mFraction * (c.far - c.near));
+            hit.hasHit()) {
+          const double r = c.near + hit.mRayHits.front().mFraction * (c.far - c.near);
+          if (r < range) {
+            range = r;
+            const auto* sn = hit.mRayHits.front().mCollisionObject->getShapeFrame()->asShapeNode();
+            const auto skel = sn ? sn->getSkeleton() : nullptr;
+            on_robot = skel && std::find(impl_->world.robots.begin(), impl_->world.robots.end(), skel) !=
+                                   impl_->world.robots.end();
+          }
+        }
       }
       if (!std::isfinite(range)) continue;
       const int64_t pixel = static_cast<int64_t>(v) * c.width + u;
@@ -213,6 +231,7 @@ DepthCapture Physics::capture(size_t camera, int64_t capture_index) {
       if (range < c.near || range > c.far) continue;
       const Vector3d p = range * dir;
       for (int k = 0; k < 3; ++k) out.xyz[pixel * 3 + k] = static_cast<float>(p[k]);
+      out.on_robot[pixel] = on_robot;
       ++out.returns;
     }
   }

@@ -28,7 +28,11 @@ double unit_open(uint64_t bits) { return (static_cast<double>(bits >> 11) + 0.5)
 
 }  // namespace
 
-int rows_per_part(int width) { return width <= 0 ? 1 : std::max(1, kCloudPartBytes / (width * kPointBytes)); }
+int rows_per_part(int width) {
+  if (width <= 0) return 1;
+  // 12 bytes of points and 1/8 byte of mask a pixel: rows * width * 97 / 8 <= the budget.
+  return std::max(1, static_cast<int>((int64_t{kCloudPartBytes} * 8) / (int64_t{width} * (kPointBytes * 8 + 1))));
+}
 
 std::vector<skillbus_msgs::camera_cloud_t> cloud_parts(const DepthCapture& c, const std::string& request_id,
                                                        int64_t capture) {
@@ -56,6 +60,12 @@ std::vector<skillbus_msgs::camera_cloud_t> cloud_parts(const DepthCapture& c, co
     m.points.resize(count * 4);
     for (size_t i = 0; i < count; ++i) put_float(c.xyz[first + i], &m.points[i * 4]);
     m.num_bytes = static_cast<int32_t>(m.points.size());
+    const size_t pixels = static_cast<size_t>(m.num_rows) * c.width, first_pixel = first / 3;
+    m.robot_mask.assign((pixels + 7) / 8, 0);
+    if (!c.on_robot.empty())
+      for (size_t i = 0; i < pixels; ++i)
+        if (c.on_robot[first_pixel + i]) m.robot_mask[i / 8] |= static_cast<uint8_t>(1u << (i % 8));
+    m.num_mask_bytes = static_cast<int32_t>(m.robot_mask.size());
     out.push_back(std::move(m));
   }
   return out;

@@ -29,6 +29,8 @@ def parts(rows_per_part=2, capture=0, request_id="", pose=(1.0, 2.0, 3.0, 0.0, 0
         m.num_rows = min(rows_per_part, H - r)
         m.points = pts[r:r + m.num_rows].tobytes()
         m.num_bytes = len(m.points)
+        m.robot_mask = bytes((m.num_rows * W + 7) // 8)
+        m.num_mask_bytes = len(m.robot_mask)
         out.append(m)
     return out, pts
 
@@ -63,6 +65,7 @@ def test_a_rotated_camera_maps_its_view_axis_into_the_world():
     ("intrinsics", [0.0, 10.0, 1.0, 1.0], "focal length"),
     ("pose", [float("nan")] * 7, "not finite"),
     ("range", [0.5, 0.5], "not 0 < near < far"),
+    ("num_mask_bytes", 9, "bytes of robot mask"),
 ])
 def test_a_part_that_cannot_be_is_refused_saying_why(field, value, why):
     ps, _ = parts()

@@ -35,6 +35,7 @@ class Cloud:
     range_m: tuple[float, float]  # near far (m along a ray)
     pose: tuple[float, ...]  # the optical frame in the world: x y z qx qy qz qw
     points: np.ndarray  # (height, width, 3) float32, optical frame, NaN: no return
+    on_robot: np.ndarray  # (height, width) bool: the return is on a robot (the self filter)
     frame: int = -1  # the lockstep frame it was published in
 
     @property
@@ -47,10 +48,14 @@ class Cloud:
                          [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                          [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
-    def world_points(self) -> np.ndarray:
-        """(N, 3) float64: every return in the world frame, row-major pixel order."""
+    def world_points(self, robot: bool = True) -> np.ndarray:
+        """(N, 3) float64: every return in the world frame, row-major pixel order (without
+        the robot's returns when `robot` is False)."""
         p = self.points.reshape(-1, 3).astype(np.float64)
-        p = p[~np.isnan(p[:, 2])]
+        keep = ~np.isnan(p[:, 2])
+        if not robot:
+            keep &= ~self.on_robot.reshape(-1)
+        p = p[keep]
         return p @ self.rotation().T + np.asarray(self.pose[:3])
 
     def write_ply(self, path: str | Path) -> None:
@@ -74,6 +79,8 @@ def _check_part(m: camera_cloud_t) -> None:
         raise CloudError(f"rows {m.row_start}..{m.row_start + m.num_rows - 1} of a {m.height}-row image")
     if m.num_bytes != m.num_rows * m.width * 12 or len(m.points) != m.num_bytes:
         raise CloudError(f"{len(m.points)} bytes of points for {m.num_rows} rows of {m.width} (12 bytes a point)")
+    if m.num_mask_bytes != (m.num_rows * m.width + 7) // 8 or len(m.robot_mask) != m.num_mask_bytes:
+        raise CloudError(f"{len(m.robot_mask)} bytes of robot mask for {m.num_rows} rows of {m.width} (a bit a pixel)")
     if not all(math.isfinite(v) for v in (*m.intrinsics, *m.pose, *m.range)) or m.intrinsics[0] <= 0 or \
             m.intrinsics[1] <= 0:
         raise CloudError("intrinsics, range or pose not finite (or a focal length <= 0)")
@@ -121,5 +128,7 @@ class CloudAssembler:
             raise CloudError(f"capture {m.capture} of camera {m.camera}: its parts hold {rows} of {m.height} rows")
         data = b"".join(p.points for p in ordered)
         points = np.frombuffer(data, dtype=POINT_DTYPE).reshape(m.height, m.width, 3)
+        mask = np.concatenate([np.unpackbits(np.frombuffer(p.robot_mask, dtype=np.uint8), bitorder="little")
+                               [:p.num_rows * p.width] for p in ordered]).astype(bool).reshape(m.height, m.width)
         return Cloud(m.camera, m.capture, m.request_id, m.width, m.height, tuple(m.intrinsics), tuple(m.range),
-                     tuple(m.pose), points, frame)
+                     tuple(m.pose), points, mask, frame)

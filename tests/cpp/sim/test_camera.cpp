@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <limits>
 
@@ -188,4 +189,15 @@ TEST(DepthCamera, ACameraOnALinkTheRobotDoesNotHaveIsRefusedNamingIt) {
 TEST(DepthCamera, AskingForACameraTheSceneDoesNotHaveThrows) {
   sim::Physics physics(make_scene());
   EXPECT_THROW(physics.capture(1, 0), std::out_of_range);
+}
+
+TEST(DepthCamera, ReturnsOnTheRobotAreMarkedForTheSelfFilter) {
+  // Straight down onto the arm's base (at the world origin), and over the table.
+  sim::Physics physics(make_scene("", R"([{"name": "down", "pose": [0, 0, 1.5, 1, 0, 0, 0], "width": 8, "height": 6,
+      "fov_deg": 4}, {"name": "overhead", "pose": [0.5, 0, 1.2, 1, 0, 0, 0], "width": 48, "height": 64, "fov_deg": 40}])"));
+  const auto down = physics.capture(0, 0), table = physics.capture(1, 0);
+  ASSERT_EQ(down.on_robot.size(), 48u);
+  EXPECT_EQ(std::count(down.on_robot.begin(), down.on_robot.end(), 1), down.returns);
+  EXPECT_GT(down.returns, 0);
+  EXPECT_EQ(std::count(table.on_robot.begin(), table.on_robot.end(), 1), 0);
 }

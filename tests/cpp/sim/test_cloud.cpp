@@ -22,6 +22,8 @@ DepthCapture capture_of(int w, int h) {
   c.xyz.resize(static_cast<size_t>(w) * h * 3);
   for (size_t i = 0; i < c.xyz.size(); ++i) c.xyz[i] = static_cast<float>(i) * 0.25f;
   c.xyz[5] = std::nanf("");
+  c.on_robot.assign(static_cast<size_t>(w) * h, 0);
+  if (c.on_robot.size() > 4100) c.on_robot[4100] = 1;  // (row 25 of a 160-wide image: part 1, its pixel 100)
   return c;
 }
 
@@ -49,7 +51,9 @@ TEST(Cloud, PartsCoverEveryRowOnceEachWithinTheDatagramBudget) {
       EXPECT_EQ(m.camera, "overhead");
       EXPECT_EQ(m.num_bytes, static_cast<int>(m.points.size()));
       EXPECT_EQ(m.num_bytes, m.num_rows * w * 12);
-      if (m.num_rows > 1) EXPECT_LE(m.num_bytes, kCloudPartBytes) << w << "x" << h;  // (one row may be more)
+      EXPECT_EQ(m.num_mask_bytes, (m.num_rows * w + 7) / 8);
+      EXPECT_EQ(m.num_mask_bytes, static_cast<int>(m.robot_mask.size()));
+      if (m.num_rows > 1) EXPECT_LE(m.num_bytes + m.num_mask_bytes, kCloudPartBytes) << w << "x" << h;  // (one row may be more)
       next_row += m.num_rows;
     }
     EXPECT_EQ(next_row, h) << w << "x" << h;
@@ -64,6 +68,12 @@ TEST(Cloud, PointsAreLittleEndianFloat32InRowMajorOrder) {
   const size_t first = static_cast<size_t>(second.row_start) * 160 * 3;
   for (size_t i = 0; i < 30; ++i) EXPECT_EQ(float_at(second.points, i), c.xyz[first + i]);
   EXPECT_TRUE(std::isnan(float_at(parts[0].points, 5)));
+  // The robot's pixels: bit 100 of part 1's mask, and no other.
+  int set = 0;
+  for (const auto& p : parts)
+    for (uint8_t b : p.robot_mask) set += __builtin_popcount(b);
+  EXPECT_EQ(set, 1);
+  EXPECT_EQ(second.robot_mask[100 / 8], 1 << (100 % 8));
   EXPECT_EQ(second.pose[2], 3);
   EXPECT_EQ(second.intrinsics[0], 100);
 }

@@ -23,9 +23,12 @@ struct DepthCapture {
   // width * height * 3: x y z per pixel, row-major, optical frame (m); NaN: no return.
   std::vector<float> xyz;
   int returns = 0;  // pixels with a return
+  // width * height: 1 where the return is on a robot's link (the self filter's mask).
+  std::vector<uint8_t> on_robot;
 };
 
-// Points per part: every part but the last holds this many rows' bytes or fewer.
+// Bytes per part: every part holds as many whole rows of points (12 bytes a pixel) and
+// mask (1 bit a pixel) as fit, at least one.
 constexpr int kCloudPartBytes = 48 * 1024;
 int rows_per_part(int width);  // at least 1
 
