@@ -25,6 +25,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--bus", choices=("lcm", "dds"), default=None,
                    help="the transport: LCM (udpm://) or Cyclone DDS (dds://; docs/transport.md); default: the one "
                         "$SKILLBUS_BUS_URL names, else LCM")
+    d.add_argument("--perception", action="store_true",
+                   help="Locate from the scene's depth camera (docs/perception.md) instead of the perfect camera")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
     ls.add_argument("--frames", type=int, default=1000)
     ls.add_argument("--python", type=int, default=3, help="Python participants")

@@ -195,14 +195,16 @@ def bus_url(bus: str) -> str:
     return env if env.startswith("udpm://") else DEFAULT_URL
 
 
-def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1) -> dict[str, Any]:
+def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, perception: bool = False) -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
     from skillbus.system import TWO_ARMS_REGIONS, Program, programs, robots_programs
     if run_dir.exists():
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)
-    progs = programs(run_dir) if robots == 1 else robots_programs(run_dir, robots)
+    if perception and robots != 1:
+        raise ValueError("--perception: the two-arm scene has no depth camera yet")
+    progs = programs(run_dir, perception=perception) if robots == 1 else robots_programs(run_dir, robots)
     robot_names = [""] if robots == 1 else list(TWO_ARMS_REGIONS)
     participants = [p.name for p in progs if p.participant]
     managers = [p.name for p in progs if p.name.endswith("skill_mgr")]
@@ -322,7 +324,8 @@ def main(args) -> int:
         return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
                                str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", None) or default_transport(),
                                "--robots", str(getattr(args, "robots", 1))]
-                              + (["--json"] if args.json else []))
+                              + (["--json"] if args.json else [])
+                              + (["--perception"] if getattr(args, "perception", False) else []))
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -332,11 +335,11 @@ def main(args) -> int:
               f"{'Cyclone DDS' if bus == 'dds' else 'LCM'}{f', {robots} robots' if robots > 1 else ''}) ...",
               flush=True)
         try:
-            r = run(Path(args.run_dir), bus=bus, robots=robots)
+            r = run(Path(args.run_dir), bus=bus, robots=robots, perception=getattr(args, "perception", False))
         except Interrupted as e:
             print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
             return 128 + e.signum
-        except (RuntimeError, TimeoutError) as e:  # (a launch that failed names the program and shows its log)
+        except (RuntimeError, TimeoutError, ValueError) as e:  # (a launch that failed names the program and shows its log)
             print(f"error: {e}", file=sys.stderr)
             return 1
     finally:

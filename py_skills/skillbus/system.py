@@ -49,8 +49,25 @@ class Program:
 FRAME_MS = 20.0
 
 
+def locate_camera(scene: Path, perception: bool) -> list[str]:
+    """The skill process's camera interfaces for a scene: the perfect camera (the physics
+    server's detections by name) always, and with `perception`, when the scene has a fixed
+    depth camera, that camera (the first), which Locate then uses (docs/perception.md,
+    "Locate")."""
+    import json
+    out = ["--interface", "camera=skillbus.robot.camera"]
+    if not perception:
+        return out
+    cameras = [c for c in json.loads(Path(scene).read_text()).get("cameras", []) if not c.get("robot")]
+    if cameras:
+        c = cameras[0]
+        out += ["--interface", f"depth_camera=skillbus.perception.depth_camera:{c['name']}:{c.get('noise_stddev_m', 0)}"]
+    return out
+
+
 def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, lockstep: bool = True,
-             stop_after_task: bool = True, extra_sim: tuple[str, ...] = (), frame_ms: float = FRAME_MS) -> list[Program]:
+             stop_after_task: bool = True, extra_sim: tuple[str, ...] = (), frame_ms: float = FRAME_MS,
+             perception: bool = False) -> list[Program]:
     """The processes, in start order. `task` is started at the manager's first tick.
     Every path is absolute: supervisord runs the programs in the repository's folder,
     not where the run folder was named."""
@@ -73,12 +90,12 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         mgr += ["--start", task]
         if lockstep and stop_after_task:  # the task's end ends the session (10 frames of grace), through lockstep
             mgr += ["--end-session-after-task", "10"]
-    # The robot interfaces, each named: the arm and the camera (the robot's channels, which
-    # the physics server or real drivers serve) and the CANopen gripper. The camera is its
-    # own interface, not implied by --arm: a robot may have an arm without a camera, or a
-    # camera from another driver.
-    skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm",
-              "--interface", "camera=skillbus.robot.camera", "--gripper", f"{can}:5"]
+    # The robot interfaces, each named: the arm and the cameras (the robot's channels and
+    # the depth camera's, which the physics server or real drivers serve) and the CANopen
+    # gripper. A camera is its own interface, not implied by --arm: a robot may have an
+    # arm without a camera, or a camera from another driver.
+    skills = [*py, "skills-process", "--name", "skills", "--world-model", "--arm", *locate_camera(scene, perception),
+              "--gripper", f"{can}:5"]
     for lib in LIBRARIES:
         skills += ["--library", lib]
     if lockstep:

@@ -130,3 +130,38 @@ class DepthCamera:
         self._answers[request_id] = a
         while len(self._answers) > self._keep:  # (answers nobody collected)
             del self._answers[next(iter(self._answers))]
+
+
+class DepthCameraInterface:
+    """A skill process's depth camera (``--interface depth_camera=skillbus.perception.
+    depth_camera:CAMERA[:NOISE_M]``): the camera Locate asks, and the range noise its
+    segmentation allows for (the camera's noise_stddev_m; 0 by default)."""
+
+    def __init__(self, camera: DepthCamera, name: str, noise_m: float = 0.0) -> None:
+        self.camera, self.name, self.noise_m = camera, name, noise_m
+
+
+def interface(bus: Bus, participant: Any = None, arg: str = "", **options: Any) -> DepthCameraInterface:
+    """The depth camera interface (skillbus.robot.interfaces): `arg` is CAMERA[:NOISE_M]."""
+    name, _, noise = arg.partition(":")
+    if not name:
+        raise CameraError("the depth camera interface needs the camera's name: "
+                          "depth_camera=skillbus.perception.depth_camera:CAMERA[:NOISE_M]")
+    try:
+        noise_m = float(noise) if noise else 0.0
+    except ValueError:
+        raise CameraError(f"depth camera {name}: the noise must be a number of metres, not {noise!r}") from None
+    if not noise_m >= 0:
+        raise CameraError(f"depth camera {name}: the noise must be >= 0 m")
+    # Request ids name the process (under lockstep they are in the session's messages).
+    client = participant.name if participant is not None else "camera-client"
+    return DepthCameraInterface(DepthCamera(bus, participant, name=client), name, noise_m)
+
+
+def depth_camera() -> DepthCameraInterface | None:
+    """The process's depth camera interface, or None when it has none."""
+    from skillbus.robot import interfaces
+    try:
+        return interfaces.get("depth_camera", hint="--interface depth_camera=skillbus.perception.depth_camera:CAMERA")
+    except interfaces.InterfaceError:
+        return None

@@ -5,8 +5,10 @@ objects").
    of the returns within 3 mm of it): a table top or a bin's floor seen from above.
 2. The objects: returns between `min_height` and `max_height` over the support and over
    its footprint, split into connected regions of the image (4-neighbours).
-3. Each region's top face (its returns near its highest), and the top face's outline in
-   the image (pixels with a neighbour off the face). A rectangle is fitted to the outline:
+3. Each region's top faces (its returns near its highest, apart in the image: objects side
+   by side make one region, bridged by a side face seen at a slant, but two top faces), and
+   each top face's outline in the image (pixels with a neighbour off the face). A
+   rectangle is fitted to the outline:
    the smallest-area rectangle around the face first, then least squares of the outline's
    distances to the rectangle's sides (centre, yaw and half sizes), which averages out the
    pixel staircase of a slanted edge.
@@ -168,12 +170,21 @@ def _normal_yaw(yaw: float, a: float, b: float) -> tuple[float, float, float]:
 
 
 def detect(cloud: Cloud, *, min_height: float = 0.008, max_height: float = 0.3, min_points: int = 12,
-           noise_m: float = 0.0) -> Scene:
+           noise_m: float = 0.0, around: tuple[float, float] | None = None, radius: float = 0.35,
+           sides: tuple[float, float] = (0.015, 0.15)) -> Scene:
     """The objects on the support surface the cloud sees most of (see the module's text).
-    `noise_m`: the camera's range noise (its standard deviation), which widens the
-    tolerances."""
+
+    `around`: only returns within `radius` (m, in x and y) of this point count, for the
+    support and the objects: one place of a scene (a table, a bin) when the camera sees
+    several. `sides`: a found box whose footprint's sides are not within these (m) is not
+    an object (a bin's wall, the edge of something under the view). `noise_m`: the
+    camera's range noise (its standard deviation), which widens the tolerances."""
     grid = world_grid(cloud)
     valid = ~np.isnan(grid[..., 2]) & ~cloud.on_robot  # (the self filter: never an object, never the support)
+    if around is not None:
+        valid &= np.hypot(grid[..., 0] - around[0], grid[..., 1] - around[1]) <= radius
+        if not valid.any():
+            raise SegmentError(f"the camera sees nothing within {radius} m of ({around[0]:.3f}, {around[1]:.3f})")
     z = grid[..., 2]
     support = support_height(z[valid])
     tol = 0.003 + 3 * noise_m
@@ -191,23 +202,40 @@ def detect(cloud: Cloud, *, min_height: float = 0.008, max_height: float = 0.3, 
         pts = grid[region[:, 0], region[:, 1]]
         zt = float(np.percentile(pts[:, 2], 90))
         face = pts[:, 2] >= zt - tol
-        top = float(np.median(pts[face, 2]))
-        mask = np.zeros(above.shape, dtype=bool)
-        rows, cols = region[face, 0], region[face, 1]
-        mask[rows, cols] = True
-        padded = np.pad(mask, 1)
-        interior = padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
-        edge_px = mask & ~interior
-        edge = grid[edge_px][:, :2]
-        face_xy = pts[face, :2]
-        if len(face_xy) < 3 or len(edge) < 6:
-            continue
-        centre, yaw, a, b = _min_area_rect(face_xy)
-        centre, yaw, a, b = _fit_rect(edge, centre, yaw, a, b)
-        depth = float(np.median(cloud.points[rows, cols, 2]))
-        half_pixel = 0.5 * depth / fx
-        yaw, a, b = _normal_yaw(yaw, a + half_pixel, b + half_pixel)
-        height = top - support
-        out.append(Detection((float(centre[0]), float(centre[1]), support + height / 2), yaw,
-                             (2 * a, 2 * b, height), int(len(region))))
+        faces = np.zeros(above.shape, dtype=bool)
+        faces[region[face, 0], region[face, 1]] = True
+        # Objects side by side make one region (a side face seen at a slant bridges the gap
+        # between them) but their top faces are apart: one object per top face.
+        for top_face in _components(faces):
+            if len(top_face) < min_points:
+                continue
+            d = _box(cloud, grid, above.shape, top_face, support, fx, sides)
+            if d is not None:
+                out.append(d)
     return Scene(support, out)
+
+
+def _box(cloud: Cloud, grid: np.ndarray, shape: tuple, face_px: np.ndarray, support: float, fx: float,
+         sides: tuple[float, float]) -> Detection | None:
+    """The box under one top face (its pixels `face_px`), or None when it is no object."""
+    rows, cols = face_px[:, 0], face_px[:, 1]
+    top = float(np.median(grid[rows, cols, 2]))
+    mask = np.zeros(shape, dtype=bool)
+    mask[rows, cols] = True
+    padded = np.pad(mask, 1)
+    interior = padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
+    edge_px = mask & ~interior
+    edge = grid[edge_px][:, :2]
+    face_xy = grid[rows, cols, :2]
+    if len(face_xy) < 3 or len(edge) < 6:
+        return None
+    centre, yaw, a, b = _min_area_rect(face_xy)
+    centre, yaw, a, b = _fit_rect(edge, centre, yaw, a, b)
+    depth = float(np.median(cloud.points[rows, cols, 2]))
+    half_pixel = 0.5 * depth / fx
+    yaw, a, b = _normal_yaw(yaw, a + half_pixel, b + half_pixel)
+    height = top - support
+    if not (sides[0] <= 2 * b and 2 * a <= sides[1]):
+        return None
+    return Detection((float(centre[0]), float(centre[1]), support + height / 2), yaw, (2 * a, 2 * b, height),
+                     int(len(face_px)))

@@ -17,6 +17,10 @@ import time
 from skillbus import tick_context
 from skillbus.robot import arm as arm_service
 from skillbus.robot import camera as camera_service
+from skillbus.perception import depth_camera as depth_service
+from skillbus.perception.depth_camera import CameraError
+from skillbus.perception.segment import SegmentError, detect
+from skillbus.skills.perceived import Known, match
 from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SelectorStar,
                             SerialStar, SkillBase, SkillDescription)
 from skillbus.msgs import wm_op_t
@@ -30,6 +34,7 @@ DOWN = (0.0, 1.0, 0.0, 0.0)  # tool z pointing down: half a turn about y
 MOVE_TIMEOUT_S = 20.0
 APPROACH, GRASP_HEIGHT, LIFT = 0.10, 0.005, 0.10      # m, tool above the object's centre
 BIN_ABOVE, BIN_RELEASE = 0.45, 0.30                     # m, tool above the bin's origin
+BIN_RADIUS = 0.15  # m: what a depth camera's Locate in a bin looks at (the demo bin's inside, 0.30 m square)
 
 
 def top_down(yaw: float) -> tuple[float, float, float, float]:
@@ -50,6 +55,8 @@ def command_id(label: str) -> str:
 class Locate(SkillDescription):
     def createDescription(self):
         self.addParam("Location", Element("skiros:Location"), ParamTypes.Required)
+        self.addParam("Radius", 0.35, ParamTypes.Optional,
+                      description="depth camera: look for objects within this distance of the Location's origin, m")
 
 
 class MoveArm(SkillDescription):
@@ -105,17 +112,31 @@ class ClearTable(SkillDescription):
 
 # -- primitives -----------------------------------------------------------------------
 class locate(PrimitiveBase):
-    """Every object the robot's camera sees (the process's camera interface) is written
-    into the world model with its pose: known elements (by label) are updated, and moved
-    into what the camera sees them rest on (its support, by label: a table, a bin, the
-    gripper) when the world model says otherwise; unknown ones are added as products
-    contained in the Location. Finishes when its replica shows it all."""
+    """Writes what the robot sees into the world model, and finishes when its replica
+    shows it all.
+
+    With a depth camera (the process's depth_camera interface) it asks for one capture,
+    finds the objects on the Location in the cloud (skillbus.perception.segment) and
+    writes their perceived poses: each matched to the world model's object on the
+    Location nearest to it (skillbus.skills.perceived); one that matches none is added as
+    a new product on the Location.
+
+    Otherwise every object the camera interface reports (detections by name, such as the
+    physics server's perfect camera) is written with its pose: known elements (by label)
+    are updated, and moved into what the camera sees them rest on (its support, by label:
+    a table, a bin, the gripper) when the world model says otherwise; unknown ones are
+    added as products contained in the Location."""
+
+    CLOUD_TIMEOUT_S = 2.0  # sim time from the request to the whole cloud
 
     def createDescription(self):
         self.setDescription(Locate(), "locate")
 
     def onStart(self):
-        self.camera = camera_service.camera()
+        self.depth = depth_service.depth_camera()
+        self.camera = None if self.depth is not None else camera_service.camera()
+        self.request: str | None = None
+        self.asked_at = 0.0
         self.expected: dict[str, tuple] = {}
         self.adding: dict[int, tuple] = {}  # lockstep: request id -> (name, position, orientation)
         self.added: list[str] = []
@@ -146,9 +167,58 @@ class locate(PrimitiveBase):
         self.wmi.write([world_pose_op(self.wmi, support.id, *tool),
                         *reparent_ops(self.wmi, eid, support.id, (p, q), parent_pose=tool)])
 
+    def _perceive(self, location: str):
+        """The depth camera's path: ask, wait for the cloud, find and match the objects
+        and write them. Returns the skill's state while that is not done, else None."""
+        if not self.started:
+            self.started = True
+            self.request = self.depth.camera.request(self.depth.name)
+            self.asked_at = tick_context.now_s()
+            return self.step(f"capturing with camera {self.depth.name}")
+        if self.request is None:
+            return None
+        try:
+            cloud = self.depth.camera.answer(self.request)
+        except CameraError as e:
+            return self.fail(f"locate: camera {self.depth.name} refused the capture: {e}", -1)
+        if cloud is None:
+            if tick_context.now_s() - self.asked_at > self.CLOUD_TIMEOUT_S:
+                return self.fail(f"locate: no cloud from camera {self.depth.name} within {self.CLOUD_TIMEOUT_S} s "
+                                 f"of sim time (is it in the physics server's scene?)", -1)
+            return self.step(f"waiting for camera {self.depth.name}'s cloud")
+        self.request = None
+        radius = float(self.params["Radius"].value)
+        try:
+            seen = detect(cloud, noise_m=self.depth.noise_m, around=world_pose(self.wmi, location)[0][:2],
+                          radius=radius)
+        except SegmentError as e:
+            return self.fail(f"locate: {e}", -1)
+        known = []
+        for e in self.wmi.get_elements():
+            if e.id == location or parent_of(self.wmi, e.id) != location:
+                continue
+            size = e.getProperty("skiros:Size").value if e.hasProperty("skiros:Size") else None
+            known.append(Known(e.id, world_pose(self.wmi, e.id)[0], float(size) if size is not None else None))
+        m = match(known, seen.detections)
+        for k, d in m.matches:
+            set_world_pose(self.wmi, k.id, d.position, d.quaternion())
+            self.expected[k.id] = (d.position, None)
+        for d in m.new:
+            self._add(f"object-{round(d.position[0] * 1000)}-{round(d.position[1] * 1000)}", d.position,
+                      d.quaternion(), location)
+        if not self.expected and not self.adding:
+            return self.fail(f"located nothing (camera {self.depth.name} sees no objects on the support at "
+                             f"z {seen.support_z:.3f} m)", -1)
+        self.unseen = [k.id for k in m.unseen]
+        return self.step(f"writing {len(self.expected) + len(self.adding)} perceived pose(s)")
+
     def execute(self):
         location = self.params["Location"].value.id
-        if not self.started:
+        if self.depth is not None:
+            state = self._perceive(location)
+            if state is not None:
+                return state
+        elif not self.started:
             self.started = True
             by_label = {e.label: e for e in self.wmi.get_elements() if e.label}
             for o in self.camera.objects():
@@ -193,6 +263,8 @@ class locate(PrimitiveBase):
             if max(abs(a - b) for a, b in zip(got, p)) > 1e-4 or (parent and parent_of(self.wmi, eid) != parent):
                 return self.step(f"waiting for the world model to show {eid}")
         extra = f"; new: {', '.join(self.added)}" if self.added else ""
+        if getattr(self, "unseen", None):
+            extra += f"; not seen: {', '.join(self.unseen)}"
         return self.success(f"located {len(self.expected)} object(s){extra}")
 
 
@@ -297,7 +369,7 @@ class place(SkillBase):
             self.skill("LiftArm", "", specify={"Height": LIFT}),
             # The object fell from the fingers (released BIN_RELEASE above the location's
             # origin): the world model learns where it landed from an observation.
-            self.skill("Locate", ""),
+            self.skill("Locate", "", specify={"Radius": BIN_RADIUS}),
         )
 
 
@@ -356,5 +428,5 @@ class clear_table(SkillBase):
         skill(
             self.skill("Locate", "", remap={"Location": "Table"}),
             self.skill("TransferProducts", "", remap={"From": "Table", "To": "Bin"}),
-            self.skill("Locate", "", remap={"Location": "Bin"}),
+            self.skill("Locate", "", remap={"Location": "Bin"}, specify={"Radius": BIN_RADIUS}),
         )
