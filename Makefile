@@ -83,6 +83,7 @@ bench: build
 	$(PY) bench/can_latency.py
 	$(PY) bench/pick_and_place.py
 	$(PY) bench/dds_transport.py
+	$(BUILD)/bench/perception_bench
 
 clean:
 	rm -rf $(BUILD)

@@ -38,7 +38,12 @@ float float_at(const std::vector<uint8_t>& b, size_t i) {
 
 }  // namespace
 
-std::optional<WorldCloud> CloudParts::add(const skillbus_msgs::camera_cloud_t& m) {
+int ray_stride(double voxel, double fx, double depth) {
+  if (!(voxel > 0) || !(fx > 0) || !(depth > 0)) return 1;
+  return std::max(1, static_cast<int>(std::lround(voxel * fx / depth)));
+}
+
+std::optional<WorldCloud> CloudParts::add(const skillbus_msgs::camera_cloud_t& m, double voxel) {
   if (!m.error.empty()) return std::nullopt;
   check(m);
   const auto key = std::make_pair(m.camera, m.capture);
@@ -74,6 +79,16 @@ std::optional<WorldCloud> CloudParts::add(const skillbus_msgs::camera_cloud_t& m
   out.origin = {t.x(), t.y(), t.z()};
   const double fx = m.intrinsics[0], fy = m.intrinsics[1], cx = m.intrinsics[2], cy = m.intrinsics[3];
   if (!(fx > 0 && fy > 0)) throw std::invalid_argument("capture of camera '" + m.camera + "': focal length <= 0");
+  // The depth of the nearer returns (the first quartile), for the stride: where the rays
+  // are densest per voxel (the floor beyond a table is seen more thinly).
+  std::vector<float> depths;
+  for (const auto& [i, p] : whole)
+    for (size_t k = 2; k < p.points.size() / 4; k += 3)
+      if (!std::isnan(float_at(p.points, k))) depths.push_back(float_at(p.points, k));
+  if (!depths.empty()) {
+    std::nth_element(depths.begin(), depths.begin() + depths.size() / 4, depths.end());
+    out.stride = ray_stride(voxel, fx, depths[depths.size() / 4]);
+  }
   int32_t row = 0;
   for (const auto& [i, p] : whole) {
     if (p.row_start != row)
@@ -82,6 +97,7 @@ std::optional<WorldCloud> CloudParts::add(const skillbus_msgs::camera_cloud_t& m
                                   std::to_string(row));
     for (int32_t r = 0; r < p.num_rows; ++r)
       for (int32_t u = 0; u < p.width; ++u) {
+        if ((p.row_start + r) % out.stride != 0 || u % out.stride != 0) continue;
         const size_t px = static_cast<size_t>(r) * p.width + u, k = px * 3;
         // The robot's own returns (the self filter) are left out: the map is the world's.
         if (p.robot_mask[px / 8] & (1u << (px % 8))) continue;

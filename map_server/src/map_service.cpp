@@ -133,7 +133,7 @@ void MapService::on_cloud_part(const uint8_t* data, size_t size, const std::stri
   }
   if (!opt_.cameras.empty() && !opt_.cameras.count(m.camera)) return;
   try {
-    auto cloud = parts_.add(m);
+    auto cloud = parts_.add(m, map_.resolution());
     if (!cloud) return;
     map_.insert(cloud->hits, cloud->misses, cloud->origin, cloud->far);
     ++clouds_;

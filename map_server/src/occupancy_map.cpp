@@ -54,7 +54,10 @@ void OccupancyMap::insert(const std::vector<Vec3>& hits, const std::vector<Vec3>
   for (const auto& m : misses) cloud.push_back(pt(m));
   // Beams longer than max_range are cut there and mark only free space: the misses.
   // (OctoMap without OpenMP, as Debian builds it: the update does not depend on threads.)
-  impl_->tree.insertPointCloud(cloud, pt(origin), max_range, false, true);
+  // Lazy: the inner nodes are brought up to date once, after every voxel is (for each
+  // voxel touched, not once per ray).
+  impl_->tree.insertPointCloud(cloud, pt(origin), max_range, true, true);
+  impl_->tree.updateInnerOccupancy();
 }
 
 Cell OccupancyMap::state(const Vec3& p) const {
