@@ -69,6 +69,16 @@ MapService::MapService(Bus& bus, ServiceOptions options)
       throw RpcBadRequest(std::string("free_area: ") + e.what());
     }
   });
+  method("free_spots", [this](const map_query_t& q, map_reply_t& r) {
+    check_finite(q, false, true);
+    try {
+      for (const auto& s : map_.free_spots(vec(q.box_min), vec(q.box_max), q.footprint[0], q.footprint[1], q.clearance))
+        r.spots.push_back({s[0], s[1], s[2]});
+    } catch (const std::invalid_argument& e) {
+      throw RpcBadRequest(std::string("free_spots: ") + e.what());
+    }
+    r.num_spots = static_cast<int32_t>(r.spots.size());
+  });
   method("save", [this](const map_query_t& q, map_reply_t& r) {
     r.file = file_of(q.name);
     map_.save(r.file);

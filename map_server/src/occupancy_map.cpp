@@ -107,6 +107,26 @@ double OccupancyMap::free_area(const Vec3& lo, const Vec3& hi, double* area) con
   return free_columns * cell;
 }
 
+std::vector<Vec3> OccupancyMap::free_spots(const Vec3& lo, const Vec3& hi, double footprint_x, double footprint_y,
+                                           double clearance, double max_unknown, size_t limit) const {
+  if (!(footprint_x > 0) || !(footprint_y > 0) || !(clearance >= 0) || !std::isfinite(footprint_x + footprint_y + clearance))
+    throw std::invalid_argument("free_spots: the footprint must be > 0 and the clearance >= 0 (m)");
+  key_box(impl_->tree, lo, hi);  // (the same checks as a box)
+  const double r = resolution(), hx = footprint_x / 2 + clearance, hy = footprint_y / 2 + clearance;
+  std::vector<Vec3> out;
+  // Centres whose footprint and clearance lie inside the box, a voxel apart.
+  const int nx = static_cast<int>(std::floor((hi[0] - lo[0] - 2 * hx) / r + 1e-9));
+  const int ny = static_cast<int>(std::floor((hi[1] - lo[1] - 2 * hy) / r + 1e-9));
+  for (int j = 0; j <= ny && out.size() < limit; ++j)
+    for (int i = 0; i <= nx && out.size() < limit; ++i) {
+      const double x = lo[0] + hx + i * r, y = lo[1] + hy + j * r;
+      const BoxCounts c = box({x - hx, y - hy, lo[2]}, {x + hx, y + hy, hi[2]});
+      const int64_t all = c.occupied + c.free + c.unknown;
+      if (c.occupied == 0 && all > 0 && c.unknown <= max_unknown * all) out.push_back({x, y, lo[2]});
+    }
+  return out;
+}
+
 void OccupancyMap::save(const std::string& path) const {
   if (!impl_->tree.writeBinary(path)) throw std::runtime_error("cannot write the map to " + path);
 }

@@ -14,6 +14,7 @@ digests. Exit code 0 when the task succeeded and every cube is in the bin in bot
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -40,6 +41,16 @@ def _last_json(path: Path) -> dict[str, Any]:
         return last_json(path.read_text()) or {}
     except OSError:
         return {}
+
+
+MIN_GAP = 0.03  # m: no two objects' centres closer at the end (one pushed into another, or in one place)
+
+
+def closest_pair(objects: dict[str, list[float]]) -> float:
+    """The smallest distance between two objects' centres (m; infinity for fewer than two)."""
+    names = sorted(objects)
+    return min((math.dist(objects[a][:3], objects[b][:3]) for i, a in enumerate(names) for b in names[i + 1:]),
+               default=math.inf)
 
 
 def in_bin(p: list[float], robots: int = 1) -> bool:
@@ -262,8 +273,10 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     physics = sim.get("objects", {})
     result["task"] = tasks[managers[0]]
     result["tasks"] = tasks
+    result["closest_m"] = closest_pair(physics)
     result["ok"] = (all(t.startswith("Success") for t in tasks.values()) and bool(physics)
                     and all(in_bin(p, robots) for p in physics.values())
+                    and result["closest_m"] > MIN_GAP
                     and all(w["in_type"] == "skiros:Bin" for w in result["world_model"].values())
                     and len(result["world_model"]) == len(physics)
                     and sim.get("robot_contact_steps", 0) == 0)
@@ -287,6 +300,7 @@ def print_summary(r: dict[str, Any]) -> None:
     print(f"  wall time         {sim.get('wall_time_s', 0):.2f} s (the lockstep session; "
           f"{r['wall_launch_s']:.1f} s with launch and shutdown)")
     print(f"  real-time factor  {sim.get('real_time_factor', 0):.1f}x")
+    print(f"  closest objects   {100 * r.get('closest_m', 0):.1f} cm apart (centres; at least {100 * MIN_GAP:.0f})")
     print(f"  physics           {sim.get('physics_us_per_step', 0):.0f} us per step ({sim.get('steps', 0)} steps), "
           f"{sim.get('collision_detector', '?')} collision detector")
     print("  objects           world model                      physics server (x, y, z)")

@@ -58,6 +58,7 @@ def locate_camera(scene: Path, perception: bool) -> list[str]:
     out = ["--interface", "camera=skillbus.robot.camera"]
     if not perception:
         return out
+    out += ["--interface", "map=skillbus.perception.map_client"]
     cameras = [c for c in json.loads(Path(scene).read_text()).get("cameras", []) if not c.get("robot")]
     if cameras:
         c = cameras[0]
@@ -80,7 +81,8 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     if lockstep:
         sim.append("--pipeline")
     if lockstep:
-        sim += ["--participants", ",".join(PARTICIPANTS), "--join-timeout-ms", "60000"]
+        # With perception the occupancy map is a participant (its answers as of a frame).
+        sim += ["--participants", ",".join(PARTICIPANTS + (["map"] if perception else [])), "--join-timeout-ms", "60000"]
     else:
         sim += ["--wall-clock"]
     sim += list(extra_sim)
@@ -102,10 +104,14 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         skills.append("--lockstep")
     device = [*py, "gripper-device", "--channel", can, "--node-id", "5", "--name", "gripper"]
     device += ["--lockstep"] if lockstep else ["--physics"]
+    mapper = [Program("map", [str(paths.binary("map_server")),
+                              *(["--lockstep", "map", "--exit-with-session"] if lockstep else []),
+                              "--maps", str(run_dir)], participant=lockstep)] if perception else []
     return [
         Program("can_hub", [*py, "can-hub", "--channel", can]),
         Program("sim", sim),
         Program("motion", [str(paths.binary("motion_server")), "--scene", str(scene)]),
+        *mapper,
         Program("wm", [str(paths.binary("wm_server")), *clock, "--data", str(run_dir / "wm"), "--scene", str(ttl)],
                 participant=True),
         Program("gripper", device, participant=True),

@@ -43,13 +43,16 @@ class MapClient:
 
     @staticmethod
     def _query(points: Iterable[Sequence[float]] = (), lo: Sequence[float] | None = None,
-               hi: Sequence[float] | None = None, name: str = "") -> map_query_t:
+               hi: Sequence[float] | None = None, name: str = "", footprint: Sequence[float] = (0.0, 0.0),
+               clearance: float = 0.0) -> map_query_t:
         q = map_query_t()
         q.points = [_triple(p, "a point") for p in points]
         q.num_points = len(q.points)
         q.box_min = _triple(lo, "the box's min") if lo is not None else [0.0] * 3
         q.box_max = _triple(hi, "the box's max") if hi is not None else [0.0] * 3
         q.name = name
+        q.footprint = [float(footprint[0]), float(footprint[1])]
+        q.clearance = float(clearance)
         return q
 
     def info(self) -> dict[str, Any]:
@@ -70,6 +73,14 @@ class MapClient:
         rep = self._call("free_area", self._query(lo=lo, hi=hi))
         return rep.free_area_m2, rep.area_m2
 
+    def free_spots(self, lo: Sequence[float], hi: Sequence[float], footprint: Sequence[float],
+                   clearance: float = 0.01) -> list[tuple[float, float, float]]:
+        """Where a footprint (x, y sides, m) with `clearance` around it fits in the box, by
+        what the cameras saw (no occupied voxel, few unknown): centres at the box's bottom,
+        row by row from its low x and y corner."""
+        rep = self._call("free_spots", self._query(lo=lo, hi=hi, footprint=footprint, clearance=clearance))
+        return [tuple(s) for s in rep.spots]
+
     def save(self, name: str) -> str:
         return self._call("save", self._query(name=name)).file
 
@@ -83,3 +94,18 @@ class MapClient:
 def reply_dict(r: map_reply_t) -> dict[str, Any]:
     return {"frame": r.frame, "resolution": r.resolution, "clouds": r.clouds, "leaves": r.leaves,
             "captures": dict(zip(r.cameras, r.captures)), **({"file": r.file} if r.file else {})}
+
+
+def interface(bus: Bus, participant: Any = None, arg: str = "", **options: Any) -> MapClient:
+    """The occupancy map interface of a skill process (``--interface map=skillbus.perception.
+    map_client``): queries as of the asking tick's frame. `arg` is unused."""
+    return MapClient(bus, participant, name=participant.name if participant is not None else "map-client")
+
+
+def occupancy_map() -> MapClient | None:
+    """The process's map interface, or None when it has none."""
+    from skillbus.robot import interfaces
+    try:
+        return interfaces.get("map")
+    except interfaces.InterfaceError:
+        return None

@@ -18,6 +18,7 @@ from skillbus import tick_context
 from skillbus.robot import arm as arm_service
 from skillbus.robot import camera as camera_service
 from skillbus.perception import depth_camera as depth_service
+from skillbus.perception import map_client as map_service
 from skillbus.perception.depth_camera import CameraError
 from skillbus.perception.segment import SegmentError, detect
 from skillbus.skills.perceived import Known, match
@@ -35,6 +36,8 @@ MOVE_TIMEOUT_S = 20.0
 APPROACH, GRASP_HEIGHT, LIFT = 0.10, 0.005, 0.10      # m, tool above the object's centre
 BIN_ABOVE, BIN_RELEASE = 0.45, 0.30                     # m, tool above the bin's origin
 BIN_RADIUS = 0.15  # m: what a depth camera's Locate in a bin looks at (the demo bin's inside, 0.30 m square)
+BIN_FLOOR_CLEAR, SPOT_CLEARANCE = 0.035, 0.015  # m: a spot's column starts over the bin's floor (mid-voxel: clear of the floor's top voxel, 0.02-0.03); free margin around it
+BIN_RELEASE_AT_SPOT = 0.14  # m, tool above the bin's origin: a held 5 cm cube's bottom 6 cm over its floor
 
 
 def top_down(yaw: float) -> tuple[float, float, float, float]:
@@ -65,6 +68,9 @@ class MoveArm(SkillDescription):
         self.addParam("Target", Element("skiros:PhysicalObject"), ParamTypes.Required)
         self.addParam("Height", 0.1, ParamTypes.Optional, description="tool above the target's origin, m")
         self.addParam("Cartesian", False, ParamTypes.Optional, description="along a straight line")
+        self.addParam("Spot", 0.0, ParamTypes.Optional,
+                      description="> 0: over a free spot of the Target for a footprint this wide (m), from the "
+                                  "occupancy map (the map interface), not over its origin")
 
 
 class LiftArm(SkillDescription):
@@ -268,6 +274,27 @@ class locate(PrimitiveBase):
         return self.success(f"located {len(self.expected)} object(s){extra}")
 
 
+class NoSpot(RuntimeError):
+    pass
+
+
+def free_spot(location: str, origin: tuple, footprint: float) -> tuple[float, float]:
+    """The first free spot for a footprint in a bin (BIN_RADIUS around its origin, from
+    BIN_FLOOR_CLEAR over its floor up by the footprint), by the occupancy map as of this
+    tick's frame: the same on every run, and the same for every move of one placing (the
+    map changes only when a cloud comes in, at a Locate)."""
+    world = map_service.occupancy_map()
+    if world is None:
+        raise NoSpot("Spot needs the occupancy map: --interface map=skillbus.perception.map_client")
+    lo = (origin[0] - BIN_RADIUS, origin[1] - BIN_RADIUS, origin[2] + BIN_FLOOR_CLEAR)
+    hi = (origin[0] + BIN_RADIUS, origin[1] + BIN_RADIUS, origin[2] + BIN_FLOOR_CLEAR + footprint)
+    spots = world.free_spots(lo, hi, (footprint, footprint), clearance=SPOT_CLEARANCE)
+    if not spots:
+        raise NoSpot(f"no free spot in {location} for a {footprint * 100:.1f} cm footprint (the occupancy map: "
+                     f"every place occupied or not seen)")
+    return spots[0][0], spots[0][1]
+
+
 class _ArmMotion(PrimitiveBase):
     """Plans with the motion service, sends the trajectory, waits until the arm settles."""
 
@@ -285,7 +312,12 @@ class _ArmMotion(PrimitiveBase):
 
     def execute(self):
         if self.cmd is None:
-            pose, cartesian, what = self.target()
+            try:
+                pose, cartesian, what = self.target()
+            except NoSpot as e:
+                return self.fail(f"{self.label}: {e}", -1)
+            except RpcError as e:
+                return self.fail(f"{self.label}: the occupancy map did not answer ({e})", -5)
             try:
                 plan = self.arm.plan(pose, cartesian)
             except RpcError as e:  # named here, within the tick, not as a tick that never returned
@@ -325,8 +357,14 @@ class move_arm(_ArmMotion):
         t = self.params["Target"].value
         h = float(self.params["Height"].value)
         p, q = world_pose(self.wmi, t.id)
+        spot = float(self.params["Spot"].value)
+        where = f"{h * 100:.1f} cm above {t.id}"
+        if spot > 0:
+            x, y = free_spot(t.id, p, spot)
+            p = (x, y, p[2])
+            where = f"{h * 100:.1f} cm above a free spot of {t.id} ({x:.3f}, {y:.3f})"
         pose = [p[0], p[1], p[2] + h, *top_down(fold(yaw_of(q)))]
-        return pose, bool(self.params["Cartesian"].value), f"{h * 100:.1f} cm above {t.id}"
+        return pose, bool(self.params["Cartesian"].value), where
 
 
 class lift_arm(_ArmMotion):
@@ -361,12 +399,22 @@ class place(SkillBase):
         self.setDescription(Place(), "place")
 
     def expand(self, skill):
+        # With an occupancy map: down into the location over a free spot of it, released
+        # just above its floor (objects side by side), and back up out of it; else
+        # released over its origin from BIN_RELEASE.
+        spot, release, lift = 0.0, BIN_RELEASE, LIFT
+        if map_service.occupancy_map() is not None:
+            obj = self.params["Object"].value
+            size = obj.getProperty("skiros:Size").value if obj.hasProperty("skiros:Size") else None
+            spot, release = float(size) if size else 0.05, BIN_RELEASE_AT_SPOT
+            lift = BIN_ABOVE - release
         skill.setProcessor(SerialStar())
         skill(
-            self.skill("MoveArm", "", remap={"Target": "Location"}, specify={"Height": BIN_ABOVE}),
-            self.skill("MoveArm", "", remap={"Target": "Location"}, specify={"Height": BIN_RELEASE, "Cartesian": True}),
+            self.skill("MoveArm", "", remap={"Target": "Location"}, specify={"Height": BIN_ABOVE, "Spot": spot}),
+            self.skill("MoveArm", "", remap={"Target": "Location"},
+                       specify={"Height": release, "Cartesian": True, "Spot": spot}),
             self.skill("Release", ""),
-            self.skill("LiftArm", "", specify={"Height": LIFT}),
+            self.skill("LiftArm", "", specify={"Height": lift}),
             # The object fell from the fingers (released BIN_RELEASE above the location's
             # origin): the world model learns where it landed from an observation.
             self.skill("Locate", "", specify={"Radius": BIN_RADIUS}),

@@ -44,6 +44,14 @@ class OccupancyMap {
   // cameras have seen. `area`, if given, gets the footprint's whole area.
   double free_area(const Vec3& lo, const Vec3& hi, double* area = nullptr) const;
 
+  // Where a footprint (x, y sides, m) with `clearance` around it fits in the box: the
+  // centres (at the box's bottom) on a grid of the map's resolution, row by row from the
+  // box's low x and y corner, whose footprint-plus-clearance column over the box's height
+  // has no occupied voxel and at most `max_unknown` of its voxels unknown. At most
+  // `limit`. Throws std::invalid_argument as box() does, or for a footprint <= 0.
+  std::vector<Vec3> free_spots(const Vec3& lo, const Vec3& hi, double footprint_x, double footprint_y,
+                               double clearance, double max_unknown = 0.2, size_t limit = 64) const;
+
   // OctoMap's binary format (.bt: each voxel free or occupied, the probabilities
   // thresholded). Throw std::runtime_error naming the file.
   void save(const std::string& path) const;
