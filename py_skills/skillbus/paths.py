@@ -40,7 +40,7 @@ def binary(name: str) -> Path:
     >>> binary("wm")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
         ...
-    KeyError: "no program 'wm' in the build; the programs: codec_peer, motion_server, ..."
+    KeyError: "no program 'wm' in the build; the programs: codec_peer, map_server, ..."
     """
     if name not in _PROGRAMS:
         raise KeyError(f"no program {name!r} in the build; the programs: {', '.join(sorted(_PROGRAMS))}")
