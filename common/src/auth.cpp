@@ -162,6 +162,7 @@ bool glob_match(const std::string& p, const std::string& s) {
 
 Policy Policy::parse(const std::string& text, const std::string& source) {
   Policy out;
+  out.source_ = source;
   const char* ns = std::getenv("SKILLBUS_NAMESPACE");
   out.namespace_ = ns ? ns : "";
   std::istringstream in(text);
@@ -349,12 +350,22 @@ AuthenticatedBus::AuthenticatedBus(std::unique_ptr<Bus> inner, std::vector<Key> 
                                    std::shared_ptr<const Policy> policy)
     : inner_(std::move(inner)),
       identity_(std::move(identity)),
+      policy_(policy),
       sealer_(keys.front(), identity_),
       opener_(std::move(keys), std::move(policy)) {}
 
 void AuthenticatedBus::publish(const std::string& channel, const void* data, size_t size) {
+  if (policy_ && !may_send(channel))
+    throw BusError("the bus policy " + policy_->source() + " does not let '" + identity_ + "' send on " + channel +
+                   ": every receiver would drop it (add a rule for it; docs/security.md)");
   const Bytes sealed = sealer_.seal(channel, data, size);
   inner_->publish(channel, sealed.data(), sealed.size());
+}
+
+bool AuthenticatedBus::may_send(const std::string& channel) {
+  if (auto it = may_send_.find(channel); it != may_send_.end()) return it->second;
+  if (may_send_.size() > 4096) may_send_.clear();  // (a process sends on few channels; bounded anyway)
+  return may_send_[channel] = policy_->allows(identity_, channel);
 }
 
 int AuthenticatedBus::subscribe(const std::string& channel, Handler handler, int queue_capacity) {

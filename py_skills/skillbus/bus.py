@@ -452,7 +452,7 @@ class AuthenticatedBus(Bus):
 
     def __init__(self, inner: Bus, keys: list[bytes], identity: str, rules=None) -> None:
         from skillbus import auth
-        self.inner, self.identity = inner, identity
+        self.inner, self.identity, self._rules = inner, identity, rules
         self._sealer = auth.Sealer(keys[0], identity)
         self._opener = auth.Opener(keys, policy=rules)
         self._rejected_type = auth.Rejected
@@ -470,6 +470,13 @@ class AuthenticatedBus(Bus):
         return self._opener.stats
 
     def publish(self, channel: str, data: bytes) -> None:
+        """Raises BusError when the policy does not let this identity send on the
+        channel: every receiver would drop the message (and a lockstep frame would wait
+        for it, then fail as "message lost"); refused here, the sender names the rule it
+        lacks. As common/src/auth.cpp."""
+        if self._rules is not None and not self._rules.allows(self.identity, channel):
+            raise BusError(f"the bus policy {self._rules.source} does not let '{self.identity}' send on {channel}: "
+                           f"every receiver would drop it (add a rule for it; docs/security.md)")
         self.inner.publish(channel, self._sealer.seal(channel, bytes(data)))
 
     def subscribe(self, channel: str, handler: Handler,

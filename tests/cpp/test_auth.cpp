@@ -174,6 +174,25 @@ TEST(Auth, TheBusDeliversOnlyWhatVerifies) {
   EXPECT_EQ(stats_of(bus)->rejected.at("unsigned"), 1u);
 }
 
+// A process may not send what the policy does not let it: every receiver would drop it
+// (and a lockstep frame would wait for it, then fail as "message lost"); the send fails
+// at once, naming the policy, the identity and the channel.
+TEST(Auth, SendingWhatThePolicyForbidsFailsAtTheSender) {
+  auto policy = std::make_shared<const Policy>(Policy::parse("SB_CAMERA_CLOUD sim\nSB_*_REQ *\n", "deploy/policy.conf"));
+  AuthenticatedBus bus(open_bus("memq://"), {key_of(0)}, "skills", policy);
+  bus.publish("SB_WM_REQ", "ok", 2);  // allowed to everyone
+  try {
+    bus.publish("SB_CAMERA_CLOUD", "no", 2);
+    FAIL() << "published";
+  } catch (const BusError& e) {
+    EXPECT_STREQ(e.what(), "the bus policy deploy/policy.conf does not let 'skills' send on SB_CAMERA_CLOUD: every "
+                           "receiver would drop it (add a rule for it; docs/security.md)");
+  }
+  EXPECT_THROW(bus.publish("SB_NOBODY", "no", 2), BusError);  // (no rule: refused)
+  AuthenticatedBus sim(open_bus("memq://"), {key_of(0)}, "sim", policy);
+  sim.publish("SB_CAMERA_CLOUD", "ok", 2);
+}
+
 TEST(Auth, TheReplayWindowSpansWords) {
   // Counters far apart (several 64-bit words of the window): each is taken once, a skipped
   // one late is taken, and everything beyond the window's 4,096 is refused.

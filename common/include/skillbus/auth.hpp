@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -39,8 +40,10 @@ class Policy {
   static Policy parse(const std::string& text, const std::string& source);  // throws BusError
   static Policy load(const std::string& path);                              // throws BusError
   bool allows(const std::string& identity, const std::string& channel) const;
+  const std::string& source() const { return source_; }  // the file it came from
 
  private:
+  std::string source_;
   struct Rule {
     std::string pattern;
     std::vector<std::string> identities;
@@ -103,6 +106,9 @@ class AuthenticatedBus : public Bus {
  public:
   AuthenticatedBus(std::unique_ptr<Bus> inner, std::vector<Key> keys, std::string identity,
                    std::shared_ptr<const Policy> policy);
+  // Throws BusError when the policy does not let this identity send on the channel:
+  // every receiver would drop the message, and a lockstep frame would then wait for it
+  // and fail as "message lost"; refused here, the sender names the rule it lacks.
   void publish(const std::string& channel, const void* data, size_t size) override;
   int subscribe(const std::string& channel, Handler handler, int queue_capacity = 10000) override;
   void unsubscribe(int subscription_id) override { inner_->unsubscribe(subscription_id); }
@@ -120,6 +126,9 @@ class AuthenticatedBus : public Bus {
   void note(Reason r, const std::string& identity, const std::string& why);
   std::unique_ptr<Bus> inner_;
   std::string identity_;
+  std::shared_ptr<const Policy> policy_;  // (also the opener's) for what this process sends
+  std::unordered_map<std::string, bool> may_send_;  // the policy's answer per channel sent on
+  bool may_send(const std::string& channel);  // the policy's answer, remembered
   Sealer sealer_;
   Opener opener_;
   std::map<std::pair<int, std::string>, std::pair<int64_t, uint64_t>> last_log_;  // -> (when, quiet since)
