@@ -1,5 +1,7 @@
 #include "cloud_input.hpp"
 
+#include "skillbus/little_endian.hpp"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -28,13 +30,7 @@ void check(const skillbus_msgs::camera_cloud_t& m) {
   if (!(m.range[0] > 0 && m.range[0] < m.range[1] && std::isfinite(m.range[1]))) bad("range not 0 < near < far");
 }
 
-float float_at(const std::vector<uint8_t>& b, size_t i) {
-  uint32_t u = 0;
-  for (int k = 0; k < 4; ++k) u |= static_cast<uint32_t>(b[i * 4 + k]) << (8 * k);
-  float f;
-  std::memcpy(&f, &u, 4);
-  return f;
-}
+float float_at(const std::vector<uint8_t>& b, size_t i) { return get_f32_le(&b[i * 4]); }
 
 }  // namespace
 

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "skillbus/little_endian.hpp"
 #include "skillbus/sim/camera.hpp"
 
 namespace skillbus::sim {
@@ -9,13 +10,6 @@ namespace skillbus::sim {
 namespace {
 
 constexpr int kPointBytes = 12;  // x y z, float32
-
-// Little-endian float32 whatever the host's order (the message says so).
-void put_float(float f, uint8_t* out) {
-  uint32_t u;
-  std::memcpy(&u, &f, 4);
-  for (int i = 0; i < 4; ++i) out[i] = static_cast<uint8_t>(u >> (8 * i));
-}
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9e3779b97f4a7c15ULL;
@@ -58,7 +52,7 @@ std::vector<skillbus_msgs::camera_cloud_t> cloud_parts(const DepthCapture& c, co
     const size_t first = static_cast<size_t>(m.row_start) * c.width * 3;
     const size_t count = static_cast<size_t>(m.num_rows) * c.width * 3;
     m.points.resize(count * 4);
-    for (size_t i = 0; i < count; ++i) put_float(c.xyz[first + i], &m.points[i * 4]);
+    for (size_t i = 0; i < count; ++i) put_f32_le(c.xyz[first + i], &m.points[i * 4]);
     m.num_bytes = static_cast<int32_t>(m.points.size());
     const size_t pixels = static_cast<size_t>(m.num_rows) * c.width, first_pixel = first / 3;
     m.robot_mask.assign((pixels + 7) / 8, 0);

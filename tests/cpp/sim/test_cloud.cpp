@@ -7,6 +7,7 @@
 #include <cstring>
 #include <set>
 
+#include "skillbus/little_endian.hpp"
 #include "skillbus/sim/camera.hpp"
 
 using namespace skillbus::sim;
@@ -27,13 +28,7 @@ DepthCapture capture_of(int w, int h) {
   return c;
 }
 
-float float_at(const std::vector<uint8_t>& b, size_t i) {
-  uint32_t u = 0;
-  for (int k = 0; k < 4; ++k) u |= static_cast<uint32_t>(b[i * 4 + k]) << (8 * k);
-  float f;
-  std::memcpy(&f, &u, 4);
-  return f;
-}
+float float_at(const std::vector<uint8_t>& b, size_t i) { return skillbus::get_f32_le(&b[i * 4]); }
 }  // namespace
 
 TEST(Cloud, PartsCoverEveryRowOnceEachWithinTheDatagramBudget) {
