@@ -101,22 +101,25 @@ def test_the_client_answers_its_own_requests_and_keeps_the_latest_of_each_camera
     bus = open_raw_bus("memq://")
     cam = DepthCamera(bus, name="me")
     rid = cam.request("cam")
-    assert rid == "me-1" and cam.answer(rid) is None
+    assert rid.startswith("me:") and rid.endswith("-1") and cam.answer(rid) is None
+    # Another client of the same name (or this one's predecessor) asks with other ids.
+    assert DepthCamera(open_raw_bus("memq://"), name="me").request("cam") != rid
     for p in parts(request_id=rid)[0]:
         bus.publish(cloud_channel(), p.encode())
     for p in parts(capture=1)[0]:  # a capture at the camera's rate
         bus.publish(cloud_channel(), p.encode())
     refused = camera_cloud_t()
-    refused.camera, refused.request_id, refused.capture, refused.num_parts = "x", cam.request("x"), -1, 1
+    second = cam.request("x")
+    refused.camera, refused.request_id, refused.capture, refused.num_parts = "x", second, -1, 1
     refused.error = "no camera 'x' in the scene (cameras: cam)"
     bus.publish(cloud_channel(), refused.encode())
     bus.publish(cloud_channel(), b"not a cloud")
     while bus.handle(0.01):
         pass
-    assert cam.answer("me-1").capture == 0
+    assert cam.answer(rid).capture == 0
     assert cam.latest["cam"].capture == 1
     with pytest.raises(CameraError, match="no camera 'x'"):
-        cam.answer("me-2")
+        cam.answer(second)
     assert sum(cam.bad_input.by_channel.values()) == 1
     with pytest.raises(CameraError, match="needs a camera name"):
         cam.request("")

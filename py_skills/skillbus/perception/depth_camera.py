@@ -11,6 +11,8 @@ server with --wall-clock, or a real camera's driver) `capture()` asks and waits.
 from __future__ import annotations
 
 import logging
+import os
+import secrets
 import time
 from typing import Any
 
@@ -46,6 +48,11 @@ class DepthCamera:
         self._keep = keep
         self._assembler = CloudAssembler()
         self._count = 0
+        # Request ids: under lockstep the participant's name and a count (they are in the
+        # session's messages: the same every run); otherwise also this process's pid and a
+        # nonce, so two clients, or a client and its predecessor (a transport that keeps
+        # messages for late joiners, as DDS does), never take each other's answers.
+        self._id_prefix = name if participant is not None else f"{name}:{os.getpid()}:{secrets.token_hex(4)}"
         self.bad_input = BadInputCounter(f"depth camera {name}")
         if participant is not None:
             participant.subscribe(cloud_channel(), lambda m: self._on_part(m.data, m.stamp.frame))
@@ -53,13 +60,13 @@ class DepthCamera:
             bus.subscribe(cloud_channel(), lambda ch, d: self._on_part(d, -1))
 
     def request(self, camera: str) -> str:
-        """Asks `camera` for a capture; returns the request's id (deterministic: this
-        client's name and a count)."""
+        """Asks `camera` for a capture; returns the request's id (under lockstep this
+        client's name and a count: the same every run)."""
         if not camera:
             raise CameraError("a capture request needs a camera name")
         m = camera_capture_t()
         self._count += 1
-        m.id, m.camera = f"{self.name}-{self._count}", camera
+        m.id, m.camera = f"{self._id_prefix}-{self._count}", camera
         if self.participant is not None:
             self.participant.publish(capture_channel(), m)
         else:
