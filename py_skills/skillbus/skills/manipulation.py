@@ -200,9 +200,8 @@ class locate(PrimitiveBase):
         except SegmentError as e:
             return self.fail(f"locate: {e}", -1)
         known = []
-        for e in self.wmi.get_elements():
-            if e.id == location or parent_of(self.wmi, e.id) != location:
-                continue
+        for r in self.wmi.get_relations(location, "skiros:contain", ""):  # (what the Location holds)
+            e = self.wmi.get_element(r["dst"])
             size = e.getProperty("skiros:Size").value if e.hasProperty("skiros:Size") else None
             known.append(Known(e.id, world_pose(self.wmi, e.id)[0], float(size) if size is not None else None))
         m = match(known, seen.detections)
