@@ -2,7 +2,8 @@
 //
 // Reads: SB_MOTION_REQ (plan: motion_request_t). Writes: SB_MOTION_REP (motion_plan_t).
 // Not a lockstep participant: it holds no state, and the same request always gets the
-// same answer (Ceres single-threaded, fixed seeds), so skills may call it from a tick.
+// same answer (Ceres single-threaded, fixed seeds; the path search seeded per request and
+// bounded in iterations), so skills may call it from a tick.
 #include <cmath>
 #include <cstdio>
 
@@ -20,7 +21,8 @@
 using namespace skillbus;
 
 namespace {
-skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_msgs::motion_request_t& req) {
+skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::CollisionModel& world,
+                                    const skillbus_msgs::motion_request_t& req) {
   skillbus_msgs::motion_plan_t out{};
   const auto& joints = k.joints();
   if (req.joint_names.size() != joints.size() || req.start.size() != joints.size())
@@ -44,6 +46,8 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_
     if (std::abs(req.target[i]) > 1e3) throw RpcBadRequest("plan: the target position is beyond 1 km");
   const Eigen::Quaterniond q(req.target[6], req.target[3], req.target[4], req.target[5]);
   if (std::abs(q.norm() - 1.0) > 1e-3) throw RpcBadRequest("plan: the target quaternion is not a unit quaternion");
+  for (double v : req.held)
+    if (!std::isfinite(v) || v < 0 || v > 2) throw RpcBadRequest("plan: a held object's sides must be within [0, 2] m");
   motion::PlanRequest pr;
   pr.start = Eigen::Map<const Eigen::VectorXd>(req.start.data(), static_cast<Eigen::Index>(req.start.size()));
   pr.target.translation() = Eigen::Vector3d(req.target[0], req.target[1], req.target[2]);
@@ -51,12 +55,15 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_
   pr.cartesian = req.cartesian;
   pr.step_m = req.step_m;
   pr.speed_scale = req.speed_scale;
-  const motion::Plan p = motion::plan_motion(k, pr);
+  pr.held = Eigen::Vector3d(req.held[0], req.held[1], req.held[2]);
+  const motion::Plan p = motion::plan_motion(k, pr, &world);
   out.ok = p.ok;
   out.error = p.error;
   out.position_error = p.position_error;
   out.orientation_error = p.orientation_error;
   out.seeds_tried = p.seeds_tried;
+  out.how = p.how;
+  out.iterations = p.iterations;
   for (const auto& j : joints) out.joint_names.push_back(j.name);
   out.num_joints = static_cast<int32_t>(joints.size());
   if (p.ok) out.goal.assign(p.goal.data(), p.goal.data() + p.goal.size());
@@ -66,6 +73,8 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, const skillbus_
     pt.time_from_start_ns = t;
     pt.positions.assign(qs.data(), qs.data() + qs.size());
     pt.num_positions = static_cast<int32_t>(pt.positions.size());
+    if (p.rests_at_points) pt.velocities.assign(qs.size(), 0.0);  // straight joint segments between the points
+    pt.num_velocities = static_cast<int32_t>(pt.velocities.size());
     out.points.push_back(pt);
   }
   out.num_points = static_cast<int32_t>(out.points.size());
@@ -86,13 +95,16 @@ int main(int argc, char** argv) {
   if (scene_file.empty()) apps::usage_error(app, "--scene FILE is required (the robot comes from it)");
   std::unique_ptr<Bus> bus;
   std::unique_ptr<motion::Kinematics> kin;
+  std::unique_ptr<motion::CollisionModel> world;
   apps::start_or_exit("motion_server", [&] {
-    kin = std::make_unique<motion::Kinematics>(scene::load_scene(scene_file), current_robot());
+    const scene::Scene scene = scene::load_scene(scene_file);
+    kin = std::make_unique<motion::Kinematics>(scene, current_robot());
+    world = std::make_unique<motion::CollisionModel>(scene, current_robot());
     bus = open_bus(url);
   });
   RpcServer rpc(*bus, "MOTION");
   rpc.add_method<skillbus_msgs::motion_request_t, skillbus_msgs::motion_plan_t>(
-      "plan", [&](const skillbus_msgs::motion_request_t& r) { return handle(*kin, r); });
+      "plan", [&](const skillbus_msgs::motion_request_t& r) { return handle(*kin, *world, r); });
   apps::stop_on_signals();
   SB_INFO("motion_server", "serving " << rpc_request_channel("MOTION") << " for " << kin->joints().size()
                                       << " arm joints of " << scene_file);

@@ -279,7 +279,8 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
                     and result["closest_m"] > MIN_GAP
                     and all(w["in_type"] == "skiros:Bin" for w in result["world_model"].values())
                     and len(result["world_model"]) == len(physics)
-                    and sim.get("robot_contact_steps", 0) == 0)
+                    and sim.get("robot_contact_steps", 0) == 0
+                    and not any(sim.get("obstacle_contact_steps", {}).values()))
     return result
 
 
@@ -295,6 +296,8 @@ def print_summary(r: dict[str, Any]) -> None:
         for m, t in r["tasks"].items():
             print(f"    {m:16s}{t}")
         print(f"  arms touching     {sim.get('robot_contact_steps', '?')} physics steps (each arm keeps to its region)")
+    for name, steps in sim.get("obstacle_contact_steps", {}).items():
+        print(f"  arm on {name:11s}{steps} physics steps (the motion service plans around it)")
     frame_ms = 1000 * sim.get("sim_time_s", 0) / max(1, sim.get("frames", 1))
     print(f"  sim time          {sim.get('sim_time_s', 0):.2f} s ({sim.get('frames', 0)} frames of {frame_ms:.0f} ms)")
     print(f"  wall time         {sim.get('wall_time_s', 0):.2f} s (the lockstep session; "

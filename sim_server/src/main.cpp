@@ -99,6 +99,11 @@ int main(int argc, char** argv) {
     out["robots"] = robots;
     out["robot_contact_steps"] = server->physics().robot_contact_steps();  // steps in which two robots touched
   }
+  if (const auto steps = server->physics().obstacle_contact_steps(); !steps.empty()) {
+    apps::Summary by_name = apps::Summary::object();
+    for (const auto& [name, n] : steps) by_name[name] = n;
+    out["obstacle_contact_steps"] = by_name;  // steps in which a robot touched each obstacle
+  }
   out["objects"] = objects;
   out["frame_ms"] = frame_ms;
   // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).

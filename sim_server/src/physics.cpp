@@ -30,6 +30,10 @@ void Physics::Impl::build() {
     const double finger_mass = robot.getMassMatrix()(rig.layout.left_dof, rig.layout.left_dof);
     rig.fingers = FingerController(rig.layout.finger_limits, finger_mass, step_ns, opening);
   });
+  obstacles.clear();
+  obstacle_contact_steps.resize(scene.fixtures.size(), 0);
+  for (size_t f = 0; f < scene.fixtures.size(); ++f)  // world.all: the floor, then the fixtures in scene order
+    if (scene.fixtures[f].obstacle) obstacles.emplace_back(world.all[1 + f].get(), f);
   for (size_t i = 0; i < robots.size(); ++i) {
     robots[i].skeleton = world.robots[i];
     robots[i].applied = Eigen::VectorXd::Zero(world.robots[i]->getNumDofs());
@@ -82,26 +86,39 @@ void Physics::Impl::step() {
   ++total_steps;
   ++steps_since_build;
   for (RobotRig& r : robots) r.arm.finish_step(total_steps);
-  if (robots.size() > 1) count_robot_contacts();
+  if (robots.size() > 1 || !obstacles.empty()) count_contacts();
 }
 
-// Two robots touching is a collision the skills should never cause (each arm keeps to its
-// region of the scene): counted, so that a run can show there was none.
-void Physics::Impl::count_robot_contacts() {
+// Two robots touching, or a robot touching an obstacle, is a collision the skills and the
+// motion planner should never cause: counted (steps with at least one such contact), so
+// that a run can show there was none.
+void Physics::Impl::count_contacts() {
+  bool robots_touched = false;
+  std::vector<bool> touched(obstacles.size(), false);
+  auto is_robot = [&](const dart::dynamics::Skeleton* s) {
+    for (const auto& r : world.robots)
+      if (r.get() == s) return true;
+    return false;
+  };
+  auto obstacle_of = [&](const dart::dynamics::Skeleton* s) -> int {
+    for (size_t k = 0; k < obstacles.size(); ++k)
+      if (obstacles[k].first == s) return static_cast<int>(k);
+    return -1;
+  };
   for (const auto& c : world.sim->getLastCollisionResult().getContacts()) {
     const auto* a = c.collisionObject1->getShapeFrame()->asShapeNode()->getBodyNodePtr()->getSkeleton().get();
     const auto* b = c.collisionObject2->getShapeFrame()->asShapeNode()->getBodyNodePtr()->getSkeleton().get();
     if (a == b) continue;
-    bool a_robot = false, b_robot = false;
-    for (const auto& r : world.robots) {
-      a_robot = a_robot || r.get() == a;
-      b_robot = b_robot || r.get() == b;
-    }
-    if (a_robot && b_robot) {
-      ++robot_contact_steps;
-      return;
+    const bool ra = is_robot(a), rb = is_robot(b);
+    robots_touched = robots_touched || (ra && rb);
+    if (ra != rb) {
+      const int k = obstacle_of(ra ? b : a);
+      if (k >= 0) touched[static_cast<size_t>(k)] = true;
     }
   }
+  if (robots_touched) ++robot_contact_steps;
+  for (size_t k = 0; k < obstacles.size(); ++k)
+    if (touched[k]) ++obstacle_contact_steps[obstacles[k].second];
 }
 
 RobotRig& Physics::Impl::rig(size_t robot) {
@@ -145,5 +162,12 @@ std::string Physics::collision_detector() const { return impl_->scene.physics.co
 double Physics::physics_seconds() const { return impl_->physics_seconds; }
 size_t Physics::num_robots() const { return impl_->robots.size(); }
 int64_t Physics::robot_contact_steps() const { return impl_->robot_contact_steps; }
+
+std::vector<std::pair<std::string, int64_t>> Physics::obstacle_contact_steps() const {
+  std::vector<std::pair<std::string, int64_t>> out;
+  for (size_t f = 0; f < impl_->scene.fixtures.size(); ++f)
+    if (impl_->scene.fixtures[f].obstacle) out.emplace_back(impl_->scene.fixtures[f].name, impl_->obstacle_contact_steps[f]);
+  return out;
+}
 
 }  // namespace skillbus::sim

@@ -48,13 +48,17 @@ struct Physics::Impl {
   int64_t total_steps = 0;   // since start (never reset): the time base of trajectories
   int64_t steps_since_build = 0;  // no step yet: no contacts to read supports from
   int64_t robot_contact_steps = 0;  // steps in which two robots touched (never reset)
+  // The scene's obstacles (fixtures from its "obstacles" list): skeleton -> fixture index,
+  // and per fixture the steps in which a robot touched it (never reset).
+  std::vector<std::pair<const dart::dynamics::Skeleton*, size_t>> obstacles;
+  std::vector<int64_t> obstacle_contact_steps;
   double physics_seconds = 0;
   std::vector<CameraRig> cameras;  // in scene order
 
   void build();    // the world and the controllers from the scene (again on reset)
   void step();
   void build_cameras();  // after the world (camera.cpp)
-  void count_robot_contacts();  // after a step, with several robots
+  void count_contacts();  // after a step, with several robots or with obstacles
   RobotRig& rig(size_t robot);  // throws std::out_of_range naming the robots there are
   const RobotRig& rig(size_t robot) const;
   // For the state messages (state.cpp): per object, what it rests on.

@@ -64,7 +64,17 @@ def test_mistakes_are_named_with_their_field(tmp_path):
     assert refused(tmp_path, d) == "objects[1].mass must be > 0"          # was accepted
     d = demo_doc()
     d["objects"][0]["on"] = "shelf"
-    assert refused(tmp_path, d) == "objects[0].on names 'shelf', which is not a fixture"
+    assert refused(tmp_path, d) == ("objects[0].on names 'shelf', which is not a fixture "
+                                    "(objects do not start on obstacles)")
+    d = demo_doc()
+    d["objects"][0]["on"] = "post"
+    assert refused(tmp_path, d).startswith("objects[0].on names 'post', which is not a fixture")
+    d = demo_doc()
+    d["obstacles"][0]["name"] = "bin"
+    assert refused(tmp_path, d) == "obstacles[0].name 'bin' is used twice in the scene"
+    d = demo_doc()
+    del d["obstacles"][0]["urdf"]
+    assert refused(tmp_path, d) == "obstacles[0].urdf is missing"
     d = demo_doc()
     d["objects"][2]["pose"] = [0, 0, 0]
     assert refused(tmp_path, d) == "objects[2].pose must be an array of 7 numbers"
@@ -99,6 +109,19 @@ def test_defaults_and_a_quaternion_normalized(tmp_path):
     assert can["pose"][3:] == pytest.approx([0, 0, 2 ** -0.5, 2 ** -0.5])
 
 
+def test_obstacles_are_numbered_after_the_robots():
+    """An obstacle added to a scene renumbers nothing: the skills' task names the robot's
+    gripper and arm by id (skiros:Gripper-7), which stays."""
+    s = scene.load(paths.demo_scene())
+    assert s["obstacles"] == [{"name": "post", "type": "Obstacle", "urdf": str(paths.REPO_ROOT / "sim_server" / "models" / "post.urdf"),
+                               "pose": [0.3, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0], "friction": 0.8}]
+    ttl = scene.to_turtle(s)
+    assert "skiros:Gripper-7\n" in ttl and "skiros:Arm-8\n" in ttl
+    assert "skiros:Obstacle-9\n\ta skiros:Obstacle ,\n\t\towl:NamedIndividual ;\n\trdfs:label \"post\"" in ttl
+    del s["obstacles"]
+    assert "Obstacle" not in scene.to_turtle(s) and "skiros:Gripper-7\n" in scene.to_turtle(s)
+
+
 def test_a_changed_document_is_numbered_again():
     belief = scene.load(paths.demo_scene())
     belief["objects"] = [o for o in belief["objects"] if o["name"] != "green"]
@@ -114,7 +137,7 @@ def skillbus_scene(*args: str) -> subprocess.CompletedProcess:
 
 def test_the_command_line_checks_and_names_the_field(tmp_path):
     r = skillbus_scene("check", str(paths.demo_scene()))
-    assert r.returncode == 0 and "a valid scene ('demo': robot 'arm_robot', 2 fixture(s), 3 object(s))" in r.stdout
+    assert r.returncode == 0 and "a valid scene ('demo': robot 'arm_robot', 2 fixture(s), 1 obstacle(s), 3 object(s))" in r.stdout
     d = demo_doc()
     del d["objects"][0]["size"]
     f = scene.save(d, tmp_path / "nosize.scene.json", paths.demo_scene())

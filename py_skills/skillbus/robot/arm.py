@@ -113,13 +113,17 @@ class Arm:
                            "running?)")
         return self.state
 
-    def plan(self, target: list[float], cartesian: bool = False, speed_scale: float = 0.5) -> motion_plan_t:
+    def plan(self, target: list[float], cartesian: bool = False, speed_scale: float = 0.5,
+             held: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> motion_plan_t:
+        """A trajectory from the motion service. `held`: the sides (m) of a box the gripper
+        holds, which the service keeps clear of obstacles as it does the arm."""
         req = motion_request_t()
         req.joint_names = self.joint_names()
         req.num_joints = len(req.joint_names)
         req.start = self.joints()
         req.target = [float(x) for x in target]
         req.cartesian, req.step_m, req.speed_scale = cartesian, 0.01, speed_scale
+        req.held = [float(x) for x in held]
         return self.motion.call("plan", req, motion_plan_t, timeout=self.motion_timeout)
 
     def execute(self, plan: motion_plan_t, cmd_id: str) -> None:

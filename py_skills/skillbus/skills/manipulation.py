@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 from skillbus import tick_context
 from skillbus.robot import arm as arm_service
@@ -294,6 +295,19 @@ def free_spot(location: str, origin: tuple, footprint: float) -> tuple[float, fl
     return spots[0][0], spots[0][1]
 
 
+def held_box(wmi: Any, arm_id: str) -> tuple[float, float, float]:
+    """The sides (m) of what the gripper of the arm's robot holds, by the world model (a
+    cube of its Size); zeros when it holds nothing, or nothing with a Size."""
+    for robot in [r["src"] for r in wmi.get_relations("", "skiros:hasA", arm_id)]:
+        for part in [r["dst"] for r in wmi.get_relations(robot, "skiros:hasA", "")]:
+            for held in [r["dst"] for r in wmi.get_relations(part, "skiros:contain", "")]:
+                e = wmi.get_element(held)
+                if e.hasProperty("skiros:Size") and e.getProperty("skiros:Size").value:
+                    side = float(e.getProperty("skiros:Size").value)
+                    return (side, side, side)
+    return (0.0, 0.0, 0.0)
+
+
 class _ArmMotion(PrimitiveBase):
     """Plans with the motion service, sends the trajectory, waits until the arm settles."""
 
@@ -318,7 +332,7 @@ class _ArmMotion(PrimitiveBase):
             except RpcError as e:
                 return self.fail(f"{self.label}: the occupancy map did not answer ({e})", -5)
             try:
-                plan = self.arm.plan(pose, cartesian)
+                plan = self.arm.plan(pose, cartesian, held=held_box(self.wmi, self.params["Arm"].value.id))
             except RpcError as e:  # named here, within the tick, not as a tick that never returned
                 return self.fail(f"{self.label} to {what}: the motion service did not answer ({e})", -5)
             if not plan.ok:

@@ -77,9 +77,12 @@ int main(int argc, char** argv) {
       text = scene::to_json(s, 1) + "\n";
     } else {
       std::string robots;
+      size_t obstacles = 0;
+      for (const auto& f : s.fixtures) obstacles += f.obstacle ? 1 : 0;
       for (const auto& r : s.robots) robots += (robots.empty() ? "'" : ", '") + one_line(r.name) + "'";
       text = (file == "-" ? std::string("<stdin>") : file) + ": a valid scene ('" + one_line(s.name) + "': robot" +
-             (s.robots.size() > 1 ? "s " : " ") + robots + ", " + std::to_string(s.fixtures.size()) + " fixture(s), " +
+             (s.robots.size() > 1 ? "s " : " ") + robots + ", " + std::to_string(s.fixtures.size() - obstacles) +
+             " fixture(s), " + (obstacles ? std::to_string(obstacles) + " obstacle(s), " : "") +
              std::to_string(s.objects.size()) + " object(s))\n";
     }
   } catch (const std::exception& e) {

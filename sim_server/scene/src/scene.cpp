@@ -257,12 +257,17 @@ Scene parse_scene(const std::string& text, const std::string& path) {
   auto unique_name = [&](const Reader& r, const std::string& n) {
     if (!names.insert(n).second) r.fail_field("name", "'" + n + "' is used twice in the scene");
   };
-  if (top.has("fixtures")) {
-    const json& arr = top.sub("fixtures");
-    if (!arr.is_array()) top.fail_field("fixtures", "must be an array");
+  // Fixtures, then obstacles: both fixed bodies from a URDF, read alike.
+  for (const char* list : {"fixtures", "obstacles"}) {
+    if (!top.has(list)) continue;
+    const bool obstacle = std::string(list) == "obstacles";
+    const json& arr = top.sub(list);
+    if (!arr.is_array()) top.fail_field(list, "must be an array");
     for (size_t i = 0; i < arr.size(); ++i) {
-      Reader r(arr[i], "fixtures[" + std::to_string(i) + "]", file);
+      Reader r(arr[i], std::string(list) + "[" + std::to_string(i) + "]", file);
       FixtureSpec f;
+      f.obstacle = obstacle;
+      if (obstacle) f.type = "Obstacle";
       f.name = r.str("name", "", true);
       unique_name(r, f.name);
       f.type = concept_type(r, f.type);
@@ -308,9 +313,10 @@ Scene parse_scene(const std::string& text, const std::string& path) {
       const auto& o = s.objects[i];
       if (o.on.empty()) continue;
       bool found = false;
-      for (const auto& f : s.fixtures) found = found || f.name == o.on;
+      for (const auto& f : s.fixtures) found = found || (f.name == o.on && !f.obstacle);
       if (!found)
-        throw SceneError(file + ": objects[" + std::to_string(i) + "].on names '" + o.on + "', which is not a fixture");
+        throw SceneError(file + ": objects[" + std::to_string(i) + "].on names '" + o.on +
+                         "', which is not a fixture (objects do not start on obstacles)");
     }
   }
   if (top.has("cameras")) read_cameras(top, s, file);
@@ -349,7 +355,7 @@ std::string to_json(const Scene& s, int indent) {
   }
   j["fixtures"] = oj::array();
   for (const auto& f : s.fixtures)
-    j["fixtures"].push_back(
+    j[f.obstacle ? "obstacles" : "fixtures"].push_back(
         {{"name", f.name}, {"type", f.type}, {"urdf", f.urdf}, {"pose", pose(f.pose)}, {"friction", f.friction}});
   j["objects"] = oj::array();
   for (const auto& o : s.objects) {

@@ -79,6 +79,7 @@ std::vector<WorldElement> world_elements(const Scene& scene) {
   std::vector<WorldElement> out;
   auto id = [&](const std::string& type) { return type + "-" + std::to_string(out.size() + 1); };
   for (const auto& f : scene.fixtures) {
+    if (f.obstacle) continue;  // after the robots
     const std::string fid = id(f.type);
     out.push_back({WorldElement::Fixture, fid, f.type, f.name, "Scene-0", f.pose, nullptr});
     for (const auto& o : scene.objects)
@@ -94,6 +95,8 @@ std::vector<WorldElement> world_elements(const Scene& scene) {
     out.push_back({WorldElement::Gripper, id("Gripper"), "Gripper", robot.gripper, rid, identity, nullptr});
     out.push_back({WorldElement::Arm, id("Arm"), "Arm", robot.arm, rid, identity, nullptr});
   }
+  for (const auto& f : scene.fixtures)  // last: a scene's obstacles renumber nothing else
+    if (f.obstacle) out.push_back({WorldElement::Fixture, id(f.type), f.type, f.name, "Scene-0", f.pose, nullptr});
   return out;
 }
 

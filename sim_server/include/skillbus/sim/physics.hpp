@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "skillbus/digest.hpp"
@@ -65,6 +66,9 @@ class Physics {
   double physics_seconds() const;  // wall time spent inside DART's step (benchmarks only)
   // Steps in which two robots touched (only counted with several robots; never reset).
   int64_t robot_contact_steps() const;
+  // Per obstacle of the scene (its "obstacles" list), in scene order: the steps in which a
+  // robot touched it (never reset).
+  std::vector<std::pair<std::string, int64_t>> obstacle_contact_steps() const;
 
  private:
   struct Impl;

@@ -43,6 +43,10 @@ struct FixtureSpec {
   std::string urdf;
   Pose pose{0, 0, 0, 0, 0, 0, 1};
   double friction = 0.8;
+  // From the scene's "obstacles" list: a fixture in the way of the arm (a post, a wall)
+  // that no object starts on. The physics counts the steps in which a robot touches one;
+  // its world-model id comes after the robots' so that adding one renumbers nothing.
+  bool obstacle = false;
 };
 
 struct ObjectSpec {
