@@ -12,6 +12,7 @@ using skillbus_msgs::map_reply_t;
 namespace {
 constexpr const char* kLog = "map_server";
 constexpr int32_t kMaxPoints = 100'000;  // a state query's points (a reply of 400 KB)
+constexpr size_t kMaxVoxels = 200'000;  // an occupied query's voxels (a reply of 2.4 MB, in chunks)
 
 Vec3 vec(const double (&a)[3]) { return {a[0], a[1], a[2]}; }
 
@@ -60,6 +61,20 @@ MapService::MapService(Bus& bus, ServiceOptions options)
     } catch (const std::invalid_argument& e) {
       throw RpcBadRequest(std::string("box: ") + e.what());
     }
+  });
+  method("occupied", [this](const map_query_t& q, map_reply_t& r) {
+    check_finite(q, false, true);
+    try {
+      bool more = false;
+      for (const Vec3& c : map_.occupied(vec(q.box_min), vec(q.box_max), kMaxVoxels, &more))
+        r.voxels.push_back({static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])});
+      if (more)
+        throw RpcBadRequest("occupied: more than " + std::to_string(kMaxVoxels) +
+                            " occupied voxels in the box; ask for a smaller one");
+    } catch (const std::invalid_argument& e) {
+      throw RpcBadRequest(std::string("occupied: ") + e.what());
+    }
+    r.num_voxels = static_cast<int32_t>(r.voxels.size());
   });
   method("free_area", [this](const map_query_t& q, map_reply_t& r) {
     check_finite(q, false, true);

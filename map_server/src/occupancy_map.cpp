@@ -1,5 +1,7 @@
 #include "skillbus/map/occupancy_map.hpp"
 
+#include <array>
+
 #include <octomap/OcTree.h>
 
 #include <algorithm>
@@ -86,6 +88,34 @@ BoxCounts OccupancyMap::box(const Vec3& lo, const Vec3& hi) const {
   }
   c.unknown = total - c.occupied - c.free;
   return c;
+}
+
+std::vector<Vec3> OccupancyMap::occupied(const Vec3& lo, const Vec3& hi, size_t limit, bool* more) const {
+  const auto& t = impl_->tree;
+  const auto [a, b] = key_box(t, lo, hi);
+  const unsigned depth = t.getTreeDepth();
+  std::vector<std::array<unsigned, 3>> keys;
+  for (auto it = t.begin_leafs_bbx(a, b); it != t.end_leafs_bbx(); ++it) {
+    if (!t.isNodeOccupied(*it)) continue;
+    const unsigned span = 1u << (depth - it.getDepth());  // a coarser leaf: each of its voxels in the box
+    const octomap::OcTreeKey k = it.getIndexKey();
+    for (unsigned x = std::max<unsigned>(k[0], a[0]); x <= std::min<unsigned>(k[0] + span - 1, b[0]); ++x)
+      for (unsigned y = std::max<unsigned>(k[1], a[1]); y <= std::min<unsigned>(k[1] + span - 1, b[1]); ++y)
+        for (unsigned z = std::max<unsigned>(k[2], a[2]); z <= std::min<unsigned>(k[2] + span - 1, b[2]); ++z)
+          keys.push_back({x, y, z});
+  }
+  std::sort(keys.begin(), keys.end());  // the order of the keys, not of the tree's walk
+  if (more) *more = keys.size() > limit;
+  if (keys.size() > limit) keys.resize(limit);
+  std::vector<Vec3> out;
+  out.reserve(keys.size());
+  for (const auto& k : keys) {
+    const octomap::point3d c = t.keyToCoord(octomap::OcTreeKey(static_cast<octomap::key_type>(k[0]),
+                                                               static_cast<octomap::key_type>(k[1]),
+                                                               static_cast<octomap::key_type>(k[2])));
+    out.push_back({c.x(), c.y(), c.z()});
+  }
+  return out;
 }
 
 double OccupancyMap::free_area(const Vec3& lo, const Vec3& hi, double* area) const {

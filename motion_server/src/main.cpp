@@ -16,12 +16,63 @@
 #include "skillbus/motion/planner.hpp"
 #include "skillbus/rpc.hpp"
 #include "skillbus_msgs/motion_plan_t.hpp"
+#include "skillbus_msgs/map_query_t.hpp"
+#include "skillbus_msgs/map_reply_t.hpp"
 #include "skillbus_msgs/motion_request_t.hpp"
 
 using namespace skillbus;
 
 namespace {
-skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::CollisionModel& world,
+// The occupancy map's occupied voxels within the arm's reach (a box around its base), as
+// of the asker's frame, from the map server (RPC area MAP) on a bus of their own: waiting
+// for the map must not dispatch another motion request into this one.
+class MapSource {
+ public:
+  MapSource(std::unique_ptr<Bus> bus, const motion::Kinematics& k, double reach)
+      : bus_(std::move(bus)), rpc_(*bus_, "MAP", "motion_server") {
+    const Eigen::Vector3d base = k.base().translation();
+    for (int i = 0; i < 3; ++i) {
+      lo_[i] = base[i] - reach;
+      hi_[i] = base[i] + reach;
+    }
+    lo_[2] = base[2] + kAboveFloor;  // the floor the robot stands on is no obstacle to it
+  }
+  // Throws RpcError (naming the map) when it does not answer.
+  void update(motion::CollisionModel& world, int64_t as_of_frame) {
+    skillbus_msgs::map_query_t q{};
+    q.as_of_frame = as_of_frame;
+    for (int i = 0; i < 3; ++i) {
+      q.box_min[i] = lo_[i];
+      q.box_max[i] = hi_[i];
+    }
+    CallOptions opts;
+    opts.timeout = std::chrono::seconds(20);
+    skillbus_msgs::map_reply_t r;
+    try {
+      r = rpc_.call<skillbus_msgs::map_reply_t>("occupied", q, opts);
+    } catch (const RpcError& e) {
+      throw RpcError(std::string("the occupancy map did not answer (motion_server --map): ") + e.what());
+    }
+    std::vector<Eigen::Vector3d> voxels;
+    voxels.reserve(r.voxels.size());
+    for (const auto& v : r.voxels) voxels.emplace_back(v[0], v[1], v[2]);
+    if (voxels != last_ || r.resolution != resolution_) {  // rebuilding the grid costs; the map seldom changes
+      world.set_map(voxels, r.resolution);
+      last_ = std::move(voxels);
+      resolution_ = r.resolution;
+    }
+  }
+
+ private:
+  static constexpr double kAboveFloor = 0.02;  // m
+  std::unique_ptr<Bus> bus_;
+  RpcClient rpc_;
+  double lo_[3], hi_[3];
+  std::vector<Eigen::Vector3d> last_;
+  double resolution_ = 0;
+};
+
+skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::CollisionModel& world, MapSource* map,
                                     const skillbus_msgs::motion_request_t& req) {
   skillbus_msgs::motion_plan_t out{};
   const auto& joints = k.joints();
@@ -56,6 +107,10 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::Collisi
   pr.step_m = req.step_m;
   pr.speed_scale = req.speed_scale;
   pr.held = Eigen::Vector3d(req.held[0], req.held[1], req.held[2]);
+  // The map for joint-space moves only: a straight line is how a skill goes the last
+  // centimetres to what it grasps or where it places, which the map holds as occupied.
+  if (map && !req.cartesian) map->update(world, req.as_of_frame);
+  if (map && req.cartesian) world.set_map({}, 0);
   const motion::Plan p = motion::plan_motion(k, pr, &world);
   out.ok = p.ok;
   out.error = p.error;
@@ -82,6 +137,8 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::Collisi
 }
 }  // namespace
 
+constexpr double kReach = 1.2;  // m around the robot's base: the map the arm can run into
+
 int main(int argc, char** argv) {
   CLI::App app{"Arm motion for the skills over RPC (area MOTION, method plan): inverse kinematics (Ceres) and "
                "joint trajectories for the scene's arm. SIGTERM or SIGINT stop it; it prints a one-line JSON summary.",
@@ -91,20 +148,26 @@ int main(int argc, char** argv) {
   apps::add_url_option(app, url);
   app.add_option("--scene", scene_file, "the scene file the robot comes from (required)")->type_name("FILE");
   apps::add_robot_option(app);  // which of the scene's robots, and its MOTION channels
+  bool use_map = false;
+  app.add_flag("--map", use_map,
+               "check joint-space moves against the occupancy map too (map_server, RPC area MAP), as of the "
+               "asker's frame");
   apps::parse_or_exit(app, argc, argv);
   if (scene_file.empty()) apps::usage_error(app, "--scene FILE is required (the robot comes from it)");
   std::unique_ptr<Bus> bus;
   std::unique_ptr<motion::Kinematics> kin;
   std::unique_ptr<motion::CollisionModel> world;
+  std::unique_ptr<MapSource> map;
   apps::start_or_exit("motion_server", [&] {
     const scene::Scene scene = scene::load_scene(scene_file);
     kin = std::make_unique<motion::Kinematics>(scene, current_robot());
     world = std::make_unique<motion::CollisionModel>(scene, current_robot());
     bus = open_bus(url);
+    if (use_map) map = std::make_unique<MapSource>(open_bus(url), *kin, kReach);
   });
   RpcServer rpc(*bus, "MOTION");
   rpc.add_method<skillbus_msgs::motion_request_t, skillbus_msgs::motion_plan_t>(
-      "plan", [&](const skillbus_msgs::motion_request_t& r) { return handle(*kin, *world, r); });
+      "plan", [&](const skillbus_msgs::motion_request_t& r) { return handle(*kin, *world, map.get(), r); });
   apps::stop_on_signals();
   SB_INFO("motion_server", "serving " << rpc_request_channel("MOTION") << " for " << kin->joints().size()
                                       << " arm joints of " << scene_file);

@@ -110,7 +110,7 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     return [
         Program("can_hub", [*py, "can-hub", "--channel", can]),
         Program("sim", sim),
-        Program("motion", [str(paths.binary("motion_server")), "--scene", str(scene)]),
+        Program("motion", [str(paths.binary("motion_server")), "--scene", str(scene), *(["--map"] if perception else [])]),
         *mapper,
         Program("wm", [str(paths.binary("wm_server")), *clock, "--data", str(run_dir / "wm"), "--scene", str(ttl)],
                 participant=True),

@@ -73,6 +73,12 @@ class MapClient:
         rep = self._call("free_area", self._query(lo=lo, hi=hi))
         return rep.free_area_m2, rep.area_m2
 
+    def occupied(self, lo: Sequence[float], hi: Sequence[float]) -> list[tuple[float, float, float]]:
+        """The centres of the occupied voxels in the box (what the motion service checks
+        joint-space moves against), in key order."""
+        rep = self._call("occupied", self._query(lo=lo, hi=hi))
+        return [(float(v[0]), float(v[1]), float(v[2])) for v in rep.voxels]
+
     def free_spots(self, lo: Sequence[float], hi: Sequence[float], footprint: Sequence[float],
                    clearance: float = 0.01) -> list[tuple[float, float, float]]:
         """Where a footprint (x, y sides, m) with `clearance` around it fits in the box, by

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import logging
 import time
+
+from skillbus import tick_context
 from typing import Any
 
 from skillbus.bus import Bus
@@ -36,7 +38,7 @@ class Arm:
     # service) well before the manager's tick timeout (2 s in the system) names the skill
     # process. Under lockstep the tick may wait for the process's frame before it starts:
     # 1.5 s left too little of the 2 s on a loaded machine. A plan takes milliseconds.
-    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 1.0) -> None:
+    def __init__(self, bus: Bus, participant: Any = None, name: str = "arm", motion_timeout: float = 1.5) -> None:
         self.bus, self.participant = bus, participant
         self.motion = RpcClient(bus, "MOTION", name)
         self.motion_timeout = motion_timeout
@@ -124,6 +126,11 @@ class Arm:
         req.target = [float(x) for x in target]
         req.cartesian, req.step_m, req.speed_scale = cartesian, 0.01, speed_scale
         req.held = [float(x) for x in held]
+        # The frame a motion service run with --map asks the occupancy map as of (it answers
+        # once it has finished that frame: a cloud inserted at this frame may take seconds).
+        tick = tick_context.current_tick()
+        req.as_of_frame = tick.frame if tick is not None else (
+            self.participant.frame if self.participant is not None and self.participant.frame >= 0 else -1)
         return self.motion.call("plan", req, motion_plan_t, timeout=self.motion_timeout)
 
     def execute(self, plan: motion_plan_t, cmd_id: str) -> None:

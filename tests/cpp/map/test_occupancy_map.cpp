@@ -3,6 +3,8 @@
 // area of a region, rays without a return, and the .bt round trip.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <filesystem>
 
 #include "skillbus/map/occupancy_map.hpp"
@@ -51,6 +53,26 @@ TEST(OccupancyMap, BoxCountsAndTheFreeAreaOfARegion) {
   EXPECT_NEAR(free, 0.04 - 0.01, 0.003);  // the block's 10 x 10 cm are not free
   // The floor itself: occupied voxels.
   EXPECT_GT(m.box({-0.2, -0.2, 0.0001}, {0.0, 0.0, 0.009}).occupied, 300);
+}
+
+TEST(OccupancyMap, TheOccupiedVoxelsOfABoxAreListedInKeyOrder) {
+  OccupancyMap m(0.01);
+  m.insert(floor_with_a_block(), {}, kOrigin, 3.0);
+  // The block's top (z = 0.1) over x, y in [0.1, 0.2]: as many voxels as the box counts.
+  const Vec3 lo{0.05, 0.05, 0.09}, hi{0.25, 0.25, 0.11};
+  bool more = true;
+  const std::vector<Vec3> top = m.occupied(lo, hi, 100000, &more);
+  EXPECT_FALSE(more);
+  EXPECT_EQ(static_cast<int64_t>(top.size()), m.box(lo, hi).occupied);
+  EXPECT_GT(top.size(), 80u);
+  for (const Vec3& c : top) {
+    EXPECT_EQ(m.state(c), Cell::Occupied);
+    EXPECT_NEAR(c[2], 0.1, 0.011);
+  }
+  EXPECT_TRUE(std::is_sorted(top.begin(), top.end()));  // x, then y, then z: not the tree's walk
+  const std::vector<Vec3> few = m.occupied(lo, hi, 10, &more);
+  EXPECT_TRUE(more);
+  EXPECT_EQ(few, std::vector<Vec3>(top.begin(), top.begin() + 10));
 }
 
 TEST(OccupancyMap, ARayWithoutAReturnClearsSpaceButMarksNothingOccupied) {

@@ -3,6 +3,7 @@
 // goes around it, reproducibly; a goal or a line into the post fails naming it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "skillbus/motion/collision.hpp"
@@ -191,4 +192,57 @@ TEST(Collision, ContactsTheMoveStartsInMayEndButNoneMayBegin) {
   const Plan into = plan_motion(kin(), down, &world);
   ASSERT_FALSE(into.ok);
   EXPECT_NE(into.error.find("held object into 'table'"), std::string::npos) << into.error;
+}
+
+namespace {
+
+// The demo scene without its post, and the post as an occupancy map would hold it: every
+// 1 cm voxel of its volume (what a camera all around it would have seen).
+scene::Scene scene_without_obstacles() {
+  scene::Scene s = demo_scene();
+  s.fixtures.erase(std::remove_if(s.fixtures.begin(), s.fixtures.end(), [](const auto& f) { return f.obstacle; }),
+                   s.fixtures.end());
+  return s;
+}
+
+std::vector<Eigen::Vector3d> post_voxels() {
+  std::vector<Eigen::Vector3d> out;
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 10; ++y)
+      for (int z = 0; z < 60; ++z) out.emplace_back(0.255 + 0.01 * x, 0.455 + 0.01 * y, 0.005 + 0.01 * z);
+  return out;
+}
+
+}  // namespace
+
+TEST(Collision, WhatTheMapHoldsIsAvoidedLikeAKnownObstacle) {
+  const scene::Scene bare = scene_without_obstacles();
+  CollisionModel world(bare);
+  const PlanRequest req = to_bin();
+  const Plan without = plan_motion(kin(), req, &world);
+  ASSERT_TRUE(without.ok) << without.error;
+  EXPECT_EQ(without.how, "direct");  // nothing known in the way
+  world.set_map(post_voxels(), 0.01);
+  EXPECT_EQ(world.map_voxels(), 6000u);
+  const Plan with = plan_motion(kin(), req, &world);
+  ASSERT_TRUE(with.ok) << with.error;
+  EXPECT_EQ(with.how, "around");
+  EXPECT_TRUE(obstacle_touches(with, req.start, req.held).empty());  // checked against the real post
+  // A goal in the mapped space fails naming the map.
+  PlanRequest into = req;
+  into.target = top_down(0.3, 0.5, 0.45);
+  const Plan bad = plan_motion(kin(), into, &world);
+  ASSERT_FALSE(bad.ok);
+  EXPECT_NE(bad.error.find("into 'the occupancy map'"), std::string::npos) << bad.error;
+  // Without the map again: the straight move.
+  world.set_map({}, 0.01);
+  EXPECT_EQ(plan_motion(kin(), req, &world).how, "direct");
+}
+
+TEST(Collision, MapVoxelsAroundAPointCanBeLeftOut) {
+  CollisionModel world(scene_without_obstacles());
+  world.set_map(post_voxels(), 0.01);
+  world.clear_map_around(Eigen::Vector3d(0.3, 0.5, 0.3), 0.05);
+  EXPECT_LT(world.map_voxels(), 6000u);
+  EXPECT_GT(world.map_voxels(), 0u);
 }

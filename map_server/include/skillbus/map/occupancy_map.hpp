@@ -39,6 +39,10 @@ class OccupancyMap {
   Cell state(const Vec3& p) const;
   // Throws std::invalid_argument for a box with lo > hi, or of more than kMaxBoxVoxels.
   BoxCounts box(const Vec3& lo, const Vec3& hi) const;
+  // The centres of the occupied voxels (finest resolution) in the box, in key order (x,
+  // then y, then z), at most `limit`; `more` says whether some were left out. Throws
+  // std::invalid_argument as box() does.
+  std::vector<Vec3> occupied(const Vec3& lo, const Vec3& hi, size_t limit, bool* more = nullptr) const;
   // The area (m2) of the box's footprint (x, y at the map's resolution) whose voxels in
   // the box are all known free: where something of the box's height fits, by what the
   // cameras have seen. `area`, if given, gets the footprint's whole area.
