@@ -70,7 +70,7 @@ fuzz-asan: build
 	  $(PY) -m pytest -q -rs -s tests/integration/test_fuzz.py -k "test_wm_server or test_skill_mgr"
 
 demo: build
-	$(VENV)/bin/skillbus demo $(if $(BUS),--bus $(BUS)) $(if $(ROBOTS),--robots $(ROBOTS)) $(if $(PERCEPTION),--perception)
+	$(VENV)/bin/skillbus demo $(if $(BUS),--bus $(BUS)) $(if $(ROBOTS),--robots $(ROBOTS),$(if $(filter 0,$(PERCEPTION)),,--perception))
 
 bench: build
 	$(PY) bench/lockstep_overhead.py
@@ -82,8 +82,10 @@ bench: build
 	$(PY) bench/sim_physics.py
 	$(PY) bench/can_latency.py
 	$(PY) bench/pick_and_place.py
+	$(PY) bench/demo_obstacle.py
 	$(PY) bench/dds_transport.py
 	$(BUILD)/bench/perception_bench
+	$(BUILD)/bench/motion_bench
 
 clean:
 	rm -rf $(BUILD)

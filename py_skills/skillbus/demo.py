@@ -206,10 +206,34 @@ def bus_url(bus: str) -> str:
     return env if env.startswith("udpm://") else DEFAULT_URL
 
 
+class DemoError(RuntimeError):
+    pass
+
+
+def session_over(conf: Path) -> bool:
+    """The physics server (which ends the session) has exited. DemoError when the run's
+    supervisord stops answering (killed, or its folder cleared by another demo): nothing
+    will say the session ended."""
+    from skillbus import launch
+    states = launch.status(conf)
+    if states:
+        return states.get("sim") in ("EXITED", "FATAL", "STOPPED")
+    if not (conf.parent / "supervisor.sock").exists() or not (launch.supervisord_pid(conf) or 0):
+        raise DemoError(f"the supervisord of this run ({conf}) no longer answers: its socket or process is gone "
+                        "(was the run folder cleared, or supervisord killed?)")
+    return False
+
+
 def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, perception: bool = False) -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
     from skillbus.system import TWO_ARMS_REGIONS, Program, programs, robots_programs
+    if (run_dir / "supervisord.conf").exists() and launch.status(run_dir / "supervisord.conf"):
+        # Another demo runs there: clearing the folder would pull its supervisord's socket
+        # from under it (it would then wait the whole 15 minutes for a session it no
+        # longer sees end).
+        raise DemoError(f"{run_dir} is in use: the supervisord of another demo answers there; wait for it to end, "
+                        f"stop it (skillbus shutdown {run_dir / 'supervisord.conf'}), or give --run-dir")
     if run_dir.exists():
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)
@@ -233,9 +257,8 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     try:
         launch.start(conf, wait_s=60)  # (shuts down what it started when it fails)
         try:
-            wait_until(lambda: launch.status(conf).get("sim") in ("EXITED", "FATAL", "STOPPED"),
-                       900 - (time.monotonic() - t0), "the end of the demo's session (15 minutes at most)",
-                       interval=0.2)
+            wait_until(lambda: session_over(conf), 900 - (time.monotonic() - t0),
+                       "the end of the demo's session (15 minutes at most)", interval=0.2)
             poll_until(lambda: not any(launch.status(conf).get(n) == "RUNNING" for n in participants), 30,
                        interval=0.2)
             try:  # the logger has written all of the run before it is stopped
