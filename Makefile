@@ -70,7 +70,7 @@ fuzz-asan: build
 	  $(PY) -m pytest -q -rs -s tests/integration/test_fuzz.py -k "test_wm_server or test_skill_mgr"
 
 demo: build
-	$(VENV)/bin/skillbus demo $(if $(BUS),--bus $(BUS)) $(if $(ROBOTS),--robots $(ROBOTS),$(if $(filter 0,$(PERCEPTION)),,--perception))
+	$(VENV)/bin/skillbus demo $(if $(BUS),--bus $(BUS)) $(if $(ROBOTS),--robots $(ROBOTS),$(if $(filter 0,$(PERCEPTION)),,--perception) $(if $(filter none,$(SEED)),,--seed $(or $(SEED),1)))
 
 bench: build
 	$(PY) bench/lockstep_overhead.py

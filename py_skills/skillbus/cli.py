@@ -27,6 +27,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "$SKILLBUS_BUS_URL names, else LCM")
     d.add_argument("--perception", action="store_true",
                    help="Locate from the scene's depth camera (docs/perception.md) instead of the perfect camera")
+    d.add_argument("--seed", type=int, default=None, metavar="N",
+                   help="the cubes at random places of the table, from this seed (N >= 0; the scene's \"scatter\", "
+                        "docs/scene.md); default: where the scene file puts them")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
     ls.add_argument("--frames", type=int, default=1000)
     ls.add_argument("--python", type=int, default=3, help="Python participants")

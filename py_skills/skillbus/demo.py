@@ -224,7 +224,27 @@ def session_over(conf: Path) -> bool:
     return False
 
 
-def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, perception: bool = False) -> dict[str, Any]:
+# Where `--seed N` puts the demo's cubes: anywhere on the table the arm reaches and the
+# overhead camera sees, at least 10 cm apart (centres), each turned by a random yaw.
+SCATTER = {"on": "table", "region": [0.3, -0.25, 0.65, 0.3], "min_gap": 0.1}
+
+
+def scattered_scene(folder: Path, seed: int) -> Path:
+    """The demo scene with its cubes at seeded-random places (the scene's "scatter"), and
+    its world model file beside it, in `folder`."""
+    from skillbus.sim import scene as scenes
+    if seed < 0:
+        raise ValueError(f"--seed {seed}: a seed is a whole number >= 0")
+    folder.mkdir(parents=True, exist_ok=True)
+    doc = json.loads(paths.demo_scene().read_text())
+    doc["scatter"] = {**SCATTER, "seed": seed}
+    path = scenes.save(doc, folder / "demo.scene.json", paths.demo_scene())
+    (folder / "demo.ttl").write_text(scenes.to_turtle(scenes.load(path)))
+    return path
+
+
+def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, perception: bool = False,
+        seed: int | None = None) -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
     from skillbus.system import TWO_ARMS_REGIONS, Program, programs, robots_programs
@@ -239,7 +259,10 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     run_dir.mkdir(parents=True)
     if perception and robots != 1:
         raise ValueError("--perception: the two-arm scene has no depth camera yet")
-    progs = programs(run_dir, perception=perception) if robots == 1 else robots_programs(run_dir, robots)
+    if seed is not None and robots != 1:
+        raise ValueError("--seed: the two-arm scene's cubes stay where its file puts them")
+    scene = scattered_scene(run_dir / "scene", seed) if seed is not None else None
+    progs = programs(run_dir, scene=scene, perception=perception) if robots == 1 else robots_programs(run_dir, robots)
     robot_names = [""] if robots == 1 else list(TWO_ARMS_REGIONS)
     participants = [p.name for p in progs if p.participant]
     managers = [p.name for p in progs if p.name.endswith("skill_mgr")]
@@ -278,7 +301,7 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     sim = _last_json(logs / "sim.out")
     mgrs = {m: _last_json(logs / f"{m}.out") for m in managers}
     result = {"sim": sim, "mgr": mgrs[managers[0]], "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus, "url": url,
-              "robots": robots,
+              "robots": robots, "seed": seed,
               "participants": {n: _last_json(logs / f"{n}.out") for n in participants if n not in managers}}
     result["world_model"] = world_model_after(run_dir)
     for view in watcher.views if watcher is not None else []:
@@ -319,6 +342,8 @@ def print_summary(r: dict[str, Any]) -> None:
         for m, t in r["tasks"].items():
             print(f"    {m:16s}{t}")
         print(f"  arms touching     {sim.get('robot_contact_steps', '?')} physics steps (each arm keeps to its region)")
+    if r.get("seed") is not None:
+        print(f"  cubes             at random places of the table from seed {r['seed']}")
     for name, steps in sim.get("obstacle_contact_steps", {}).items():
         print(f"  arm on {name:11s}{steps} physics steps (the motion service plans around it)")
     frame_ms = 1000 * sim.get("sim_time_s", 0) / max(1, sim.get("frames", 1))
@@ -365,7 +390,8 @@ def main(args) -> int:
                                str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", None) or default_transport(),
                                "--robots", str(getattr(args, "robots", 1))]
                               + (["--json"] if args.json else [])
-                              + (["--perception"] if getattr(args, "perception", False) else []))
+                              + (["--perception"] if getattr(args, "perception", False) else [])
+                              + (["--seed", str(args.seed)] if getattr(args, "seed", None) is not None else []))
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -375,7 +401,8 @@ def main(args) -> int:
               f"{'Cyclone DDS' if bus == 'dds' else 'LCM'}{f', {robots} robots' if robots > 1 else ''}) ...",
               flush=True)
         try:
-            r = run(Path(args.run_dir), bus=bus, robots=robots, perception=getattr(args, "perception", False))
+            r = run(Path(args.run_dir), bus=bus, robots=robots, perception=getattr(args, "perception", False),
+                    seed=getattr(args, "seed", None))
         except Interrupted as e:
             print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
             return 128 + e.signum

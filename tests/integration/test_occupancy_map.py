@@ -15,23 +15,25 @@ from skillbus.sim import scene as scene_file
 
 # 0.9 m over the demo table looking down (optical z = world -z): the table, its three
 # cubes and some floor beyond it.
-OVERHEAD = {"name": "overhead", "pose": [0.5, 0, 1.3, 1, 0, 0, 0], "width": 128, "height": 96, "fov_deg": 45}
-# (x, y, top z) of the demo's cubes, and spots of the table top with no cube.
+# The demo scene's camera, over the table and the post, without its noise.
+OVERHEAD = {"name": "overhead", "pose": [0.32, 0.18, 1.6, 1, 0, 0, 0], "width": 400, "height": 300, "fov_deg": 54}
+# (x, y, top z) of the demo's cubes, spots of the table top with no cube, and the post's top.
 CUBES = {"red": (0.4, 0.15, 0.45), "green": (0.5, -0.1, 0.45), "blue": (0.6, 0.05, 0.45)}
 TABLE = [(0.3, -0.25, 0.40), (0.7, 0.25, 0.40), (0.6, -0.3, 0.40)]
+POST = [(0.3, 0.5, 0.60), (0.27, 0.47, 0.60)]
 
 
 def named_points():
     """Per surface: just under and just over it (the surface's voxel is one of the two, as
     the surface lies on a voxel boundary), well over it (free) and under it (unknown)."""
     pts = []
-    for x, y, z in [*CUBES.values(), *TABLE]:
+    for x, y, z in [*CUBES.values(), *TABLE, *POST]:
         pts += [(x, y, z - 0.004), (x, y, z + 0.004), (x, y, z + 0.15), (x, y, z - 0.03)]
     return pts
 
 
 def check_named(states):
-    for i, (x, y, z) in enumerate([*CUBES.values(), *TABLE]):
+    for i, (x, y, z) in enumerate([*CUBES.values(), *TABLE, *POST]):
         under, over, above, inside = states[4 * i:4 * i + 4]
         assert "occupied" in (under, over), ((x, y, z), under, over)  # the surface
         assert above == "free", ((x, y, z), above)                      # the space over it

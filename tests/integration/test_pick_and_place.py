@@ -15,19 +15,21 @@ import pytest
 
 from clear_table_run import run_clear_table
 from conftest import last_json, python_tool
-from skillbus.demo import in_bin
+from skillbus.demo import in_bin, scattered_scene
 from skillbus.netns import Sandbox
 from skillbus.system import programs, start
 
 
-def clear_table(tmp: Path, name: str, load: bool = False, transport: str = "lcm", perception: bool = False) -> dict:
+def clear_table(tmp: Path, name: str, load: bool = False, transport: str = "lcm", perception: bool = False,
+                seed: int | None = None) -> dict:
     run = tmp / name
     run.mkdir(parents=True)
     with Sandbox(log_dir=run / "logs", transport=transport) as box:
         hog = None
         if load:  # another process keeps a core busy all along (and the other one now and then)
             hog = box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
-        out = run_clear_table(box, run, perception=perception)
+        scene = scattered_scene(run / "scene", seed) if seed is not None else None
+        out = run_clear_table(box, run, perception=perception, scene=scene)
         # the load ran for the whole session (it is never told to stop)
         out["load_ran_throughout"] = hog is not None and hog.returncode is None
     return out
@@ -143,3 +145,20 @@ def test_with_perception_the_cubes_are_located_by_the_camera_and_placed_side_by_
     for key in ("frames", "state_digest", "session_digest"):
         assert second["sim"][key] == first["sim"][key], key
     assert second["map"]["map_digest"] == first["map"]["map_digest"]
+
+
+@pytest.mark.parametrize("seed", [1, 4])
+def test_cubes_at_seeded_random_places_are_cleared_around_the_post(tmp_path, seed):
+    # `make demo`: the cubes at random places of the table from a seed (1 by default), the
+    # camera and the map, the post in the way: every cube in the bin, side by side, and the
+    # arm never touched the post.
+    r = clear_table(tmp_path, f"seed{seed}", perception=True, seed=seed)
+    assert r["skill_mgr"]["tasks"] == {"1": "Success: all succeeded"}, r["skill_mgr"]
+    cubes = r["sim"]["objects"]
+    assert sorted(cubes) == ["blue", "green", "red"]
+    for name, p in cubes.items():
+        assert in_bin(p), (name, p)
+        assert r["world_model"][name]["in_type"] == "skiros:Bin", r["world_model"][name]
+    names = sorted(cubes)
+    assert min(math.dist(cubes[a][:3], cubes[b][:3]) for i, a in enumerate(names) for b in names[i + 1:]) > 0.03
+    assert r["sim"]["obstacle_contact_steps"] == {"post": 0}, r["sim"]

@@ -4,6 +4,7 @@ same file as the physics server's world, and both are read and checked by one re
 server accepts and names a mistake the same way."""
 
 import json
+import math
 import subprocess
 import sys
 
@@ -145,3 +146,43 @@ def test_the_command_line_checks_and_names_the_field(tmp_path):
         r = skillbus_scene(action, str(f))
         assert r.returncode == 2 and r.stderr == f"error: {f}: objects[0].size is missing\n", r.stderr
         assert r.stdout == ""
+
+
+def scattered(tmp_path, name: str = "s", **scatter) -> list[dict]:
+    d = demo_doc()
+    d["scatter"] = {"on": "table", "region": [0.3, -0.25, 0.65, 0.3], "min_gap": 0.1, "seed": 1, **scatter}
+    return scene.load(scene.save(d, tmp_path / f"{name}.scene.json", paths.demo_scene()))["objects"]
+
+
+def test_scatter_puts_the_objects_at_seeded_random_places_of_its_region(tmp_path):
+    one, again, other = scattered(tmp_path, "a"), scattered(tmp_path, "b"), scattered(tmp_path, "c", seed=2)
+    assert one == again                       # the same seed: the same poses, bit for bit
+    assert [o["pose"] for o in one] != [o["pose"] for o in other]
+    fixed = {o["name"]: o["pose"] for o in demo_doc()["objects"]}
+    for objects in (one, other):
+        for o in objects:
+            x, y, z = o["pose"][:3]
+            assert 0.3 <= x <= 0.65 and -0.25 <= y <= 0.3 and z == 0.425, o
+            assert o["pose"][:2] != fixed[o["name"]][:2]
+            assert math.isclose(sum(c * c for c in o["pose"][3:]), 1.0, abs_tol=1e-9)
+            assert o["pose"][3] == 0 and o["pose"][4] == 0  # turned about z only
+        for i, a in enumerate(objects):
+            for b in objects[i + 1:]:
+                assert math.dist(a["pose"][:2], b["pose"][:2]) >= 0.1
+    # The world model's Turtle carries the same poses (table-relative: the table is at x 0.5).
+    ttl = scene.to_turtle(scene.load(tmp_path / "a.scene.json"))
+    assert f'rdfs:label "red" ;\n\tskiros:PositionX "{round(one[0]["pose"][0] - 0.5, 6):g}"' in ttl
+    assert scattered(tmp_path, "d", yaw=False)[0]["pose"][3:] == [0.0, 0.0, 0.0, 1.0]
+
+
+def test_scatter_mistakes_are_named(tmp_path):
+    d = demo_doc()
+    for bad, message in (({"on": "post", "region": [0, 0, 1, 1]}, "scatter.on names 'post', which is not a fixture"),
+                         ({"on": "table"}, "scatter.region is missing"),
+                         ({"on": "table", "region": [1, 0, 0, 1]}, "scatter.region must be [x_min, y_min, x_max, y_max] with max > min"),
+                         ({"on": "table", "region": [0, 0, 1, 1], "seed": -1}, "scatter.seed must be a whole number >= 0"),
+                         ({"on": "table", "region": [0, 0, 1, 1], "yaw": "yes"}, "scatter.yaw must be true or false"),
+                         ({"on": "table", "region": [0, 0, 0.05, 0.05], "min_gap": 0.1},
+                          "scatter cannot place 2 objects 0.100000 m apart in its region (a larger region or a smaller min_gap)")):
+        d["scatter"] = bad
+        assert refused(tmp_path, d) == message

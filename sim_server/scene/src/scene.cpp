@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <random>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -77,6 +78,60 @@ class Reader {
   const json& j_;
   std::string where_, file_;
 };
+
+// A uniform double in [0, 1) from the top 53 bits: std::mt19937_64's sequence is fixed by
+// the standard, std::uniform_real_distribution's mapping is not (the same seed would give
+// other poses on another standard library).
+double unit(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
+
+// "scatter": the objects on one fixture at seeded-random places of a region (world x, y),
+// turned by a random yaw, no two centres closer than min_gap. Applied when the scene is
+// read, so the physics server and the world model's Turtle see the same poses.
+void scatter(const Reader& r, Scene& s) {
+  const std::string on = r.str("on", "", true);
+  bool found = false;
+  for (const auto& f : s.fixtures) found = found || (f.name == on && !f.obstacle);
+  if (!found) r.fail_field("on", "names '" + on + "', which is not a fixture");
+  const double seed = r.num("seed", 0);
+  if (seed < 0 || seed != std::floor(seed) || seed > 4294967295.0) r.fail_field("seed", "must be a whole number >= 0");
+  const auto region = r.vec<4>("region", {}, true);  // x_min y_min x_max y_max
+  if (!(region[2] > region[0] && region[3] > region[1])) r.fail_field("region", "must be [x_min, y_min, x_max, y_max] with max > min");
+  const double gap = r.num("min_gap", 0.1);
+  if (gap < 0) r.fail_field("min_gap", "must be >= 0");
+  bool turn = true;  // a random yaw too
+  if (r.has("yaw")) {
+    if (!r.sub("yaw").is_boolean()) r.fail_field("yaw", "must be true or false");
+    turn = r.sub("yaw").get<bool>();
+  }
+  std::mt19937_64 g(static_cast<uint64_t>(seed));
+  constexpr int kTries = 1000;  // per object
+  std::vector<std::array<double, 2>> placed;
+  for (auto& o : s.objects) {
+    if (o.on != on) continue;
+    int tries = 0;
+    std::array<double, 2> xy{};
+    bool clear = false;
+    while (!clear && tries++ < kTries) {
+      xy = {region[0] + unit(g) * (region[2] - region[0]), region[1] + unit(g) * (region[3] - region[1])};
+      clear = true;
+      for (const auto& p : placed) clear = clear && std::hypot(p[0] - xy[0], p[1] - xy[1]) >= gap;
+    }
+    if (!clear)
+      r.fail("cannot place " + std::to_string(placed.size() + 1) + " objects " + std::to_string(gap) +
+             " m apart in its region (a larger region or a smaller min_gap)");
+    placed.push_back(xy);
+    const double yaw = turn ? (unit(g) * 2 - 1) * M_PI : 0.0;
+    o.pose[0] = xy[0];
+    o.pose[1] = xy[1];
+    // yaw about the world's z, then the object's own orientation
+    const double cz = std::cos(yaw / 2), sz = std::sin(yaw / 2);
+    const double x = o.pose[3], y = o.pose[4], z = o.pose[5], w = o.pose[6];
+    o.pose[3] = cz * x - sz * y;
+    o.pose[4] = cz * y + sz * x;
+    o.pose[5] = cz * z + sz * w;
+    o.pose[6] = cz * w - sz * z;
+  }
+}
 
 std::string resolve(const std::string& base_dir, const std::string& p) {
   fs::path q(p);
@@ -320,6 +375,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
     }
   }
   if (top.has("cameras")) read_cameras(top, s, file);
+  if (top.has("scatter")) scatter(Reader(top.sub("scatter"), "scatter", file), s);
   return s;
 }
 
