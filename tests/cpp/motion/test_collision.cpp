@@ -9,34 +9,13 @@
 #include "skillbus/motion/collision.hpp"
 #include "skillbus/motion/ik.hpp"
 #include "skillbus/motion/planner.hpp"
+#include "demo_arm.hpp"
 
 using namespace skillbus;
 using namespace skillbus::motion;
+using namespace skillbus::motion::test;
 
 namespace {
-
-const scene::Scene& demo_scene() {
-  static const scene::Scene s = scene::load_scene(SKILLBUS_TEST_SCENE);
-  return s;
-}
-
-Kinematics& kin() {
-  static Kinematics k(demo_scene());
-  return k;
-}
-
-Eigen::Isometry3d top_down(double x, double y, double z) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  T.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  return T;
-}
-
-Eigen::VectorXd home() {
-  Eigen::VectorXd q(6);
-  q << 0.0, 0.2, 1.6, 0.0, 1.3416, 0.0;
-  return q;
-}
 
 // The arm over the red cube (where the demo lifts it from), holding it.
 Eigen::VectorXd over_red() {

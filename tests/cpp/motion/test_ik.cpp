@@ -7,38 +7,11 @@
 
 #include "skillbus/motion/ik.hpp"
 #include "skillbus/motion/planner.hpp"
+#include "demo_arm.hpp"
 
 using namespace skillbus;
 using namespace skillbus::motion;
-
-namespace {
-
-const scene::Scene& demo_scene() {
-  static const scene::Scene s = scene::load_scene(SKILLBUS_TEST_SCENE);
-  return s;
-}
-
-Kinematics& kin() {
-  static Kinematics k(demo_scene());
-  return k;
-}
-
-Eigen::VectorXd home() {
-  Eigen::VectorXd q(6);
-  q << 0.0, 0.2, 1.6, 0.0, 1.3416, 0.0;
-  return q;
-}
-
-// Tool pointing down, fingers closing along the world axis at `yaw` from y.
-Eigen::Isometry3d top_down(double x, double y, double z, double yaw = 0) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()))
-                   .toRotationMatrix();
-  return T;
-}
-
-}  // namespace
+using namespace skillbus::motion::test;
 
 TEST(Ik, TheHomePoseIsTheScenesToolPose) {
   const Eigen::Isometry3d T = kin().tool_pose(home());
