@@ -35,7 +35,11 @@ TEST(Scene, TheDemoSceneLoads) {
   EXPECT_EQ(s.objects[1].name, "green");
   EXPECT_EQ(s.objects[1].on, "table");
   EXPECT_DOUBLE_EQ(s.objects[1].pose[2], 0.425);
-  ASSERT_EQ(s.fixtures.size(), 2u);
+  ASSERT_EQ(s.fixtures.size(), 3u);  // the table, the bin, and the obstacle (the post) after them
+  EXPECT_FALSE(s.fixtures[1].obstacle);
+  EXPECT_TRUE(s.fixtures[2].obstacle);
+  EXPECT_EQ(s.fixtures[2].name, "post");
+  EXPECT_EQ(s.fixtures[2].type, "Obstacle");
   EXPECT_EQ(s.physics.collision_detector, "bullet");
   ASSERT_EQ(s.robots.size(), 1u);
   EXPECT_EQ(s.robots[0].tool_link, "link6");
