@@ -147,7 +147,7 @@ def test_cli_get_query_tree_save_load(sandbox, tmp_path):
     assert rc == 0 and "  skiros:Table-1 [table] at (0.500, 0.000, 0.000)" in out
     assert "    skiros:Cube-2 [red] at (-0.100, 0.150, 0.425)" in out
     rc, out, _ = cli("save", tmp_path / "saved.ttl")
-    assert rc == 0 and (tmp_path / "saved.ttl").read_text().count("owl:NamedIndividual") == 9
+    assert rc == 0 and (tmp_path / "saved.ttl").read_text().count("owl:NamedIndividual") == 10  # the demo's nine elements and the scene
     rc, out, _ = cli("load", tmp_path / "saved.ttl")
     assert rc == 0 and "9 elements" in out
     rc, _, err = cli("get", "skiros:Nope-1")

@@ -43,7 +43,7 @@ def api() -> None:
     new.setProperty("skiros:PositionX", 0.2)
     new.addRelation("skiros:Table-1", "skiros:contain", "-1")
     new = wmi.add_element(new)
-    assert new.id == "skiros:Cylinder-9", new.id
+    assert new.id == "skiros:Cylinder-10", new.id  # after the demo's nine (the post is skiros:Obstacle-9)
     assert wmi.get_relations("skiros:Table-1", "skiros:contain", new.id)
     # update properties and relations
     new.setProperty("skiros:PositionX", 0.3)
