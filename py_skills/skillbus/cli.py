@@ -105,6 +105,8 @@ def build_parser() -> argparse.ArgumentParser:
     sim_cli.add_parsers(sub)
     from skillbus.skill import cli as skill_cli
     skill_cli.add_parsers(sub)
+    from skillbus.planning import cli as plan_cli
+    plan_cli.add_parser(sub)
     return ap
 
 
@@ -184,6 +186,9 @@ def dispatch(args: argparse.Namespace) -> int:
             from skillbus.system import TASK
             args.task = TASK
         return launch.main_launch(args)
+    if args.command == "plan":
+        from skillbus.planning import cli as plan_cli
+        return plan_cli.main(args)
     if args.command == "dds-record":
         from skillbus import dds_record
         return dds_record.main(args)

@@ -19,7 +19,7 @@ from skillbus import paths
 
 PARTICIPANTS = ["wm", "skill_mgr", "skills", "gripper"]
 TASK = ("ClearTable Gripper=skiros:Gripper-7 Arm=skiros:Arm-8 Table=skiros:Table-1 Bin=skiros:Bin-5")
-LIBRARIES = ["skillbus.skills.gripper", "skillbus.skills.manipulation"]
+LIBRARIES = ["skillbus.skills.gripper", "skillbus.skills.manipulation", "skillbus.skills.planning"]
 
 # Several robots (docs/pick_and_place.md, "Two arms"): the scene with two arms, each at its
 # own table with its own bin, and the region (table, bin) each one clears. An arm keeps to

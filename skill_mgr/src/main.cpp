@@ -25,6 +25,10 @@ int main(int argc, char** argv) {
   app.add_option("--tick-hz", hz, "skill ticks per second of (sim) time; a whole number of frames")
       ->check(apps::positive());
   app.add_option("--tick-timeout-ms", tick_timeout_ms, "how long a skill process may take to answer a tick");
+  int64_t expand_timeout_ms = 30000;
+  app.add_option("--expand-timeout-ms", expand_timeout_ms,
+                 "how long a skill process may take to expand a compound skill (TaskPlan plans then)")
+      ->check(apps::positive());
   apps::add_list_option(app, "--ontology", o.ontology_files,
                         "ontology files or folders (OWL in RDF/XML or Turtle) for its world copy (default: the "
                         "world model server's ontology, read with the world)");
@@ -46,6 +50,7 @@ int main(int argc, char** argv) {
   if (o.tick_period_ns % o.frame_period_ns != 0)
     apps::usage_error(app, "the tick period (1/--tick-hz) must be a whole number of frames (--period-ms)");
   o.tick_timeout = std::chrono::milliseconds(tick_timeout_ms);
+  o.expand_timeout = std::chrono::milliseconds(expand_timeout_ms);
   o.liveness_timeout = std::chrono::milliseconds(liveness_ms);
   if (o.liveness_timeout.count() <= 0) apps::usage_error(app, "--liveness-ms must be positive");
   std::unique_ptr<Bus> bus;

@@ -10,6 +10,7 @@
 #include "param_check.hpp"
 #include "remote_primitive.hpp"
 #include "skill_nodes.hpp"
+#include "start_words.hpp"
 #include "skillbus_msgs/skill_processors_t.hpp"
 #include "skillbus_msgs/skill_state_t.hpp"
 #include "tree/processor_registry.hpp"
@@ -44,15 +45,16 @@ Manager::Manager(Bus& bus, ManagerOptions options)
       world_(bus, participant_, opt_.ontology_files, opt_.wall_clock),
       rpc_(bus, "SKILL") {
   if (!opt_.start_at_first_tick.empty()) {
-    // "Type[:label] [KEY=VALUE ...]": values are typed at the start, by the description.
-    std::istringstream words(opt_.start_at_first_tick);
-    std::string head, kv;
-    words >> head;
+    // "Type[:label] [KEY=VALUE ...]": values are typed at the start, by the description;
+    // double quotes keep spaces in a value (Goal="(skiros:contain a b), (skiros:contain a c)").
+    const std::vector<std::string> words = split_start_words(opt_.start_at_first_tick);
+    const std::string head = words.empty() ? std::string() : words.front();
     skill_start_t req{};
     const auto colon = head.find(':');
     req.type = head.substr(0, colon);
     if (colon != std::string::npos) req.label = head.substr(colon + 1);
-    while (words >> kv) {
+    for (size_t w = 1; w < words.size(); ++w) {
+      const std::string& kv = words[w];
       const auto eq = kv.find('=');
       if (eq == std::string::npos || eq == 0)
         throw std::runtime_error("--start: '" + kv + "' is not KEY=VALUE");
@@ -220,6 +222,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
                                                         [this](const std::string& a) -> RpcClient& { return client(a); },
                                                         opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot,
                                                         opt_.robot_label});
+  t->ctx->expand_timeout = opt_.expand_timeout;
   // (instance ids name running primitives in skill processes: unique across tasks)
   if (impls.empty() || !bad.empty()) {
     const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;

@@ -32,6 +32,9 @@ struct ManagerOptions {
   int64_t frame_period_ns = 10'000'000;   // wall-clock mode
   int64_t tick_period_ns = 40'000'000;    // skill ticks: 25 Hz of (sim) time
   std::chrono::milliseconds tick_timeout{1000};
+  // How long a skill process may take to expand a compound: TaskPlan plans there (Fast
+  // Downward, seconds on a large world; its first plan also imports the planner).
+  std::chrono::milliseconds expand_timeout{30000};
   std::vector<std::string> ontology_files;  // for the world replica (conditions, grounding)
   std::string start_at_first_tick;           // "TYPE" or "TYPE:LABEL": a task started at the first tick
   int64_t end_session_after_frames = -1;     // lockstep: when that task ends, end the session this many frames later

@@ -55,7 +55,7 @@ bool RemoteCompound::start() {
   t.params = params;
   t.num_params = static_cast<int32_t>(params.size());
   CallOptions opts;
-  opts.timeout = ctx_.tick_timeout;
+  opts.timeout = ctx_.expand_timeout;
   skillbus_msgs::skill_tree_t tree;
   try {
     tree = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tree_t>("expand", t, opts);

@@ -26,6 +26,7 @@ struct TaskContext {
   std::string robot_label;
   int64_t frame = -1;             // the frame being ticked, passed to skill processes
   int64_t sim_time_ns = 0;
+  std::chrono::milliseconds expand_timeout{30000};  // a compound's expansion (ManagerOptions)
 };
 
 // The replica when it is loaded, else null (reads that may go without a world).

@@ -21,7 +21,7 @@ from skillbus.system import programs, start
 
 
 def clear_table(tmp: Path, name: str, load: bool = False, transport: str = "lcm", perception: bool = False,
-                seed: int | None = None) -> dict:
+                seed: int | None = None, task: str | None = None) -> dict:
     run = tmp / name
     run.mkdir(parents=True)
     with Sandbox(log_dir=run / "logs", transport=transport) as box:
@@ -29,7 +29,7 @@ def clear_table(tmp: Path, name: str, load: bool = False, transport: str = "lcm"
         if load:  # another process keeps a core busy all along (and the other one now and then)
             hog = box.start("load", [sys.executable, "-c", "import time\nwhile True:\n    sum(range(10000))"])
         scene = scattered_scene(run / "scene", seed) if seed is not None else None
-        out = run_clear_table(box, run, perception=perception, scene=scene)
+        out = run_clear_table(box, run, perception=perception, scene=scene, task=task)
         # the load ran for the whole session (it is never told to stop)
         out["load_ran_throughout"] = hog is not None and hog.returncode is None
     return out
@@ -162,3 +162,23 @@ def test_cubes_at_seeded_random_places_are_cleared_around_the_post(tmp_path, see
     names = sorted(cubes)
     assert min(math.dist(cubes[a][:3], cubes[b][:3]) for i, a in enumerate(names) for b in names[i + 1:]) > 0.03
     assert r["sim"]["obstacle_contact_steps"] == {"post": 0}, r["sim"]
+
+
+TWO_IN_THE_BIN = 'TaskPlan Goal="(skiros:contain skiros:Bin-5 skiros:Cube-2), (skiros:contain skiros:Bin-5 skiros:Cube-4)"'
+
+
+def test_task_plan_puts_two_cubes_in_the_bin_the_same_way_every_run(tmp_path):
+    # Goals, not a tree: TaskPlan plans Pick and Place for the red and the blue cube from the
+    # skills' conditions and the world model (Fast Downward), and runs them under lockstep.
+    runs = [clear_table(tmp_path, f"plan{i}", task=TWO_IN_THE_BIN) for i in range(2)]
+    first = runs[0]
+    assert first["skill_mgr"]["tasks"] == {"1": "Success: all succeeded"}, first["skill_mgr"]
+    wm = first["world_model"]
+    assert wm["red"]["in_type"] == "skiros:Bin" and wm["blue"]["in_type"] == "skiros:Bin", wm
+    assert wm["green"]["in_type"] == "skiros:Table", wm  # no goal of its own: it stays
+    assert in_bin(first["sim"]["objects"]["red"]) and in_bin(first["sim"]["objects"]["blue"])
+    assert not in_bin(first["sim"]["objects"]["green"])
+    for key in ("frames", "state_digest", "session_digest"):
+        assert runs[1]["sim"][key] == first["sim"][key], key
+    for n in ("wm", "skill_mgr", "skills", "gripper"):
+        assert runs[1][n]["digest"] == first[n]["digest"], n

@@ -132,6 +132,7 @@ def description_msg(skill: SkillCore) -> skill_description_t:
     m.pre, m.hold, m.post = (condition_msgs(d.preConditions), condition_msgs(d.holdConditions),
                              condition_msgs(d.postConditions))
     m.num_pre, m.num_hold, m.num_post = len(m.pre), len(m.hold), len(m.post)
+    m.not_for_planning = not getattr(skill, "available_for_planning", True)
     return m
 
 

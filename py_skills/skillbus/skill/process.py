@@ -110,6 +110,10 @@ class SkillProcess:
         # self.id stays its own); each run of a primitive gets an instance of its own.
         self.loaded, self.errors = load_libraries(libraries, wmi)
         self.classes: dict[str, type] = {label: type(s) for label, s in self.loaded.items()}
+        # What this process registers, also for its compounds to see (TaskPlan plans with it).
+        descriptions = [description_msg(s) for _, s in sorted(self.loaded.items())]
+        for s in self.loaded.values():
+            s.registered_skills = descriptions
         for e in self.errors:
             log.error("%s", e)
         self.area = "SKPROC_" + name.upper()

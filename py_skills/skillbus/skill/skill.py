@@ -66,6 +66,11 @@ class SkillCore:
     """What primitives and compound skills share: a description, a label, parameters, the
     world-model client, a state and the progress counter."""
 
+    # SkiROS2's: False leaves the skill out of the task planner's actions (docs/planning.md),
+    # for a skill whose conditions another skill's already cover (the gripper's grasp is
+    # Pick without the arm's motion).
+    available_for_planning = True
+
     def __init__(self) -> None:
         self._id = next(_skill_ids)
         self._description: SkillDescription | None = None

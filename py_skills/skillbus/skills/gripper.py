@@ -59,10 +59,16 @@ class gripper_close(GripperPrimitive):
 
 
 class grasp(GripperPrimitive):
+    # Pick's conditions without Pick's motion: the task planner plans with Pick.
+    available_for_planning = False
+
     def createDescription(self):
         self.setDescription(Grasp(), "grasp")
 
 
 class release(GripperPrimitive):
+    # Place's conditions without Place's motion: the task planner plans with Place.
+    available_for_planning = False
+
     def createDescription(self):
         self.setDescription(Release(), "release")

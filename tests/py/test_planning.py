@@ -1,0 +1,185 @@
+"""The task planner alone (skillbus.planning): skills and a world built in code, planned
+by Fast Downward through Unified Planning. The demo's Pick and Place; a mobile robot that
+drives between locations (the shortest plan, optimal mode); goals that cannot be reached
+or are malformed; skills left out and why."""
+
+from __future__ import annotations
+
+import pytest
+
+from skillbus.planning import domain as domains
+from skillbus.planning.goals import GoalError, parse_goals
+from skillbus.planning.model import Condition, SkillSpec, World
+from skillbus.planning.solve import PlanError, make_plan, write_pddl
+from skillbus.world.ontology_view import OntologyView
+
+CLASSES = {
+    "sumo:Object": [], "sumo:Agent": ["sumo:Object"], "skiros:PhysicalObject": ["sumo:Object"],
+    "skiros:Location": ["skiros:PhysicalObject"], "skiros:Table": ["skiros:Location"], "skiros:Bin": ["skiros:Location"],
+    "skiros:Product": ["skiros:PhysicalObject"], "skiros:Cube": ["skiros:Product"],
+    "skiros:Gripper": ["skiros:PhysicalObject"], "skiros:Arm": ["skiros:PhysicalObject"],
+    # several parents: the planner keeps the one through which a parameter's concept is reached
+    "skiros:Agent": ["skiros:PhysicalObject", "sumo:Agent"], "skiros:Robot": ["skiros:Agent"],
+}
+ONTOLOGY = OntologyView.from_json({"classes": CLASSES, "relations": {"skiros:contain": [], "skiros:at": []},
+                                   "individuals": {}})
+
+
+def contain(s: str, o: str, desired: bool = True) -> Condition:
+    return Condition("Relation", s, o, "skiros:contain", desired=desired)
+
+
+PICK = SkillSpec("Pick", "pick", [("Gripper", "skiros:Gripper"), ("Arm", "skiros:Arm"), ("Object", "skiros:Product")],
+                 pre=[contain("Gripper", "Object", False)], post=[contain("Gripper", "Object")])
+PLACE = SkillSpec("Place", "place", [("Gripper", "skiros:Gripper"), ("Arm", "skiros:Arm"), ("Object", "skiros:Product"),
+                                     ("Location", "skiros:Location")],
+                  pre=[contain("Gripper", "Object")], post=[contain("Location", "Object")])
+GRASP = SkillSpec("Grasp", "grasp", [("Gripper", "skiros:Gripper"), ("Object", "skiros:Product")],
+                  pre=[contain("Gripper", "Object", False)], post=[contain("Gripper", "Object")], for_planning=False)
+MOVE = SkillSpec("MoveArm", "move_arm", [("Arm", "skiros:Arm"), ("Target", "skiros:PhysicalObject")])
+
+
+def demo_world() -> World:
+    types = {"skiros:Table-1": "skiros:Table", "skiros:Cube-2": "skiros:Cube", "skiros:Cube-3": "skiros:Cube",
+             "skiros:Cube-4": "skiros:Cube", "skiros:Bin-5": "skiros:Bin", "skiros:Gripper-7": "skiros:Gripper",
+             "skiros:Arm-8": "skiros:Arm"}
+    relations = {("skiros:Table-1", "skiros:contain", f"skiros:Cube-{i}") for i in (2, 3, 4)}
+    return World(types, {}, relations, ONTOLOGY)
+
+
+def test_the_demos_pick_and_place_reach_two_cubes_in_the_bin():
+    plan = make_plan([PICK, PLACE, GRASP, MOVE], demo_world(),
+                     "(skiros:contain skiros:Bin-5 skiros:Cube-2), (skiros:contain skiros:Bin-5 skiros:Cube-4)")
+    assert [s.skill.type for s in plan.steps] == ["Pick", "Place", "Pick", "Place"]
+    placed = {s.params["Object"] for s in plan.steps if s.skill.type == "Place"}
+    assert placed == {"skiros:Cube-2", "skiros:Cube-4"}
+    for s in plan.steps:
+        assert s.params["Gripper"] == "skiros:Gripper-7" and s.params["Arm"] == "skiros:Arm-8"
+        if s.skill.type == "Place":
+            assert s.params["Location"] == "skiros:Bin-5"
+    # Each Pick comes right before the Place of its cube.
+    assert [s.params["Object"] for s in plan.steps[0::2]] == [s.params["Object"] for s in plan.steps[1::2]]
+    assert plan.left_out == {"grasp": "it is not available for planning (available_for_planning = False)",
+                             "move_arm": "it has no post-condition: nothing for the planner to reach with it"}
+
+
+def test_a_goal_already_true_needs_no_step_and_the_same_request_the_same_plan():
+    w = demo_world()
+    assert make_plan([PICK, PLACE], w, "(skiros:contain skiros:Table-1 skiros:Cube-3)").steps == []
+    goal = "(skiros:contain skiros:Bin-5 skiros:Cube-3), (skiros:contain skiros:Gripper-7 skiros:Cube-2)"
+    runs = [[str(s) for s in make_plan([PICK, PLACE], w, goal).steps] for _ in range(2)]
+    assert runs[0] == runs[1] and len(runs[0]) == 3
+
+
+# -- a mobile manipulator -----------------------------------------------------------------
+def at(s: str, o: str, desired: bool = True) -> Condition:
+    return Condition("Relation", s, o, "skiros:at", desired=desired)
+
+
+DRIVE = SkillSpec("Drive", "drive", [("Robot", "skiros:Robot"), ("From", "skiros:Location"), ("To", "skiros:Location")],
+                  pre=[at("Robot", "From")], post=[at("Robot", "From", False), at("Robot", "To")])
+FETCH = SkillSpec("Fetch", "fetch", [("Robot", "skiros:Robot"), ("Object", "skiros:Product"), ("At", "skiros:Location")],
+                  pre=[at("Robot", "At"), contain("At", "Object"), contain("Robot", "Object", False)],
+                  post=[contain("Robot", "Object")])
+DROP = SkillSpec("Drop", "drop", [("Robot", "skiros:Robot"), ("Object", "skiros:Product"), ("At", "skiros:Location")],
+                 pre=[at("Robot", "At"), contain("Robot", "Object")], post=[contain("At", "Object")])
+
+
+def warehouse() -> World:
+    """Four shelves in a row; the robot at the first; a cube on each of the other three."""
+    types = {"skiros:Robot-1": "skiros:Robot", **{f"skiros:Table-{i}": "skiros:Table" for i in (2, 3, 4, 5)},
+             "skiros:Cube-6": "skiros:Cube", "skiros:Cube-7": "skiros:Cube", "skiros:Cube-8": "skiros:Cube"}
+    relations = {("skiros:Robot-1", "skiros:at", "skiros:Table-2"), ("skiros:Table-3", "skiros:contain", "skiros:Cube-6"),
+                 ("skiros:Table-4", "skiros:contain", "skiros:Cube-7"), ("skiros:Table-5", "skiros:contain", "skiros:Cube-8")}
+    return World(types, {}, relations, ONTOLOGY)
+
+
+def test_a_mobile_robot_gets_the_shortest_plan_for_three_goals_at_once():
+    # Every cube to the first table. The robot may carry several things, so the shortest
+    # plan collects all three on one trip: three drives out (table 3, 4, 5 in some order),
+    # three fetches, one drive back, three drops: 10 skills. A plan that brings each cube
+    # back on its own takes more.
+    goal = ", ".join(f"(skiros:contain skiros:Table-2 skiros:Cube-{i})" for i in (6, 7, 8))
+    optimal = make_plan([DRIVE, FETCH, DROP], warehouse(), goal, optimal=True)
+    kinds = [s.skill.type for s in optimal.steps]
+    assert kinds.count("Fetch") == 3 and kinds.count("Drop") == 3
+    assert kinds.count("Drive") == 4  # out to 3, 4, 5 (three drives), and back (one)
+    assert len(optimal.steps) == 10 and optimal.engine == "fast-downward-opt"
+    # The plan is executable: replay it on the facts.
+    where, holds, cubes = "skiros:Table-2", set(), {"skiros:Cube-6": "skiros:Table-3", "skiros:Cube-7": "skiros:Table-4",
+                                                   "skiros:Cube-8": "skiros:Table-5"}
+    for s in optimal.steps:
+        if s.skill.type == "Drive":
+            assert s.params["From"] == where
+            where = s.params["To"]
+        elif s.skill.type == "Fetch":
+            assert s.params["At"] == where == cubes[s.params["Object"]]
+            holds.add(s.params["Object"])
+            cubes[s.params["Object"]] = "robot"
+        else:
+            assert s.params["At"] == where and s.params["Object"] in holds
+            holds.discard(s.params["Object"])
+            cubes[s.params["Object"]] = where
+    assert set(cubes.values()) == {"skiros:Table-2"}
+    # A satisficing plan reaches the goals too, perhaps with more steps.
+    assert len(make_plan([DRIVE, FETCH, DROP], warehouse(), goal).steps) >= 10
+
+
+def test_goals_that_cannot_be_reached_are_named():
+    w = demo_world()
+    # No skill puts anything into a cube.
+    with pytest.raises(PlanError, match=r"reaches \(skiros:contain skiros:Cube-2 skiros:Cube-3\) from the world"):
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5 skiros:Cube-4), (skiros:contain skiros:Cube-2 skiros:Cube-3)")
+    # Each alone, not both: an element is in one container.
+    with pytest.raises(PlanError, match=r"each goal can be reached on its own, but not all 2 together"):
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5 skiros:Cube-4), (skiros:contain skiros:Table-1 skiros:Cube-4)")
+    # Without Pick nothing leaves the table; the message names the skills it had.
+    with pytest.raises(PlanError, match=r"no sequence of the skills \(place\) reaches"):
+        make_plan([PLACE, GRASP], w, "(skiros:contain skiros:Bin-5 skiros:Cube-4)")
+
+
+def test_malformed_goals_and_unknown_names_are_refused_naming_them():
+    w = demo_world()
+    with pytest.raises(GoalError, match=r"no goal"):
+        make_plan([PICK, PLACE], w, " ")
+    with pytest.raises(GoalError, match=r"goal 2 '\(skiros:contain skiros:Bin-5': a '\(' is not closed"):
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5 skiros:Cube-4), (skiros:contain skiros:Bin-5")
+    with pytest.raises(GoalError, match=r"the world model has no element skiros:Cube-99"):
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5 skiros:Cube-99)")
+    with pytest.raises(GoalError, match=r"no skill the planner can use has skiros:near in its conditions "
+                                        r"\(the predicates it knows: skiros:contain\)"):
+        make_plan([PICK, PLACE], w, "(skiros:near skiros:Bin-5 skiros:Cube-4)")
+    with pytest.raises(GoalError, match=r"skiros:contain takes 2 element\(s\)"):
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5)")
+    with pytest.raises(GoalError, match=r"a fact names a predicate and one or two elements, not 3"):
+        parse_goals("(skiros:contain a b c)")
+
+
+def test_conditions_become_preconditions_and_effects(tmp_path):
+    """Properties, types and disjunctions; what cannot be expressed leaves the skill out."""
+    prop = lambda owl, value, d=True, op="=", o="": Condition("Property", "Object", "", owl, op, value, d, o)  # noqa: E731
+    paint = SkillSpec("Paint", "paint", [("Object", "skiros:Product")],
+                      pre=[prop("skiros:Color", "red", o="c"), prop("skiros:Color", "blue", o="c"),
+                           prop("skiros:Weight", 1.0, op="<"), Condition("OnType", "Object", "", "skiros:Cube")],
+                      post=[prop("skiros:Color", "green")])
+    weigh = SkillSpec("Weigh", "weigh", [("Object", "skiros:Product")], post=[prop("skiros:Weight", 2.0, op=">")])
+    typed = SkillSpec("Retype", "retype", [("Object", "skiros:Product")],
+                      post=[Condition("OnType", "Object", "", "skiros:Cube")])
+    w = demo_world()
+    w.properties = {"skiros:Cube-2": {"skiros:Color": ["red"], "skiros:Weight": [0.2]},
+                    "skiros:Cube-3": {"skiros:Color": ["white"], "skiros:Weight": [0.2]},
+                    "skiros:Cube-4": {"skiros:Color": ["blue"], "skiros:Weight": [5.0]}}
+    plan = make_plan([paint, weigh, typed], w, "(skiros:Color=green skiros:Cube-2)")
+    assert [str(s) for s in plan.steps] == ["Paint (paint) Object=skiros:Cube-2"]
+    assert plan.left_out == {"weigh": "its post-condition skiros:Weight > 2.0 does not say which value results",
+                             "retype": "its post-condition OnType skiros:Cube is not a fact a skill can make true"}
+    with pytest.raises(PlanError):  # white, not red or blue
+        make_plan([paint], w, "(skiros:Color=green skiros:Cube-3)")
+    with pytest.raises(PlanError):  # too heavy
+        make_plan([paint], w, "(skiros:Color=green skiros:Cube-4)")
+    # Painting it green makes it no longer red; the files Fast Downward reads.
+    d = domains.build([paint], w, parse_goals("(not (skiros:Color=red skiros:Cube-2))"))
+    dom, prob = write_pddl(d, tmp_path)
+    text = dom.read_text()
+    assert "(or (skiros_color_red ?object) (skiros_color_blue ?object))" in text.lower().replace("=", "_")
+    assert prob.read_text().count("(:init") == 1
