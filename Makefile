@@ -83,6 +83,7 @@ bench: build
 	$(PY) bench/can_latency.py
 	$(PY) bench/pick_and_place.py
 	$(PY) bench/demo_obstacle.py
+	$(PY) bench/planning_bench.py
 	$(PY) bench/dds_transport.py
 	$(BUILD)/bench/perception_bench
 	$(BUILD)/bench/motion_bench

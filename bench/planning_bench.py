@@ -4,7 +4,7 @@ conditions, the skills of tests/integration/skill_libs/warehouse_skills.py), goa
 and 20 products each brought to another shelf (seeded). skillbus's planner (the domain and
 problem built from the skills and the world, Fast Downward's first plan through Unified
 Planning) beside pyperplan (greedy best-first search with h_FF) given the same PDDL files,
-in the same run; the ratio of their times.
+in the same run; the ratio of their times; and skillbus's optimal mode (the fewest skills).
 
 Run: .venv/bin/python bench/planning_bench.py   (in `make bench`)
 """
@@ -92,24 +92,30 @@ def main() -> int:
     make_plan(SKILLS, w, goals(random.Random(0), on, 1))  # (Unified Planning's import and first call)
     rows = []
     print(f"task planning: {SHELVES} shelves, {PRODUCTS} products, a robot with Drive, Fetch, Drop (seed {SEED})")
-    print(f"  {'goals':>5} {'skillbus (s)':>13} {'steps':>6} {'pyperplan (s)':>14} {'steps':>6} {'ratio':>7}")
+    print(f"  {'goals':>5} {'skillbus (s)':>13} {'steps':>6} {'pyperplan (s)':>14} {'steps':>6} {'ratio':>7} "
+          f"{'optimal (s)':>12} {'steps':>6}")
     with tempfile.TemporaryDirectory() as tmp:
         for n in (1, 5, 20):
             text = goals(rng, on, n)
             t0 = time.monotonic()
             plan = make_plan(SKILLS, w, text)
             ours = time.monotonic() - t0
+            t0 = time.monotonic()
+            best = make_plan(SKILLS, w, text, optimal=True, time_limit=PYPERPLAN_LIMIT_S)
+            optimal_s = time.monotonic() - t0
             d = domains.build(SKILLS, w, parse_goals(text))
             dom, prob = write_pddl(d, Path(tmp) / f"g{n}")
             theirs, their_steps = pyperplan(dom, prob)
             ratio = f"{theirs / ours:6.1f}x" if theirs else "   n/a"
             print(f"  {n:>5} {ours:>13.2f} {len(plan.steps):>6} "
-                  f"{(f'{theirs:.2f}' if theirs else f'>{PYPERPLAN_LIMIT_S:.0f}'):>14} {their_steps or '-':>6} {ratio}",
-                  flush=True)
+                  f"{(f'{theirs:.2f}' if theirs else f'>{PYPERPLAN_LIMIT_S:.0f}'):>14} {their_steps or '-':>6} {ratio} "
+                  f"{optimal_s:>12.2f} {len(best.steps):>6}", flush=True)
             rows.append({"goals": n, "skillbus_s": round(ours, 3), "skillbus_steps": len(plan.steps),
-                         "pyperplan_s": round(theirs, 3) if theirs else None, "pyperplan_steps": their_steps})
+                         "pyperplan_s": round(theirs, 3) if theirs else None, "pyperplan_steps": their_steps,
+                         "optimal_s": round(optimal_s, 3), "optimal_steps": len(best.steps)})
     print("  (skillbus: building the problem, writing it for Fast Downward, its translation and search; "
-          "pyperplan: parsing, grounding and search of the same PDDL; ratio: pyperplan / skillbus)")
+          "pyperplan: parsing, grounding and search of the same PDDL; ratio: pyperplan / skillbus; "
+          "optimal: skillbus --optimal, A* with LM-cut, the fewest skills)")
     print(json.dumps({"planning": rows}))
     return 0
 

@@ -149,7 +149,7 @@ def test_cli_get_query_tree_save_load(sandbox, tmp_path):
     rc, out, _ = cli("save", tmp_path / "saved.ttl")
     assert rc == 0 and (tmp_path / "saved.ttl").read_text().count("owl:NamedIndividual") == 10  # the demo's nine elements and the scene
     rc, out, _ = cli("load", tmp_path / "saved.ttl")
-    assert rc == 0 and "9 elements" in out
+    assert rc == 0 and "10 elements" in out  # the scene and its nine
     rc, _, err = cli("get", "skiros:Nope-1")
     assert rc == 1 and "no element skiros:Nope-1" in err
     (tmp_path / "broken.ttl").write_text("this is not turtle")

@@ -183,3 +183,18 @@ def test_conditions_become_preconditions_and_effects(tmp_path):
     text = dom.read_text()
     assert "(or (skiros_color_red ?object) (skiros_color_blue ?object))" in text.lower().replace("=", "_")
     assert prob.read_text().count("(:init") == 1
+
+
+def test_the_time_limit_ends_the_search_naming_it():
+    # A warehouse of 30 shelves and 60 cubes, 15 cubes to bring home: more than 50 ms of work.
+    types = {"skiros:Robot-1": "skiros:Robot", **{f"skiros:Table-{i}": "skiros:Table" for i in range(2, 32)}}
+    relations = {("skiros:Robot-1", "skiros:at", "skiros:Table-2")}
+    for i in range(60):
+        cube = f"skiros:Cube-{100 + i}"
+        types[cube] = "skiros:Cube"
+        relations.add((f"skiros:Table-{3 + i % 29}", "skiros:contain", cube))
+    w = World(types, {}, relations, ONTOLOGY)
+    goal = ", ".join(f"(skiros:contain skiros:Table-2 skiros:Cube-{100 + 4 * i})" for i in range(15))
+    with pytest.raises(PlanError, match=r"no plan within the planner's time limit of 0.05 s \(fast-downward\) "
+                                        r"for 15 goal\(s\)"):
+        make_plan([DRIVE, FETCH, DROP], w, goal, time_limit=0.05)
