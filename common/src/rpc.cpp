@@ -257,6 +257,15 @@ void RpcClient::pull_missing(const std::string& method, int64_t request_id, int6
   }
 }
 
+void RpcClient::wait(std::chrono::milliseconds left) {
+  if (!while_waiting_) {
+    bus_.handle(left);
+    return;
+  }
+  bus_.handle(std::min(left, std::chrono::milliseconds(200)));
+  while_waiting_();
+}
+
 Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const CallOptions& opts) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
@@ -286,7 +295,7 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
       while (!done() && pending_[rid].have - had < kRpcPullWindow) {
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(again - clock::now());
         if (left.count() <= 0) break;
-        bus_.handle(left);
+        wait(left);
       }
       continue;
     }
@@ -300,7 +309,7 @@ Bytes RpcClient::call_raw(const std::string& method, const Bytes& payload, const
     while (!done() && pending_[rid].parts.empty()) {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(resend_at - clock::now());
       if (left.count() <= 0) break;
-      bus_.handle(left);
+      wait(left);
     }
   }
   Pending result = std::move(pending_[rid]);

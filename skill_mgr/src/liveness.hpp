@@ -24,10 +24,10 @@ class Liveness {
   Liveness& operator=(const Liveness&) = delete;
   void registered(const std::string& process);  // a registration counts as a heartbeat
   void on_frame();                              // announce (once a second), drop the silent
+  void announce();                              // once a second at most (also while a call waits)
   int64_t incarnation() const { return incarnation_; }
 
  private:
-  void announce();
   void drop_silent();
 
   Bus& bus_;

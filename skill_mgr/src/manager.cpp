@@ -192,7 +192,12 @@ Manager::Manager(Bus& bus, ManagerOptions options)
 
 RpcClient& Manager::client(const std::string& area) {
   auto& c = clients_[area];
-  if (!c) c = std::make_unique<RpcClient>(bus_, area, opt_.name);
+  if (!c) {
+    c = std::make_unique<RpcClient>(bus_, area, opt_.name);
+    // A skill process may take seconds to answer (an expansion that plans): the manager
+    // goes on announcing itself meanwhile, or the CLI would call it silent.
+    if (liveness_) c->set_while_waiting([this] { liveness_->announce(); });
+  }
   return *c;
 }
 

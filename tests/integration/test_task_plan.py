@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from test_skills import cli, start_system, start_wm
+from test_skills import LIBS, cli, start_system, start_wm
 
 HERE = Path(__file__).resolve().parent
 ALL_HOME = ", ".join(f"(skiros:contain skiros:Table-2 skiros:Cube-{i})" for i in (6, 7, 8))
@@ -75,6 +75,20 @@ def test_a_step_that_fails_because_the_world_changed_makes_task_plan_plan_again(
     assert "(RetryOnFail(1)) Success: succeeded at attempt 2" in out, out  # the second plan, to where the cube is now
 
 
+def test_task_plan_plans_with_the_skills_of_every_process_of_its_manager(sandbox, tmp_path):
+    # TaskPlan in one skill process, the warehouse skills in another: it plans with what the
+    # manager has registered, not only with its own process's skills.
+    start_wm(sandbox, tmp_path / "wm", scene=HERE / "warehouse.ttl")
+    start_system(sandbox, "skillbus.skills.planning", name="planner", world_model=True)
+    other = sandbox.start("movers", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "movers",
+                                     "--library", "warehouse_skills", "--world-model"], env={"PYTHONPATH": str(LIBS)})
+    other.wait_for("registered", 30)
+    rc, out, err = cli(sandbox, "run", "TaskPlan", "-p", "Goal=(skiros:contain skiros:Table-2 skiros:Cube-7)",
+                       "--timeout", "120", timeout=150)
+    assert rc == 0, out + err
+    assert where(sandbox, "skiros:Cube-7") == "skiros:Table-2"
+
+
 def test_goals_that_cannot_be_reached_or_are_malformed_fail_naming_why(warehouse):
     rc, out, err = cli(warehouse, "run", "TaskPlan", "-p", "Goal=(skiros:contain skiros:Cube-7 skiros:Cube-6)",
                        "--timeout", "60", timeout=90)
@@ -89,3 +103,16 @@ def test_goals_that_cannot_be_reached_or_are_malformed_fail_naming_why(warehouse
     assert rc == 2 and "no skill the planner can use has skiros:near in its conditions" in err, out + err
     rc, out, err = cli(warehouse, "plan", "(skiros:contain skiros:Table-2 skiros:Cube-6)", "--time-limit", "0")
     assert rc == 2 and "--time-limit must be > 0" in err, out + err
+
+
+
+def test_a_long_expansion_keeps_the_process_and_the_manager_heard(warehouse):
+    # An expansion that plans may take seconds. Before, the skill process sent no heartbeat
+    # meanwhile (the manager dropped its skills after 3 s: the next run found "unknown
+    # skill ... (available: none)"), and the manager, waiting for it, did not announce
+    # itself (the CLI gave the task up: "the skill manager went silent"). Now the process
+    # beats from a thread of its own and the manager announces while it waits.
+    rc, out, err = cli(warehouse, "run", "Ponder", "--timeout", "60", timeout=90)
+    assert rc == 0 and "Ponder" in out and "Success" in out, out + err
+    rc, out, err = cli(warehouse, "skills")
+    assert rc == 0 and "Drive (drive" in out and "TaskPlan (task_plan" in out, out + err

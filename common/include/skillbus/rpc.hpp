@@ -154,6 +154,10 @@ class RpcClient {
 
   const std::string& client_id() const { return client_id_; }
   long retries() const { return retries_; }
+  // Called at least every 200 ms while a call waits for its reply: a caller that must be
+  // heard while it waits (the skill manager's announcements, during an expansion that
+  // plans for seconds) does it here.
+  void set_while_waiting(std::function<void()> fn) { while_waiting_ = std::move(fn); }
 
  private:
   struct Pending {
@@ -165,6 +169,7 @@ class RpcClient {
     int32_t have = 0;
   };
   void on_reply(const std::string& ch, const uint8_t* data, size_t size);
+  void wait(std::chrono::milliseconds left);  // the bus handled for at most `left`, then while_waiting_
   // Asks for the first kRpcPullWindow chunks of `p`'s reply still missing.
   void pull_missing(const std::string& method, int64_t request_id, int64_t deadline_ns, const Pending& p);
 
@@ -177,6 +182,7 @@ class RpcClient {
   std::map<int64_t, Pending> pending_;
   long retries_ = 0;
   BadInputCounter bad_;
+  std::function<void()> while_waiting_;
 };
 
 }  // namespace skillbus

@@ -9,6 +9,7 @@ Under lockstep it is a participant (its world-model replica follows the frames).
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import inspect
 import json
@@ -16,6 +17,7 @@ import logging
 import os
 import struct
 import sys
+import threading
 import time
 import traceback
 from typing import Any
@@ -110,10 +112,16 @@ class SkillProcess:
         # self.id stays its own); each run of a primitive gets an instance of its own.
         self.loaded, self.errors = load_libraries(libraries, wmi)
         self.classes: dict[str, type] = {label: type(s) for label, s in self.loaded.items()}
-        # What this process registers, also for its compounds to see (TaskPlan plans with it).
-        descriptions = [description_msg(s) for _, s in sorted(self.loaded.items())]
+        # What the manager has registered, for compounds that plan (TaskPlan): every skill
+        # process's skills, this one's when the manager does not answer.
+        self.own_descriptions = [description_msg(s) for _, s in sorted(self.loaded.items())]
+        self._manager_client: RpcClient | None = None
+        # On the wall clock, Liveness sets this: a context in which heartbeats go on from a
+        # thread of their own (an expansion that plans may take seconds; the manager drops
+        # the skills of a process silent for 3 s).
+        self.busy: Any = None
         for s in self.loaded.values():
-            s.registered_skills = descriptions
+            s.registered_skills = self.registered_skills
         for e in self.errors:
             log.error("%s", e)
         self.area = "SKPROC_" + name.upper()
@@ -130,6 +138,19 @@ class SkillProcess:
             participant.after_frame.append(lambda frame: self.server.retry_deferred())
         self.incarnation = time.time_ns()  # identity of this run of the process, not behaviour
         self.rejects = Rejects(f"skills-process {name}")  # ticks and expansions refused (check_tick)
+
+    def registered_skills(self) -> list:
+        """The skill descriptions the skill manager has registered (skill_description_t, all
+        processes'); this process's own when it does not answer within 5 s (no manager:
+        --standalone)."""
+        from skillbus.msgs import skill_list_t, skill_start_t
+        if self._manager_client is None:
+            self._manager_client = RpcClient(self.bus, "SKILL", f"{self.name}-planner")
+        try:
+            return list(self._manager_client.call("list", skill_start_t(), skill_list_t, timeout=5.0).skills)
+        except RpcError as e:
+            log.warning("the skill manager did not list its skills (%s): planning with this process's own", e)
+            return list(self.own_descriptions)
 
     def registration(self) -> skill_register_t:
         m = skill_register_t()
@@ -293,7 +314,10 @@ class SkillProcess:
             skill._resetParams()
             skill.wmi = self.wmi
             apply_param_msgs(skill, t.params)
-            return tree_msg(skill.tree())
+            if self.busy is None:
+                return tree_msg(skill.tree())
+            with self.busy():
+                return tree_msg(skill.tree())
         except Exception as e:
             out = skill_tree_t()
             out.error = f"{t.label}.expand() raised {type(e).__name__}: {e}"
@@ -404,7 +428,7 @@ def main(args) -> int:
         print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex,
                           **bad_input(proc, wmi, participant)}), flush=True)
         return 0 if r.ok else 1
-    Liveness(bus, proc).serve_forever()
+    Liveness(bus, proc, url=args.url).serve_forever()
 
 
 class Liveness:
@@ -414,14 +438,37 @@ class Liveness:
 
     HEARTBEAT_S = 0.5
 
-    def __init__(self, bus: Bus, proc: "SkillProcess") -> None:
+    def __init__(self, bus: Bus, proc: "SkillProcess", url: str | None = None) -> None:
         from skillbus.bus import channel
         from skillbus.msgs import skill_alive_t
-        self.bus, self.proc = bus, proc
+        self.bus, self.proc, self.url = bus, proc, url
         self.reregister = False
         self._alive_t = skill_alive_t
         self._heartbeat_channel = channel("SB_SKILL_HEARTBEAT")
+        self._side_bus: Bus | None = None
         bus.subscribe(channel("SB_SKILL_MANAGER"), self._on_manager)
+        proc.busy = self.busy
+
+    @contextlib.contextmanager
+    def busy(self):
+        """Heartbeats from a thread while the main loop is held up (a long expansion). They
+        go on a bus of their own: this process's bus (its sender's counter, its sockets)
+        is the main thread's alone."""
+        if self._side_bus is None:
+            self._side_bus = open_bus(self.url)
+        stop = threading.Event()
+
+        def beat() -> None:
+            while not stop.wait(self.HEARTBEAT_S):
+                self.heartbeat(self._side_bus)
+
+        t = threading.Thread(target=beat, name="heartbeat", daemon=True)
+        t.start()
+        try:
+            yield
+        finally:
+            stop.set()
+            t.join()
 
     def _on_manager(self, ch: str, data: bytes) -> None:
         from skillbus.msgs import decode
@@ -429,11 +476,11 @@ class Liveness:
         if a is not None and self.proc.name not in a.processes:
             self.reregister = True  # not here: an RPC call must not run inside a handler
 
-    def heartbeat(self) -> None:
+    def heartbeat(self, bus: Bus | None = None) -> None:
         m = self._alive_t()
         m.header.frame = -1
         m.sender, m.incarnation = self.proc.name, self.proc.incarnation
-        self.bus.publish(self._heartbeat_channel, m.encode())
+        (bus or self.bus).publish(self._heartbeat_channel, m.encode())
 
     def serve_forever(self) -> None:
         next_beat = 0.0

@@ -2,8 +2,8 @@
 
 `TaskPlan` takes SkiROS2's Goal string ("(skiros:contain skiros:Bin-5 skiros:Cube-2),
 (...)"). Its tree is one `PlanSteps`, retried `Replans` times (RetryOnFail): each start of
-PlanSteps plans from the world model as it is then (skillbus.planning: the skills of this
-skill process that may be planned with, Fast Downward) and runs the plan as a SerialStar
+PlanSteps plans from the world model as it is then (skillbus.planning: the skills the
+skill manager has registered, from every skill process, Fast Downward) and runs the plan as a SerialStar
 of the planned skills, their element parameters bound. A step that fails (its
 pre-condition false because the world changed, a fault) fails PlanSteps, which plans
 again from the new world; after the last replan the failure names the step. A goal that
@@ -12,7 +12,7 @@ cannot be reached, or is malformed, fails PlanSteps at its start naming why.
 
 from __future__ import annotations
 
-from typing import Any
+import threading
 
 from skillbus.skill import ParamTypes, RetryOnFail, SerialStar, SkillBase, SkillDescription
 
@@ -65,7 +65,8 @@ class plan_steps(SkillBase):
         from skillbus.planning.solve import make_plan
         if self.wmi is None:
             raise RuntimeError("TaskPlan plans from the world model: run the skill process with --world-model")
-        skills = [skill_from_msg(m) for m in getattr(self, "registered_skills", [])]
+        registered = getattr(self, "registered_skills", None)  # set by the skill process
+        skills = [skill_from_msg(m) for m in (registered() if registered else [])]
         plan = make_plan(skills, world_from_client(self.wmi), str(self.params["Goal"].value),
                          optimal=bool(self.params["Optimal"].value), time_limit=float(self.params["TimeLimit"].value))
         skill.setProcessor(SerialStar())
@@ -73,8 +74,15 @@ class plan_steps(SkillBase):
                 for s in plan.steps])
 
 
-def warm_up() -> Any:
-    """Imports the planner now (Unified Planning takes seconds to import; a skill
-    process's first plan should not)."""
-    from skillbus.planning import solve
-    return solve._engine()
+def _warm_up() -> None:
+    """Imports the planner (Unified Planning takes about 2.5 s to import): in a thread when
+    this library loads, so that a skill process starts at once and its first plan does not
+    pay for the import."""
+    try:
+        from skillbus.planning import solve
+        solve._engine()
+    except Exception:  # (the first plan then imports it, and says what is wrong)
+        pass
+
+
+threading.Thread(target=_warm_up, name="planner-import", daemon=True).start()

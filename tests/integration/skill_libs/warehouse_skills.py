@@ -3,7 +3,9 @@ between shelves (skiros:at), fetches products from the shelf it is at and drops 
 there (skiros:contain). The primitives only change the world model, after a few ticks
 (time for a test to change the world mid-plan)."""
 
-from skillbus.skill import ConditionRelation, Element, ParamTypes, PrimitiveBase, SkillDescription
+import time
+
+from skillbus.skill import ConditionRelation, Element, ParamTypes, PrimitiveBase, SkillBase, SkillDescription
 from skillbus.world.poses import reparent
 
 TICKS = 5  # each skill takes this many ticks
@@ -84,3 +86,22 @@ class drop(_Slow):
 
     def act(self) -> None:
         reparent(self.wmi, self.params["Object"].value.id, self.params["Shelf"].value.id)
+
+
+
+class Ponder(SkillDescription):
+    """A compound whose expansion takes `Seconds` (as a large plan would): longer than the
+    manager's 3 s of skill-process liveness and the CLI's 3.5 s of manager silence."""
+
+    def createDescription(self):
+        self.addParam("Seconds", 4.5, ParamTypes.Optional)
+
+
+class ponder(SkillBase):
+    available_for_planning = False
+
+    def createDescription(self):
+        self.setDescription(Ponder(), "ponder")
+
+    def expand(self, skill):
+        time.sleep(float(self.params["Seconds"].value))
