@@ -95,6 +95,8 @@ struct CollisionModel::Impl {
   std::unique_ptr<collision::CollisionGroup> arm, world;
   // Each shape's name: the robot's link, the held object, a fixture, the map.
   std::map<const dynamics::ShapeFrame*, std::string> names;
+  mutable std::shared_ptr<AllowedPairs> filter;  // clear()'s, for the contacts in filter_for
+  mutable std::vector<Touch> filter_for;
 
   void set(const Eigen::VectorXd& q) const {
     for (size_t k = 0; k < dofs.size(); ++k) robot->setPosition(dofs[k], q[static_cast<Eigen::Index>(k)]);
@@ -205,9 +207,14 @@ std::vector<Touch> CollisionModel::touches(const Eigen::VectorXd& q) const {
 bool CollisionModel::clear(const Eigen::VectorXd& q, const std::vector<Touch>& allowed) const {
   const Impl& m = *impl_;
   m.set(q);
+  // The path search asks this thousands of times with the same allowed contacts: their
+  // filter is built once, not per state.
+  if (!m.filter || m.filter_for != allowed) {
+    m.filter = std::make_shared<AllowedPairs>(m.names, allowed);
+    m.filter_for = allowed;
+  }
   collision::CollisionOption option(false, 1);
-  auto filter = std::make_shared<AllowedPairs>(m.names, allowed);
-  option.collisionFilter = filter;
+  option.collisionFilter = m.filter;
   return !m.arm->collide(m.world.get(), option, nullptr);
 }
 
