@@ -14,6 +14,7 @@ APT_PACKAGES=(
   liboctomap-dev libompl-dev
   cyclonedds-dev cyclonedds-tools
   xvfb imagemagick
+  chromium libjs-three
   default-jdk-headless
   python3-venv
   iproute2 util-linux procps

@@ -418,6 +418,29 @@ class DropEveryNthBus(Bus):
         return self.inner.handle(timeout)
 
 
+class DropEveryNthReceivedBus(DropEveryNthBus):
+    """Drops every n-th message received on each channel whose name ends with one of
+    `suffixes` (tests of a watcher that must not depend on hearing everything)."""
+
+    def __init__(self, inner: Bus, n: int, suffixes: tuple[str, ...]) -> None:
+        super().__init__(inner, 0)
+        self.receive_n, self.suffixes = n, suffixes
+        self.received: collections.Counter[str] = collections.Counter()
+
+    def subscribe(self, channel: str, handler: Handler,
+                  queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
+        if not channel.endswith(self.suffixes):
+            return self.inner.subscribe(channel, handler, queue_capacity)
+
+        def losing(ch: str, data: bytes) -> None:
+            self.received[ch] += 1
+            if self.received[ch] % self.receive_n == 0:
+                self.dropped += 1
+                return
+            handler(ch, data)
+        return self.inner.subscribe(channel, losing, queue_capacity)
+
+
 def authenticated(inner: Bus) -> Bus:
     """`inner` behind the deployment's key, when there is one (skillbus.auth.key_path);
     else `inner` as it is, with one warning per process: without a key anyone who can

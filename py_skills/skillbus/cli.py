@@ -107,6 +107,8 @@ def build_parser() -> argparse.ArgumentParser:
     skill_cli.add_parsers(sub)
     from skillbus.planning import cli as plan_cli
     plan_cli.add_parser(sub)
+    from skillbus.console import cli as console_cli
+    console_cli.add_parser(sub)
     return ap
 
 
@@ -189,6 +191,9 @@ def dispatch(args: argparse.Namespace) -> int:
     if args.command == "plan":
         from skillbus.planning import cli as plan_cli
         return plan_cli.main(args)
+    if args.command == "console":
+        from skillbus.console import cli as console_cli
+        return console_cli.main(args)
     if args.command == "dds-record":
         from skillbus import dds_record
         return dds_record.main(args)
@@ -198,7 +203,7 @@ def dispatch(args: argparse.Namespace) -> int:
     if args.command == "shutdown":
         from skillbus import launch
         return launch.main_shutdown(args)
-    if args.command in ("skills-process", "skills", "run", "stop", "pause", "resume", "step"):
+    if args.command in ("skills-process", "skills", "run", "watch", "stop", "pause", "resume", "step"):
         from skillbus.skill import cli as skill_cli
         return skill_cli.main(args)
     if args.command == "gripper-device":

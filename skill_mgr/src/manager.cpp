@@ -128,6 +128,11 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     out.num_skills = static_cast<int32_t>(out.skills.size());
     return out;
   });
+  // tasks: the latest progress of one task (req.task > 0) or of all that are running, queued
+  // or among the last finished (a watcher's catch-up: progress messages may be lost).
+  rpc_.add_method<skill_start_t, skill_progress_list_t>("tasks", [this](const skill_start_t& req) {
+    return tasks_reply(req.task);
+  });
   rpc_.add_method<skill_start_t, skill_task_t>("start", [this](const skill_start_t& req) {
     const auto impls = registry_.find(req.type, req.label);
     if (impls.empty()) throw RpcError(unknown_skill_error(req.type, req.label));
@@ -233,6 +238,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
     const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;
     SB_WARN(kLog, "task " << id << ": " << req.type << " cannot start: " << why);
     record_result(id, "Failure: " + why);
+    publish_end_without_tree(id, req.type, why);
     return;
   }
   t->root = make_placeholder_node(*t->ctx, req.type, req.label, std::make_shared<Scope>());
@@ -279,6 +285,67 @@ void Manager::publish_progress(const Task& t) {
   walk(*t.root, -1);
   p.num_nodes = static_cast<int32_t>(p.nodes.size());
   participant_.publish(channel("SB_SKILL_PROGRESS"), p);
+  remember(p);
+}
+
+void Manager::publish_end_without_tree(int64_t id, const std::string& type, const std::string& message) {
+  skill_progress_t p{};
+  p.task = id;
+  p.state = state_code(State::Failure);
+  skill_node_progress_t root{};
+  root.id = 0;
+  root.parent = -1;
+  root.type = type;
+  root.state = p.state;
+  root.message = message;
+  root.code = skill_state_t::CODE_FAILED;
+  p.nodes = {root};
+  p.num_nodes = 1;
+  participant_.publish(channel("SB_SKILL_PROGRESS"), p);
+  remember(p);
+}
+
+void Manager::remember(const skill_progress_t& p) {
+  const bool was_finished = latest_.count(p.task) && finished(static_cast<State>(latest_[p.task].state));
+  latest_[p.task] = p;
+  if (!finished(static_cast<State>(p.state)) || was_finished) return;
+  finished_.push_back(p.task);
+  while (finished_.size() > kFinishedKept) {
+    latest_.erase(finished_.front());
+    finished_.pop_front();
+  }
+}
+
+skill_progress_list_t Manager::tasks_reply(int64_t task) const {
+  skill_progress_list_t out{};
+  auto wanted = [task](int64_t id) { return task <= 0 || id == task; };
+  for (const auto& [id, p] : latest_)
+    if (wanted(id)) out.tasks.push_back(p);
+  // Begun tasks that have not ticked yet, and queued ones: one Idle node each.
+  auto idle = [&out](int64_t id, const std::string& type, const std::string& label, const char* message) {
+    skill_progress_t p{};
+    p.task = id;
+    p.state = static_cast<int8_t>(State::Idle);
+    skill_node_progress_t root{};
+    root.parent = -1;
+    root.type = type;
+    root.label = label;
+    root.state = p.state;
+    root.message = message;
+    p.nodes = {root};
+    p.num_nodes = 1;
+    out.tasks.push_back(p);
+  };
+  for (const auto& [id, t] : tasks_)
+    if (wanted(id) && !latest_.count(id)) idle(id, t->type, t->label, "started, not ticked yet");
+  for (const auto& [id, req] : starts_)
+    if (wanted(id)) idle(id, req.type, req.label, "queued");
+  std::sort(out.tasks.begin(), out.tasks.end(), [](const auto& a, const auto& b) { return a.task < b.task; });
+  if (task > 0 && out.tasks.empty())
+    throw RpcError("no task " + std::to_string(task) + " (neither running, queued nor among the last " +
+                   std::to_string(kFinishedKept) + " finished)");
+  out.num_tasks = static_cast<int32_t>(out.tasks.size());
+  return out;
 }
 
 void Manager::record_result(int64_t id, const std::string& result) {
@@ -315,19 +382,7 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     const auto [id, type] = stopped_queued_.front();
     stopped_queued_.pop_front();
     record_result(id, "Failure: stopped before it started");
-    skill_progress_t p{};
-    p.task = id;
-    p.state = state_code(State::Failure);
-    skill_node_progress_t root{};
-    root.id = 0;
-    root.parent = -1;
-    root.type = type;
-    root.state = p.state;
-    root.message = "stopped before it started";
-    root.code = skill_state_t::CODE_FAILED;
-    p.nodes = {root};
-    p.num_nodes = 1;
-    participant_.publish(channel("SB_SKILL_PROGRESS"), p);
+    publish_end_without_tree(id, type, "stopped before it started");
   }
   if (sim_time_ns % opt_.tick_period_ns != 0) {
     // Between skill ticks only a stop is served: a stop reaches the skills (and the arm)

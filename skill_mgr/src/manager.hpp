@@ -16,6 +16,7 @@
 #include "world_replica.hpp"
 #include "skillbus/lockstep.hpp"
 #include "skillbus/rpc.hpp"
+#include "skillbus_msgs/skill_progress_list_t.hpp"
 #include "skillbus_msgs/skill_progress_t.hpp"
 #include "skillbus_msgs/skill_start_t.hpp"
 #include "skillbus_msgs/skill_task_t.hpp"
@@ -73,6 +74,13 @@ class Manager {
   void begin(const skillbus_msgs::skill_start_t& req, int64_t id);
   void tick(Task& t);
   void publish_progress(const Task& t);
+  // The final progress of a task that ended without a tree (stopped while queued, refused at
+  // its start): one node, so watchers see its end as they see any other.
+  void publish_end_without_tree(int64_t id, const std::string& type, const std::string& message);
+  // Keeps p as the task's latest progress (for SKILL.tasks); a finished task's is kept
+  // among the last kFinishedKept.
+  void remember(const skillbus_msgs::skill_progress_t& p);
+  skillbus_msgs::skill_progress_list_t tasks_reply(int64_t task) const;
   RpcClient& client(const std::string& area);
 
   Bus& bus_;
@@ -88,6 +96,9 @@ class Manager {
   std::deque<std::pair<int64_t, std::string>> stopped_queued_;  // stopped before they began: (task, type)
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;
+  static constexpr size_t kFinishedKept = 20;
+  std::map<int64_t, skillbus_msgs::skill_progress_t> latest_;  // running and recently finished tasks
+  std::deque<int64_t> finished_;  // ids in latest_ that ended, oldest first
   int64_t start_task_ = -1;  // the --start task's id
   std::unique_ptr<Liveness> liveness_;  // wall clock only
   std::unique_ptr<Directory> directory_;  // answers "which managers are there"

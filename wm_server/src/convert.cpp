@@ -76,7 +76,7 @@ skillbus_msgs::wm_relation_t to_msg(const Relation& r) {
 }
 
 Op from_msg(const skillbus_msgs::wm_op_t& m) {
-  if (m.kind < 0 || m.kind > skillbus_msgs::wm_op_t::REMOVE_RELATION)
+  if (m.kind < 0 || m.kind > skillbus_msgs::wm_op_t::EXPECT_ELEMENT)
     throw WmError("unknown operation kind " + std::to_string(m.kind));
   return Op{static_cast<Op::Kind>(m.kind), from_msg(m.element), from_msg(m.relation)};
 }

@@ -14,6 +14,22 @@ namespace {
 
 std::string rel_text(const Relation& r) { return "(" + r.subject + " " + r.predicate + " " + r.object + ")"; }
 
+// What differs between an element as read and as it is now, for the refusal of a stale edit.
+std::string what_changed(const Element& read, const Element& now) {
+  std::string out;
+  auto add = [&out](const std::string& what) { out += (out.empty() ? "" : ", ") + what; };
+  if (read.type != now.type) add("type " + read.type + " -> " + now.type);
+  if (read.label != now.label) add("label '" + read.label + "' -> '" + now.label + "'");
+  for (const auto& [key, values] : now.properties) {
+    auto it = read.properties.find(key);
+    if (it == read.properties.end()) add(key + " added");
+    else if (it->second != values) add(key);
+  }
+  for (const auto& [key, values] : read.properties)
+    if (!now.properties.count(key)) add(key + " removed");
+  return out;
+}
+
 // "skiros:Cube-12" -> 12, or -1 when the id does not end in -N.
 int64_t id_number(const std::string& id) {
   const auto dash = id.rfind('-');
@@ -227,6 +243,14 @@ TxnResult WorldStore::apply(const std::vector<Op>& ops, int64_t expected_version
             erase_rel(*r);
             undo_.push_back([this, r] { insert_rel(r); });
             result.effect.push_back(Op{Op::RemoveRelation, {}, *r});
+            break;
+          }
+          case Op::ExpectElement: {
+            const Element* now = get(op.element.id);
+            if (!now) throw WmError("element " + op.element.id + " was removed since it was read");
+            if (!(*now == op.element))
+              throw WmError("element " + op.element.id + " changed since it was read (" +
+                            what_changed(op.element, *now) + "): read it again");
             break;
           }
           default:

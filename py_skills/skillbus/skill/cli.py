@@ -9,10 +9,12 @@ import math
 import os
 import signal
 import sys
+import time
 from typing import Any
 
 from skillbus.bus import BusError, channel, open_bus
-from skillbus.msgs import (decode, skill_list_t, skill_param_t, skill_progress_t, skill_start_t, skill_task_t,
+from skillbus.msgs import (decode, skill_list_t, skill_param_t, skill_progress_list_t, skill_progress_t, skill_start_t,
+                           skill_task_t,
                            skill_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout, no_answer
 from skillbus.skill.params import ParamTypes
@@ -27,6 +29,7 @@ PARAM_TYPES = {int(t): t.name for t in ParamTypes}
 MANAGER_TIMEOUT = 2.0   # s: how long a command waits for the skill manager's answer
 STOP_ACK_TIMEOUT = 2.0  # s: for the acknowledgement of the stop of an interrupted run
 FINAL_TIMEOUT = 5.0     # s: then for the task's final progress (the manager preempts at its next tick)
+CATCH_UP_S = 1.0        # s: without progress of a task this long, ask its manager for its tree (SKILL.tasks)
 EXIT_TIMEOUT = 3
 
 
@@ -158,6 +161,14 @@ def add_parsers(sub) -> None:
                           "shown before it as a JSON line)")
     run.add_argument("--url", default=None)
     run.add_argument("--robot", default=None, metavar="NAME", help=ROBOT_HELP)
+    wa = sub.add_parser("watch", help="follow a running task to its end, printing what changes (a task started "
+                                      "elsewhere too); exit as run's; an interrupt leaves the task running")
+    wa.add_argument("task", type=int)
+    wa.add_argument("-v", "--verbose", action="store_true", help="show each primitive's parameters")
+    wa.add_argument("--timeout", type=float, default=0.0, help="stop watching after this many seconds, exit 3 (0: never)")
+    wa.add_argument("--json", action="store_true", help="each tree shown as a JSON line, then the result")
+    wa.add_argument("--url", default=None)
+    wa.add_argument("--robot", default=None, metavar="NAME", help=ROBOT_HELP)
     for verb, text in (("stop", "preempt a running task"), ("pause", "stop ticking a task"),
                        ("resume", "tick a paused task again"), ("step", "tick a paused task once")):
         st = sub.add_parser(verb, help=text)
@@ -243,20 +254,52 @@ def parse_param(text: str, lst: skill_list_t | None = None, skill: str = "") -> 
     return m
 
 
+def node_line(n, name: str) -> str:
+    """One node as the terminal shows it: its name, state, message (and an error's code)."""
+    proc = f" [{n.processor}]" if n.processor and n.type else ""
+    msg = f": {n.message}" if n.message else ""
+    # A negative code is an error's; a positive one is the progress counter (SkiROS2's:
+    # each step and success adds one), shown by --json only.
+    return f"{name}{proc} {STATES.get(n.state, '?')}{msg}" + (f" (code {n.code})" if n.code < 0 else "")
+
+
 def print_tree(p: skill_progress_t, verbose: bool = False) -> None:
     depth: dict[int, int] = {}
     for n in p.nodes:
         d = 0 if n.parent < 0 else depth[n.parent] + 1
         depth[n.id] = d
-        name = n.type or f"({n.processor})"
-        proc = f" [{n.processor}]" if n.processor and n.type else ""
-        msg = f": {n.message}" if n.message else ""
-        # A negative code is an error's; a positive one is the progress counter (SkiROS2's:
-        # each step and success adds one), shown by --json only.
-        print(f"{'  ' * d}{name}{proc} {STATES.get(n.state, '?')}{msg}" + (f" (code {n.code})" if n.code < 0 else ""))
+        print("  " * d + node_line(n, n.type or f"({n.processor})"))
         if verbose and n.params:
             for line in n.params.strip().splitlines():
                 print(f"{'  ' * (d + 2)}{line}")
+
+
+class ChangePrinter:
+    """`skillbus run --watch` and `skillbus watch`: after each progress, only the nodes
+    whose state, message (or, verbose, parameters) changed, each named by its path
+    ('ClearTable / PickAndPlace / Grasp Running: closing'), under '--- task N, tick T'."""
+
+    def __init__(self, verbose: bool = False) -> None:
+        self.verbose = verbose
+        self.shown: dict[int, tuple] = {}
+
+    def print(self, p: skill_progress_t) -> None:
+        from skillbus.skill.task_tree import node_path
+        dicts = [{"type": n.type, "processor": n.processor, "parent": n.parent} for n in p.nodes]
+        lines = []
+        for n in p.nodes:
+            key = (n.type, n.parent, n.state, n.message, n.code < 0) + ((n.params,) if self.verbose else ())
+            if self.shown.get(n.id) == key:
+                continue
+            self.shown[n.id] = key
+            lines.append(node_line(n, node_path(dicts, n.id)))
+            if self.verbose and n.params:
+                lines += [f"    {line}" for line in n.params.strip().splitlines()]
+        for i in [i for i in self.shown if i >= len(p.nodes)]:  # a tree that shrank (a re-expansion)
+            del self.shown[i]
+        if lines:
+            print(f"--- task {p.task}, tick {p.tick}")
+            print("\n".join(lines), flush=True)
 
 
 def run(args) -> int:
@@ -361,42 +404,18 @@ def _run(args, intr: Interrupts) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     req.num_params = len(req.params)
-    final: list[skill_progress_t] = []
-    last_shown = [None]
-    last: list[skill_progress_t | None] = [None]
-    task_id = [None]
     as_json = getattr(args, "json", False)
     say = sys.stderr if as_json else sys.stdout  # (with --json, stdout is JSON only)
-
-    def on_progress(ch, data):
-        p = decode(skill_progress_t, data)
-        if p is None or p.task != task_id[0]:
-            return
-        last[0] = p
-        if args.watch:
-            # (with --json each new progress code is a new line: a step that repeats its message
-            # still counts up)
-            shown = [(n.state, n.message) + ((n.code,) if as_json else ()) for n in p.nodes]
-            if shown != last_shown[0]:
-                last_shown[0] = shown
-                if as_json:
-                    print(json.dumps(progress_json(p)), flush=True)
-                else:
-                    print(f"--- task {p.task}, tick {p.tick}")
-                    print_tree(p, args.verbose)
-        if p.state in (State.Success, State.Failure):
-            final.append(p)
-
     # The bus layer's queue (DEFAULT_QUEUE_CAPACITY) holds the progress that arrives while
     # an RPC is in flight; nothing else keeps this loop from the bus.
-    bus.subscribe(channel("SB_SKILL_PROGRESS"), on_progress)
+    follow = TaskFollow(bus, client, intr, args.watch, as_json, args.verbose)
     manager = ManagerWatch(bus)
     try:
         task = call(client, "start", req, skill_task_t, intr)
     except RpcError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    task_id[0] = task.task
+    follow.task = task.task
     manager.started(task)
     if args.detach:
         print(f"task {task.task}: {req.type} started, detached (stop it with: skillbus stop {task.task})",
@@ -405,41 +424,147 @@ def _run(args, intr: Interrupts) -> int:
               flush=True)
         return 0
     print(f"task {task.task}: {req.type} started", file=say, flush=True)
-    poll_until(lambda: final or intr.signum or manager.lost(task.task), args.timeout if args.timeout > 0 else math.inf,
-               interval=0.2, step=lambda s: intr.handle(bus, s))
+    return _follow_to_end(follow, manager, args, intr, req.type, req.label, say, stop_when_abandoned=True)
+
+
+class TaskFollow:
+    """Follows one task's progress: each tree once, in tick order, printed as --watch
+    asks; when nothing is heard of it for CATCH_UP_S, the manager's latest tree
+    (SKILL.tasks), so lost messages, the last ones above all, do not leave it hanging."""
+
+    def __init__(self, bus, client: RpcClient, intr: Interrupts, watch: bool, as_json: bool, verbose: bool) -> None:
+        self.bus, self.client, self.intr = bus, client, intr
+        self.watch, self.as_json = watch, as_json
+        self.task: int | None = None
+        self.final: list[skill_progress_t] = []
+        self.last: skill_progress_t | None = None
+        self._changes = ChangePrinter(verbose)
+        self._last_shown = None
+        self._heard = time.monotonic()
+        bus.subscribe(channel("SB_SKILL_PROGRESS"), self._on_progress)
+
+    def _on_progress(self, ch, data) -> None:
+        p = decode(skill_progress_t, data)
+        if p is not None and self.task is not None and p.task == self.task:
+            self.take(p)
+
+    def take(self, p: skill_progress_t) -> None:
+        self._heard = time.monotonic()
+        if self.final or (self.last is not None and p.tick < self.last.tick):
+            return  # (a catch-up answer that crossed a newer message)
+        self.last = p
+        if self.watch:
+            if self.as_json:
+                # (each new progress code is a new line: a step that repeats its message still counts up)
+                shown = [(n.state, n.message, n.code) for n in p.nodes]
+                if shown != self._last_shown:
+                    self._last_shown = shown
+                    print(json.dumps(progress_json(p)), flush=True)
+            else:
+                self._changes.print(p)
+        if p.state in (State.Success, State.Failure):
+            self.final.append(p)
+
+    def catch_up(self) -> bool:
+        """Takes the manager's latest tree of the task; False when it does not know it."""
+        self._heard = time.monotonic()
+        p = latest_progress(self.client, self.task, self.intr)
+        if p is not None:
+            self.take(p)
+        return p is not None
+
+    def step(self, s: float) -> None:
+        self.intr.handle(self.bus, s)
+        if not self.final and time.monotonic() - self._heard > CATCH_UP_S:
+            # Nothing heard for a while: lost messages or a paused task; the manager says which.
+            self.catch_up()
+
+
+def _follow_to_end(follow: TaskFollow, manager: "ManagerWatch", args, intr: Interrupts, skill: str, label: str,
+                   say, stop_when_abandoned: bool) -> int:
+    """Waits for the task's end (or --timeout, a signal, a lost manager) and prints it;
+    the exit code. An abandoned task is stopped when we started it."""
+    task, as_json = follow.task, getattr(args, "json", False)
+    timeout = getattr(args, "timeout", 0.0)
+    final = follow.final
+    poll_until(lambda: final or intr.signum or manager.lost(task), timeout if timeout > 0 else math.inf,
+               interval=0.2, step=follow.step)
     code = None
-    lost = "" if final else manager.lost(task.task)
+    lost = "" if final else manager.lost(task)
     if lost and not intr.signum:
-        print(f"task {task.task}: Failure: {lost}", file=say, flush=True)
+        print(f"task {task}: Failure: {lost}", file=say, flush=True)
         code = 1
     elif not final and intr.signum:
-        print(f"interrupted ({intr.name}): stopping task {task.task}", file=sys.stderr, flush=True)
+        print(f"interrupted ({intr.name})" + (f": stopping task {task}" if stop_when_abandoned else ""),
+              file=sys.stderr, flush=True)
         code = intr.exit_code
     elif not final:
-        print(f"error: task {task.task} did not end within {args.timeout} s: stopping it", file=sys.stderr,
-              flush=True)
+        print(f"error: task {task} did not end within {timeout} s" + (": stopping it" if stop_when_abandoned else ""),
+              file=sys.stderr, flush=True)
         code = EXIT_TIMEOUT
-    if code is not None and not final and not lost:
-        _stop(client, bus, task.task, final, intr)
+    if code is not None and not final and not lost and stop_when_abandoned:
+        _stop(follow.client, follow.bus, task, final, intr)
     if code is None:
         code = 0 if final[0].state == State.Success else 1
     if as_json:
         # the final tree, or when its end was not seen, the last one (state Running, ...)
-        p = final[0] if final else last[0]
+        p = final[0] if final else follow.last
         tree = progress_json(p) if p is not None else None
         root = p.nodes[0] if p is not None and p.nodes else None
-        print(json.dumps({"task": task.task, "skill": req.type, "label": req.label,
+        print(json.dumps({"task": task, "skill": skill or (root.type if root else ""), "label": label,
                           "state": STATES[p.state] if final else ("Failure" if lost else None),
                           "message": lost or (root.message if root else ""),
                           "ended": bool(final), "exit_code": code, "tick": tree["tick"] if tree else None,
                           "tree": tree["nodes"] if tree else []}), flush=True)
     elif final:
         p = final[0]
-        if not args.watch:
+        if not follow.watch:
             print_tree(p, args.verbose)
         root = p.nodes[0]
         print(f"task {p.task}: {STATES[p.state]}" + (f": {root.message}" if root.message else ""), flush=True)
     return code
+
+
+def watch(args, intr: Interrupts) -> int:
+    """`skillbus watch TASK`: follows a task started elsewhere (a console, another shell,
+    the manager's --start) from its current tree to its end; the exit code as run's. An
+    interrupt or --timeout leaves the task running."""
+    from skillbus.monitor import watch_url
+    bus = open_bus(watch_url(args.url))
+    client = RpcClient(bus, "SKILL", "cli")
+    as_json = args.json
+    follow = TaskFollow(bus, client, intr, True, as_json, args.verbose)
+    manager = ManagerWatch(bus)
+    follow.task = args.task
+    try:
+        found = call(client, "tasks", _task_req(args.task), skill_progress_list_t, intr)
+    except RpcRemoteError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    p = next((t for t in found.tasks if t.task == args.task), None)
+    if p is None:
+        print(f"error: the skill manager does not know task {args.task}", file=sys.stderr)
+        return 2
+    say = sys.stderr if as_json else sys.stdout
+    print(f"task {args.task}: {p.nodes[0].type if p.nodes else '?'}, watching from tick {p.tick}", file=say, flush=True)
+    follow.take(p)
+    return _follow_to_end(follow, manager, args, intr, "", "", say, stop_when_abandoned=False)
+
+
+def _task_req(task: int) -> skill_start_t:
+    req = skill_start_t()
+    req.task = task
+    return req
+
+
+def latest_progress(client: RpcClient, task: int, intr: Interrupts | None = None) -> skill_progress_t | None:
+    """The manager's latest tree of `task` (SKILL.tasks), or None when it does not know it
+    (any more), does not answer, or is too old to have the method."""
+    try:
+        reply = call(client, "tasks", _task_req(task), skill_progress_list_t, intr)
+    except (NoManager, RpcError):
+        return None
+    return next((p for p in reply.tasks if p.task == task), None)
 
 
 def _stop(client: RpcClient, bus, task: int, final: list, intr: Interrupts) -> None:
@@ -471,6 +596,8 @@ def main(args: argparse.Namespace) -> int:
         return process.main(args)
     if args.command == "run":
         return run(args)
+    if args.command == "watch":
+        return _with_manager(watch, args)
     if args.command in ("skills", "stop", "pause", "resume", "step"):
         return _with_manager(_command, args)
     return 2

@@ -127,3 +127,39 @@ TEST_F(World, UpdateReplacesPropertiesAndUndoRestores) {
   EXPECT_EQ(std::get<double>(store.get("skiros:Cube-2")->properties.at("skiros:Size")[0]), 0.05);
   EXPECT_EQ(store.version(), 1);
 }
+
+// An editor's compare-and-set: the element as it was read goes with the edit, and the
+// whole transaction is refused, naming what changed, when it is no longer so.
+TEST_F(World, ExpectElementRefusesAnEditOfAStaleRead) {
+  const Element read = *store.get("skiros:Cube-2");
+  Element edited = read;
+  edited.label = "crimson";
+  const Op expect{Op::ExpectElement, read, {}};
+  EXPECT_NO_THROW(store.apply({expect, Op{Op::UpdateElement, edited, {}}}));
+  EXPECT_EQ(store.get("skiros:Cube-2")->label, "crimson");
+  EXPECT_EQ(store.version(), 2);
+
+  // Someone else changes the size; an edit of the old read changes nothing.
+  Element bigger = *store.get("skiros:Cube-2");
+  bigger.properties["skiros:Size"] = {0.2};
+  store.apply({Op{Op::UpdateElement, bigger, {}}});
+  Element again = read;
+  again.label = "scarlet";
+  try {
+    store.apply({Op{Op::ExpectElement, edited, {}}, Op{Op::UpdateElement, again, {}}});
+    FAIL() << "a stale edit was applied";
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("skiros:Cube-2 changed since it was read (skiros:Size)"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(store.get("skiros:Cube-2")->label, "crimson");
+  EXPECT_EQ(store.version(), 3);
+
+  store.apply({Op{Op::RemoveElement, element("skiros:Cube-3", ""), {}}});
+  try {
+    store.apply({Op{Op::ExpectElement, element("skiros:Cube-3", "skiros:Cube", "blue"), {}}});
+    FAIL() << "an element removed since it was read was expected";
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("skiros:Cube-3 was removed since it was read"), std::string::npos) << e.what();
+  }
+}

@@ -36,7 +36,12 @@ struct Relation {
 };
 
 struct Op {
-  enum Kind { AddElement = 0, UpdateElement = 1, RemoveElement = 2, AddRelation = 3, RemoveRelation = 4 };
+  // ExpectElement changes nothing: the transaction fails unless the element is exactly as
+  // given (type, label, properties). An editor sends the element as it read it before its
+  // change, so an edit of an element that changed meanwhile is refused, not lost.
+  enum Kind {
+    AddElement = 0, UpdateElement = 1, RemoveElement = 2, AddRelation = 3, RemoveRelation = 4, ExpectElement = 5
+  };
   Kind kind;
   Element element;
   Relation relation;

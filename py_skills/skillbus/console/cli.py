@@ -1,0 +1,50 @@
+"""`skillbus console [--port 8080] [--host 127.0.0.1]`."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+
+def add_parser(sub) -> None:
+    c = sub.add_parser("console", help="the web console: skills, tasks, world model (docs/console.md)")
+    c.add_argument("--port", type=int, default=8080, help="HTTP port (default 8080; 0: any free port)")
+    c.add_argument("--host", default="127.0.0.1",
+                   help="the address to serve on (default: this machine only; 0.0.0.0 serves every network the "
+                        "machine is on, to anyone who reaches it: the console starts and stops tasks)")
+    c.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
+    # test: lose every N-th progress message it hears (the catch-up from SKILL.tasks must
+    # still give every task its final tree)
+    c.add_argument("--lose-progress-every", type=int, default=0, help=argparse.SUPPRESS)
+
+
+def main(args: argparse.Namespace) -> int:
+    import socket
+
+    import uvicorn
+
+    from skillbus.bus import open_bus
+    from skillbus.console.server import create_app
+    from skillbus.monitor import watch_url
+
+    def bus():
+        b = open_bus(watch_url(args.url))
+        if args.lose_progress_every > 0:
+            from skillbus.bus import DropEveryNthReceivedBus
+            b = DropEveryNthReceivedBus(b, args.lose_progress_every, ("SB_SKILL_PROGRESS",))
+        return b
+
+    app = create_app(bus)
+    # The socket is bound here, so a port in use is one line, and --port 0's port is known.
+    try:
+        sock = socket.create_server((args.host, args.port))
+    except OSError as e:
+        print(f"error: cannot serve on {args.host}:{args.port}: {e.strerror or e}", file=sys.stderr)
+        return 1
+    host, port = sock.getsockname()[:2]
+    print(f"skillbus console: http://{host}:{port}/", flush=True)
+    logging.getLogger("uvicorn.error").setLevel(logging.WARNING)
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on"))
+    server.run(sockets=[sock])
+    return 0

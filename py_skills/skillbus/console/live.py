@@ -1,0 +1,195 @@
+"""The console's view of a live system: skill managers, their skills and tasks.
+
+Everything here runs on the bus thread (console.bus_worker). Managers are found as
+``skillbus skills`` finds them (a probe on ``SB_MANAGERS_PROBE``, answered on
+``SB_MANAGERS``), again every few seconds, so a manager that starts later, or restarts,
+is picked up. Of each, the console hears the progress channel and keeps every task's
+tree (skill.task_tree); browsers get the changes.
+
+Progress is a lossy channel (a full receive queue drops messages): a task not heard of
+for CATCH_UP_S is read from its manager (``SKILL.tasks``), and so is every task a
+manager knows when the console first meets it, so tasks started elsewhere, before the
+console, appear with their current trees, and no task is left showing a state that is
+not its last.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any, Callable
+
+from skillbus.channels import robot_channel
+from skillbus.msgs import (decode, skill_list_t, skill_manager_info_t, skill_progress_list_t, skill_progress_t,
+                           skill_start_t, skill_task_t)
+from skillbus.rpc import RpcClient, RpcError, RpcTimeout
+from skillbus.skill.cli import parse_param, progress_json, skills_json
+from skillbus.skill.task_tree import TaskTrees
+
+log = logging.getLogger("skillbus.console")
+
+CATCH_UP_S = 1.0        # a running task not heard of this long is read from its manager
+PROBE_PERIOD_S = 3.0    # managers are looked for again this often
+MANAGER_TIMEOUT_S = 2.0
+VERBS = ("pause", "step", "resume", "stop")
+
+
+class ConsoleError(RuntimeError):
+    """A request the console cannot do; the message is for the user."""
+
+
+class Manager:
+    def __init__(self, bus, info: skill_manager_info_t, on_progress: Callable[[str, bytes], None]) -> None:
+        self.robot, self.name, self.agent = info.robot, info.name, info.agent
+        self.incarnation = info.incarnation
+        self.rpc = RpcClient(bus, "SKILL", "console", robot=info.robot)
+        self.sub = bus.subscribe(robot_channel("SB_SKILL_PROGRESS", info.robot), on_progress)
+        self.heard = time.monotonic()
+
+    def call(self, method: str, req, reply_type, timeout: float = MANAGER_TIMEOUT_S):
+        try:
+            return self.rpc.call(method, req, reply_type, timeout=timeout)
+        except RpcTimeout:
+            raise ConsoleError(f"the skill manager of robot {self.robot or '(none)'} did not answer "
+                               f"SKILL.{method} within {timeout:g} s") from None
+
+
+class LiveSkills:
+    def __init__(self, bus, emit: Callable[[dict[str, Any]], None]) -> None:
+        self.bus, self._emit = bus, emit
+        self.seq = 0  # events emitted: a snapshot says which it holds
+        self.managers: dict[str, Manager] = {}
+        self.trees = TaskTrees()
+        self._heard: dict[tuple[str, int], float] = {}
+        bus.subscribe(robot_channel("SB_MANAGERS", ""), self._on_manager)
+
+    # -- managers -----------------------------------------------------------
+    def probe(self) -> None:
+        """Asks every manager to say itself (answers arrive in _on_manager)."""
+        m = skill_manager_info_t()
+        m.header.frame, m.header.sender = -1, "console"
+        self.bus.publish(robot_channel("SB_MANAGERS_PROBE", ""), m.encode())
+
+    def _on_manager(self, ch: str, data: bytes) -> None:
+        info = decode(skill_manager_info_t, data)
+        if info is None or info.header.sender == "console":
+            return
+        known = self.managers.get(info.robot)
+        if known is not None and known.incarnation == info.incarnation and known.name == info.name:
+            known.heard = time.monotonic()
+            known.agent = info.agent or known.agent
+            return
+        if known is not None:
+            self.bus.unsubscribe(known.sub)
+        self.managers[info.robot] = Manager(self.bus, info, lambda c, d, r=info.robot: self._on_progress(r, d))
+        self.emit({"kind": "managers", "managers": self.manager_list()})
+        self._catch_up(info.robot, 0)  # its running tasks and recent history
+
+    def manager_list(self) -> list[dict[str, Any]]:
+        return [{"robot": m.robot, "name": m.name, "agent": m.agent} for _, m in sorted(self.managers.items())]
+
+    def manager(self, robot: str) -> Manager:
+        m = self.managers.get(robot)
+        if m is None:
+            have = ", ".join(r or "(none)" for r in sorted(self.managers)) or "none"
+            raise ConsoleError(f"no skill manager of robot {robot or '(none)'} (managers heard: {have})")
+        return m
+
+    # -- tasks --------------------------------------------------------------
+    def _on_progress(self, robot: str, data: bytes) -> None:
+        p = decode(skill_progress_t, data)
+        if p is not None:
+            self._take(robot, p)
+
+    def _take(self, robot: str, p: skill_progress_t) -> None:
+        self._heard[(robot, p.task)] = time.monotonic()
+        change = self.trees.apply(robot, progress_json(p))
+        if change is not None:
+            self.emit(change.as_json())
+
+    def _catch_up(self, robot: str, task: int) -> None:
+        """Reads the manager's latest trees: of `task`, or (0) of every task it knows."""
+        m = self.managers.get(robot)
+        if m is None:
+            return
+        req = skill_start_t()
+        req.task = task
+        try:
+            reply = m.call("tasks", req, skill_progress_list_t, timeout=1.0)
+        except (ConsoleError, RpcError) as e:
+            if task and "no task" in str(e):
+                self._lost(robot, task, f"its manager no longer knows it ({e})")
+            else:
+                log.info("catching up with robot %s: %s", robot or "(none)", e)
+            return
+        for p in reply.tasks:
+            self._take(robot, p)
+
+    def _lost(self, robot: str, task: int, why: str) -> None:
+        tree = self.trees.get(robot, task)
+        if tree is None or tree.ended:
+            return
+        nodes = [dict(tree.nodes[0], state="Failure", message=why)] if tree.nodes else []
+        change = self.trees.apply(robot, {"task": task, "tick": tree.tick, "state": "Failure", "nodes": nodes,
+                                          "sim_time_s": tree.sim_time_s})
+        if change is not None:
+            self.emit(dict(change.as_json(), lost=True))
+
+    def catch_up_quiet_tasks(self) -> None:
+        """Chore: each running task not heard of for CATCH_UP_S is read from its manager."""
+        now = time.monotonic()
+        for tree in self.trees.running():
+            key = (tree.robot, tree.task)
+            if now - self._heard.get(key, 0.0) > CATCH_UP_S:
+                self._heard[key] = now
+                self._catch_up(tree.robot, tree.task)
+
+    def emit(self, event: dict[str, Any]) -> None:
+        self.seq += 1
+        self._emit(dict(event, seq=self.seq))
+
+    def snapshot(self) -> dict[str, Any]:
+        """What a browser sees first: the managers and every task's tree, as of event seq."""
+        return {"kind": "hello", "seq": self.seq, "managers": self.manager_list(), "tasks": self.tasks()}
+
+    def tasks(self) -> list[dict[str, Any]]:
+        """Every task kept: its summary and whole tree (a browser's first view)."""
+        return [dict(t.summary(), nodes=t.nodes) for _, t in sorted(self.trees.trees.items())]
+
+    # -- skills and commands ------------------------------------------------
+    def skills(self) -> list[dict[str, Any]]:
+        out = []
+        for robot, m in sorted(self.managers.items()):
+            lst = m.call("list", skill_start_t(), skill_list_t)
+            out += [dict(s, robot=robot, manager=m.name) for s in skills_json(lst)]
+        return out
+
+    def start(self, robot: str, skill: str, label: str, params: dict[str, str]) -> int:
+        """Starts a skill with text parameters (typed and checked by the manager, as
+        `skillbus run -p` does); the task id."""
+        m = self.manager(robot)
+        req = skill_start_t()
+        req.type, req.label = skill, label
+        try:
+            req.params = [parse_param(f"{k}={v}") for k, v in params.items()]
+        except ValueError as e:
+            raise ConsoleError(str(e)) from None
+        req.num_params = len(req.params)
+        try:
+            task = m.call("start", req, skill_task_t)
+        except RpcError as e:
+            raise ConsoleError(str(e)) from None
+        return task.task
+
+    def command(self, robot: str, task: int, verb: str) -> str:
+        if verb not in VERBS:
+            raise ConsoleError(f"unknown command {verb!r} (one of {', '.join(VERBS)})")
+        m = self.manager(robot)
+        req = skill_start_t()
+        req.task = task
+        try:
+            reply = m.call(verb, req, skill_task_t)
+        except RpcError as e:
+            raise ConsoleError(str(e)) from None
+        self._heard[(robot, task)] = 0.0  # the next chore reads its tree
+        return reply.message

@@ -1,0 +1,162 @@
+"""The console's web server: a FastAPI app between the bus and browsers.
+
+HTTP for what a page asks (skills, a start, a task command, the world model and its
+edits); one WebSocket, ``/api/live``, for what happens: a first message with the
+managers and every task's tree, then each change of a tree (only the nodes that
+changed). A browser that falls behind by more than LIVE_QUEUE events is told to reload
+rather than silently missing changes (the trees are whole again at the reload).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+from pathlib import Path
+from typing import Any, Callable
+
+from fastapi import FastAPI, HTTPException, Request, WebSocket, WebSocketDisconnect
+from fastapi.responses import FileResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+
+from skillbus.console.bus_worker import BusWorker
+from skillbus.console.live import CATCH_UP_S, PROBE_PERIOD_S, ConsoleError, LiveSkills
+from skillbus.console.world import LiveWorld
+
+log = logging.getLogger("skillbus.console")
+STATIC = Path(__file__).parent / "static"
+LIVE_QUEUE = 10000
+JOB_TIMEOUT_S = 15.0
+
+
+class Broadcaster:
+    """Fans events out to every connected browser, on the server's event loop."""
+
+    def __init__(self) -> None:
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.queues: set[asyncio.Queue] = set()
+        self.sent = 0
+
+    def emit_threadsafe(self, event: dict[str, Any]) -> None:
+        if self.loop is not None:
+            self.loop.call_soon_threadsafe(self._put, event)
+
+    def _put(self, event: dict[str, Any]) -> None:
+        self.sent += 1
+        for q in list(self.queues):
+            try:
+                q.put_nowait(event)
+            except asyncio.QueueFull:
+                self.queues.discard(q)
+                q.put_nowait_overflow = True  # type: ignore[attr-defined]
+
+
+def create_app(open_bus: Callable[[], Any]) -> FastAPI:
+    """The console app on a bus opened by `open_bus` (on the bus thread)."""
+    app = FastAPI(title="skillbus console", docs_url="/api/docs", redoc_url=None)
+    worker = BusWorker(open_bus)
+    hub = Broadcaster()
+    state: dict[str, Any] = {}
+
+    def setup() -> None:  # on the bus thread
+        state["skills"] = LiveSkills(worker.bus, hub.emit_threadsafe)
+        state["world"] = LiveWorld(worker.bus, state["skills"].emit)
+        worker.every(0.5, state["world"].say_version)
+        worker.every(PROBE_PERIOD_S, state["skills"].probe)
+        worker.every(CATCH_UP_S / 2, state["skills"].catch_up_quiet_tasks)
+
+    @app.on_event("startup")
+    async def _start() -> None:
+        hub.loop = asyncio.get_running_loop()
+        worker.start()
+        await asyncio.wrap_future(worker.submit(setup))
+
+    @app.on_event("shutdown")
+    async def _stop() -> None:
+        worker.stop()
+
+    async def on_bus(fn: Callable[[], Any]) -> Any:
+        """Runs fn on the bus thread; a ConsoleError is a 400 with its message."""
+        try:
+            return await asyncio.wait_for(asyncio.wrap_future(worker.submit(fn)), JOB_TIMEOUT_S)
+        except ConsoleError as e:
+            raise HTTPException(status_code=400, detail=str(e)) from None
+        except asyncio.TimeoutError:
+            raise HTTPException(status_code=504, detail=f"the bus did not answer within {JOB_TIMEOUT_S:g} s") from None
+
+    @app.exception_handler(HTTPException)
+    async def _http_error(request: Request, exc: HTTPException) -> JSONResponse:
+        return JSONResponse({"error": exc.detail}, status_code=exc.status_code)
+
+    @app.get("/")
+    async def index() -> FileResponse:
+        return FileResponse(STATIC / "index.html")
+
+    app.mount("/static", StaticFiles(directory=STATIC), name="static")
+
+    @app.get("/api/managers")
+    async def managers() -> list[dict[str, Any]]:
+        return await on_bus(lambda: state["skills"].manager_list())
+
+    @app.get("/api/skills")
+    async def skills() -> list[dict[str, Any]]:
+        return await on_bus(lambda: state["skills"].skills())
+
+    @app.get("/api/tasks")
+    async def tasks() -> list[dict[str, Any]]:
+        return await on_bus(lambda: state["skills"].tasks())
+
+    @app.post("/api/tasks")
+    async def start(body: dict[str, Any]) -> dict[str, Any]:
+        params = body.get("params") or {}
+        if not isinstance(params, dict) or not isinstance(body.get("skill"), str):
+            raise HTTPException(400, "a start needs {\"skill\": NAME, \"robot\": NAME, \"params\": {KEY: VALUE}}")
+        robot, skill, label = str(body.get("robot", "")), body["skill"], str(body.get("label", ""))
+        text = {str(k): v if isinstance(v, str) else json.dumps(v) for k, v in params.items()}
+        task = await on_bus(lambda: state["skills"].start(robot, skill, label, text))
+        return {"robot": robot, "task": task}
+
+    @app.post("/api/tasks/{task}/{verb}")
+    async def command(task: int, verb: str, robot: str = "") -> dict[str, Any]:
+        message = await on_bus(lambda: state["skills"].command(robot, task, verb))
+        return {"robot": robot, "task": task, "message": message}
+
+    @app.get("/api/world/tree")
+    async def world_tree() -> dict[str, Any]:
+        return await on_bus(lambda: state["world"].tree())
+
+    @app.get("/api/world/search")
+    async def world_search(type: str = "", label: str = "") -> list[dict[str, Any]]:
+        return await on_bus(lambda: state["world"].search(type, label))
+
+    @app.get("/api/world/element/{eid}")
+    async def world_element(eid: str) -> dict[str, Any]:
+        return await on_bus(lambda: state["world"].element(eid))
+
+    @app.post("/api/world/edit")
+    async def world_edit(body: dict[str, Any]) -> dict[str, Any]:
+        return await on_bus(lambda: state["world"].edit(body))
+
+    @app.websocket("/api/live")
+    async def live(ws: WebSocket) -> None:
+        await ws.accept()
+        q: asyncio.Queue = asyncio.Queue(LIVE_QUEUE)
+        hub.queues.add(q)  # (before the snapshot: what happens after it is queued)
+        try:
+            # The snapshot's seq: events queued before it (seq <= it) are in it already.
+            first = await asyncio.wrap_future(worker.submit(lambda: state["skills"].snapshot()))
+            await ws.send_json(first)
+            while True:
+                event = await q.get()
+                if event.get("seq", 0) > first["seq"]:
+                    await ws.send_json(event)
+                if getattr(q, "put_nowait_overflow", False) and q.empty():
+                    await ws.send_json({"kind": "overflow", "message": "this page fell behind: reload it"})
+                    break
+        except WebSocketDisconnect:
+            pass
+        finally:
+            hub.queues.discard(q)
+
+    app.state.worker, app.state.hub, app.state.live = worker, hub, state
+    return app

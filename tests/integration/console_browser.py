@@ -1,0 +1,170 @@
+"""Drives the skillbus console in headless Chromium (Debian's, through Playwright), inside
+the test's network namespace, as a user would: one scenario per run, what it saw as one
+JSON line on stdout, screenshots into --shots.
+
+    console_browser.py URL SCENARIO --shots DIR [--task N] [--element ID]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from playwright.sync_api import Page, sync_playwright
+
+CHROMIUM = "/usr/bin/chromium"
+TIMEOUT_MS = 30_000
+
+
+def root_state(page: Page) -> str | None:
+    return page.get_attribute('[data-testid=task-tree] .node[data-node="0"]', "data-state", timeout=TIMEOUT_MS)
+
+
+def shown_tick(page: Page) -> int:
+    return int(page.get_attribute("[data-testid=task-state]", "data-tick", timeout=TIMEOUT_MS))
+
+
+def tree_rows(page: Page) -> list[dict]:
+    return page.eval_on_selector_all("[data-testid=task-tree] .node", """rows => rows.map(r => ({
+        id: Number(r.dataset.node), state: r.dataset.state,
+        message: (r.querySelector('.msg') || {textContent: ''}).textContent}))""")
+
+
+def wait_until(what: str, check, timeout: float, interval: float = 0.05):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = check()
+        if value:
+            return value
+        time.sleep(interval)
+    raise TimeoutError(f"{what} within {timeout} s")
+
+
+def open_console(browser, url: str) -> Page:
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.set_default_timeout(TIMEOUT_MS)
+    page.goto(url)
+    page.wait_for_selector("#connection.good")
+    return page
+
+
+def start_clear_table(page: Page, shots: Path, args) -> dict:
+    page.click("[data-testid=tab-skills]")
+    page.click('[data-testid=skill-list] .item[data-skill="ClearTable"]')
+    page.wait_for_selector("[data-testid=start]")
+    page.screenshot(path=str(shots / "console-skills.png"))
+    page.click("[data-testid=start]")
+    page.wait_for_selector('[data-testid=task-tree] .node[data-node="0"]')
+    states: list[str] = []
+    shot_taken = False
+
+    def ended() -> bool:
+        nonlocal shot_taken
+        s = root_state(page)
+        if not states or states[-1] != s:
+            states.append(s)
+        if s == "Running" and not shot_taken and len(tree_rows(page)) > 3:
+            page.screenshot(path=str(shots / "console-task-running.png"))
+            shot_taken = True
+        return s in ("Success", "Failure")
+
+    wait_until("ClearTable's end", ended, 600)
+    page.screenshot(path=str(shots / "console-task-done.png"), full_page=True)
+    task = int(page.get_attribute("[data-testid=task-list] .item.selected", "data-task"))
+    return {"task": task, "states": states, "rows": tree_rows(page), "message": page.inner_text("[data-testid=message]")}
+
+
+def control_cli_task(page: Page, shots: Path, args) -> dict:
+    """Pause, step, resume and stop a task someone else starts (args.task) once this page
+    is open (it says READY: under lockstep a ClearTable is over in seconds)."""
+    page.click("[data-testid=tab-tasks]")
+    print("READY", flush=True)
+    page.click(f'[data-testid=task-list] .item[data-task="{args.task}"]', timeout=60_000)
+    wait_until("the task's tree", lambda: root_state(page) == "Running", 30)
+    out: dict = {}
+    page.click("[data-testid=task-pause]")
+    time.sleep(1.5)  # a tick already under way when the pause came may still be shown
+    out["paused_at"] = shown_tick(page)
+    time.sleep(1.5)
+    out["after_pause"] = shown_tick(page)
+    page.screenshot(path=str(shots / "console-task-paused.png"))
+    page.click("[data-testid=task-step]")
+    wait_until("the step's tick", lambda: shown_tick(page) > out["after_pause"], 10)
+    time.sleep(1.0)
+    out["after_step"] = shown_tick(page)
+    page.click("[data-testid=task-resume]")
+    wait_until("ticks after the resume", lambda: shown_tick(page) > out["after_step"] + 3, 20)
+    out["after_resume"] = shown_tick(page)
+    page.click("[data-testid=task-stop]")
+    wait_until("the stopped task's end", lambda: root_state(page) in ("Success", "Failure"), 30)
+    out["final"] = root_state(page)
+    out["root_message"] = tree_rows(page)[0]["message"]
+    return out
+
+
+def edit_element(page: Page, shots: Path, args) -> dict:
+    """Renames args.element from the element page; then a second page edits the element
+    the first one shows, and the first page's edit of its stale read is refused."""
+    out: dict = {}
+    page.click("[data-testid=tab-world]")
+    page.fill("[data-testid=search-label]", "")
+    page.fill("[data-testid=search-type]", "skiros:Product")
+    page.click("[data-testid=world-search] button")
+    page.click(f'[data-testid=search-results] .item[data-element="{args.element}"]')
+    page.wait_for_selector("[data-testid=label-input]")
+    page.fill("[data-testid=label-input]", "renamed in the console")
+    page.click("[data-testid=save-label]")
+    wait_until("the edit's answer", lambda: "done" in page.inner_text("[data-testid=message]"), 10)
+    out["renamed"] = page.inner_text("[data-testid=message]")
+    page.wait_for_function("document.querySelector('[data-testid=label-input]').value === 'renamed in the console'")
+    page.screenshot(path=str(shots / "console-world.png"))
+
+    other = open_console(page.context.browser, page.url.split("#")[0] + "#world")
+    other.click(f'[data-testid=world-tree] .item[data-element="{args.element}"]')
+    other.wait_for_selector("[data-testid=label-input]")
+    other.fill("[data-testid=label-input]", "renamed by someone else")
+    other.click("[data-testid=save-label]")
+    wait_until("the other page's edit", lambda: "done" in other.inner_text("[data-testid=message]"), 10)
+
+    page.fill("[data-testid=label-input]", "my stale rename")
+    page.click("[data-testid=save-label]")
+    wait_until("the refusal", lambda: page.get_attribute("[data-testid=message]", "class") == "error", 10)
+    out["stale"] = page.inner_text("[data-testid=message]")
+    page.screenshot(path=str(shots / "console-world-stale.png"))
+    return out
+
+
+SCENARIOS = {"start_clear_table": start_clear_table, "control_cli_task": control_cli_task,
+             "edit_element": edit_element}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("url")
+    ap.add_argument("scenario", choices=sorted(SCENARIOS))
+    ap.add_argument("--shots", required=True)
+    ap.add_argument("--task", type=int, default=0)
+    ap.add_argument("--element", default="")
+    args = ap.parse_args()
+    shots = Path(args.shots)
+    shots.mkdir(parents=True, exist_ok=True)
+    with sync_playwright() as p:
+        # (no sandbox: the test's network namespace is a user namespace, where Chromium's
+        # own sandbox cannot be set up)
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = open_console(browser, args.url)
+        try:
+            out = SCENARIOS[args.scenario](page, shots, args)
+        except Exception:
+            page.screenshot(path=str(shots / f"failed-{args.scenario}.png"), full_page=True)
+            raise
+        print(json.dumps(out), flush=True)
+        browser.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,135 @@
+"""The console (`skillbus console`) in a real browser: Debian's Chromium, headless, driven
+by Playwright (console_browser.py, run inside the test's network namespace), against the
+pick-and-place system in lockstep with no task of its own.
+
+* ClearTable started from the skill form: its tree goes Running to Success, and the tree
+  the page ends with is the manager's final tree, node for node, also when the console
+  loses every third progress message (it catches up from SKILL.tasks).
+* A task started from the CLI: paused (no tick while paused), stepped (one tick),
+  resumed and stopped from the page; the CLI's run ends saying it failed, stopped.
+* An element renamed on the world page: `skillbus wm get` shows the new label; an edit
+  of an element another page changed since it was read is refused, naming the change.
+
+Screenshots of each page go to $SKILLBUS_TEST_ARTIFACTS (default build/test-artifacts)
+/console; docs/console.md shows them."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import last_json
+from skillbus import paths
+from skillbus.system import programs, start
+
+DRIVER = Path(__file__).parent / "console_browser.py"
+CHROMIUM = Path("/usr/bin/chromium")
+SHOTS = Path(os.environ.get("SKILLBUS_TEST_ARTIFACTS", paths.REPO_ROOT / "build" / "test-artifacts")) / "console"
+
+
+@pytest.fixture
+def system(sandbox, tmp_path):
+    """The pick-and-place system under lockstep, without a task: tasks come from the page
+    or the CLI."""
+    if not CHROMIUM.exists():
+        pytest.fail(f"{CHROMIUM} is missing: `make test` installs Debian's chromium (deploy/setup.sh)")
+    procs = start(sandbox, programs(tmp_path / "run", task=None), tmp_path / "run")
+    procs["skills"].wait_for("registered", 60)
+    return procs
+
+
+def console(sandbox, *extra: str) -> str:
+    """Starts `skillbus console --port 0` in the sandbox; its URL."""
+    p = sandbox.start(f"console-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", "console", "--port", "0",
+                                                        *extra])
+    m = p.wait_for(re.compile(r"skillbus console: (http://\S+)"), 30, stream="stdout")
+    return m.group(1)
+
+
+def start_browser(sandbox, url: str, scenario: str, *extra: str):
+    return sandbox.start(f"browser-{scenario}", [sys.executable, str(DRIVER), url, scenario, "--shots", str(SHOTS),
+                                                 *extra])
+
+
+def browser_result(sandbox, p, scenario: str, timeout: float = 600) -> dict:
+    rc = sandbox.wait(p, timeout)
+    assert rc == 0, f"the browser scenario {scenario} failed (screenshot in {SHOTS}):\n{p.stderr()[-4000:]}"
+    return last_json(p.stdout())
+
+
+def browser(sandbox, url: str, scenario: str, *extra: str, timeout: float = 600) -> dict:
+    """Runs one scenario of console_browser.py; what it saw."""
+    return browser_result(sandbox, start_browser(sandbox, url, scenario, *extra), scenario, timeout)
+
+
+def cli(sandbox, *args: str, timeout: float = 60) -> tuple[int, str, str]:
+    p = sandbox.start(f"cli-{args[0]}-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", *args])
+    rc = sandbox.wait(p, timeout)
+    return rc, p.stdout(), p.stderr()
+
+
+def manager_final_tree(sandbox, task: int) -> list[dict]:
+    """The manager's own final tree of a finished task (`skillbus watch --json`, which
+    reads it from SKILL.tasks)."""
+    rc, out, err = cli(sandbox, "watch", str(task), "--json", "--timeout", "10")
+    result = last_json(out)
+    assert result and result["ended"], out + err
+    return result["tree"]
+
+
+def same_tree(rows: list[dict], tree: list[dict]) -> None:
+    assert [(r["id"], r["state"], r["message"]) for r in rows] == \
+        [(n["id"], n["state"], n["message"]) for n in tree]
+
+
+@pytest.mark.parametrize("lose_every", [0, 3], ids=["all-heard", "every-third-progress-lost"])
+def test_clear_table_started_from_the_form_runs_to_success_and_the_page_ends_with_the_managers_tree(
+        sandbox, system, lose_every):
+    url = console(sandbox, *(["--lose-progress-every", str(lose_every)] if lose_every else []))
+    seen = browser(sandbox, url, "start_clear_table")
+    assert seen["states"][0] == "Running" and seen["states"][-1] == "Success", seen["states"]
+    assert f"task {seen['task']} started: ClearTable" in seen["message"]
+    final = manager_final_tree(sandbox, seen["task"])
+    assert len(final) > 10  # a whole ClearTable: locate, pick and place of every cube
+    same_tree(seen["rows"], final)  # no state of any node lost on the way
+
+
+def test_a_task_started_from_the_cli_is_paused_stepped_resumed_and_stopped_from_the_page(sandbox, system):
+    url = console(sandbox)
+    page = start_browser(sandbox, url, "control_cli_task", "--task", "1")
+    page.wait_for("READY", 60, stream="stdout")
+    run = sandbox.start("run", [sys.executable, "-m", "skillbus.cli", "run", "ClearTable", "--timeout", "300"])
+    seen = browser_result(sandbox, page, "control_cli_task")
+    assert seen["after_pause"] == seen["paused_at"], seen  # no tick while paused
+    assert seen["after_step"] == seen["after_pause"] + 1, seen  # one step: one tick
+    assert seen["after_resume"] > seen["after_step"] + 3, seen
+    assert seen["final"] == "Failure", seen
+    assert sandbox.wait(run, 30) == 1, run.stdout() + run.stderr()
+    assert "task 1: Failure" in run.stdout(), run.stdout()
+
+
+def test_an_edit_on_the_world_page_is_in_the_world_model_and_a_stale_one_is_refused(sandbox, system):
+    from skillbus.sim.scene import element_ids
+    cube = element_ids(paths.demo_scene())["cube_red"] if "cube_red" in element_ids(paths.demo_scene()) else \
+        sorted(v for k, v in element_ids(paths.demo_scene()).items() if v.startswith("skiros:Cube"))[0]
+    url = console(sandbox)
+    seen = browser(sandbox, url, "edit_element", "--element", cube)
+    assert "done" in seen["renamed"], seen
+    assert f"{cube} changed since it was read (label 'renamed in the console' -> 'renamed by someone else')" \
+        in seen["stale"], seen
+    rc, out, err = cli(sandbox, "wm", "get", cube, "--json")
+    assert rc == 0, out + err
+    assert json.loads(out)["label"] == "renamed by someone else"  # the refused edit changed nothing
+
+
+def test_screenshots_are_in_the_docs():
+    """The docs show the pages the tests above photographed (copied from the artefacts
+    when they change: cp build/test-artifacts/console/console-*.png docs/images/)."""
+    text = (paths.REPO_ROOT / "docs" / "console.md").read_text()
+    for name in ("console-skills.png", "console-task-running.png", "console-task-paused.png", "console-world.png"):
+        assert f"images/{name}" in text and (paths.REPO_ROOT / "docs" / "images" / name).exists(), name
