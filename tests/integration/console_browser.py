@@ -74,7 +74,15 @@ def start_clear_table(page: Page, shots: Path, args) -> dict:
     wait_until("ClearTable's end", ended, 600)
     page.screenshot(path=str(shots / "console-task-done.png"), full_page=True)
     task = int(page.get_attribute("[data-testid=task-list] .item.selected", "data-task"))
-    return {"task": task, "states": states, "rows": tree_rows(page), "message": page.inner_text("[data-testid=message]")}
+    out = {"task": task, "states": states, "rows": tree_rows(page), "message": page.inner_text("[data-testid=message]")}
+    # the live 3D view of the scene the task left
+    page.click("[data-testid=tab-3d]")
+    page.wait_for_function("document.querySelector('[data-testid=live-contacts]').textContent.startsWith('frame')")
+    page.wait_for_timeout(500)
+    page.screenshot(path=str(shots / "console-3d.png"))
+    out["live3d"] = page.inner_text("[data-testid=live-contacts]")
+    out["canvas"] = page.locator("[data-testid=live-3d] canvas").count()
+    return out
 
 
 def control_cli_task(page: Page, shots: Path, args) -> dict:
@@ -137,8 +145,33 @@ def edit_element(page: Page, shots: Path, args) -> dict:
     return out
 
 
+def replay_log(page: Page, shots: Path, args) -> dict:
+    """Opens args.log on the Replay page and scrubs the timeline forward until the world
+    model shows a cube in the gripper."""
+    page.click("[data-testid=tab-replay]")
+    page.fill("[data-testid=replay-path]", args.log)
+    page.click("[data-testid=replay-open] button")
+    page.wait_for_selector("[data-testid=replay-digest]", timeout=60_000)
+    timeline = page.locator("[data-testid=timeline]")
+    first, last = int(timeline.get_attribute("min")), int(timeline.get_attribute("max"))
+    held = '[data-testid=replay-world] .item[data-element^="skiros:Cube"][data-parent^="skiros:Gripper"]'
+    for frame in range(first, last + 1, max(1, (last - first) // 60)):
+        timeline.fill(str(frame))
+        page.wait_for_selector(f'[data-testid=replay-frame-number][data-frame="{frame}"]')
+        if page.locator(held).count():
+            break
+    else:
+        raise AssertionError(f"no frame of {first}..{last} shows a cube in the gripper")
+    page.wait_for_timeout(300)  # (the 3D view draws the frame)
+    page.screenshot(path=str(shots / "console-replay.png"))
+    return {"frame": frame, "first": first, "last": last, "cube": page.get_attribute(held, "data-element"),
+            "contacts": page.inner_text("[data-testid=replay-contacts]"),
+            "digest": page.inner_text("[data-testid=replay-digest]"),
+            "tasks": page.inner_text("[data-testid=replay-tasks]")[:2000]}
+
+
 SCENARIOS = {"start_clear_table": start_clear_table, "control_cli_task": control_cli_task,
-             "edit_element": edit_element}
+             "edit_element": edit_element, "replay_log": replay_log}
 
 
 def main() -> int:
@@ -148,13 +181,16 @@ def main() -> int:
     ap.add_argument("--shots", required=True)
     ap.add_argument("--task", type=int, default=0)
     ap.add_argument("--element", default="")
+    ap.add_argument("--log", default="")
     args = ap.parse_args()
     shots = Path(args.shots)
     shots.mkdir(parents=True, exist_ok=True)
     with sync_playwright() as p:
         # (no sandbox: the test's network namespace is a user namespace, where Chromium's
         # own sandbox cannot be set up)
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        # (software WebGL for the 3D view: there is no GPU)
+        browser = p.chromium.launch(executable_path=CHROMIUM,
+                                    args=["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"])
         page = open_console(browser, args.url)
         try:
             out = SCENARIOS[args.scenario](page, shots, args)

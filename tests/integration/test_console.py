@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import signal
 import sys
 from pathlib import Path
 
@@ -35,10 +36,12 @@ SHOTS = Path(os.environ.get("SKILLBUS_TEST_ARTIFACTS", paths.REPO_ROOT / "build"
 @pytest.fixture
 def system(sandbox, tmp_path):
     """The pick-and-place system under lockstep, without a task: tasks come from the page
-    or the CLI."""
+    or the CLI. lcm-logger records it from the start (for the replay)."""
     if not CHROMIUM.exists():
         pytest.fail(f"{CHROMIUM} is missing: `make test` installs Debian's chromium (deploy/setup.sh)")
-    procs = start(sandbox, programs(tmp_path / "run", task=None), tmp_path / "run")
+    (tmp_path / "run").mkdir()
+    procs = {"logger": sandbox.start("logger", [str(paths.lcm_logger()), "-f", str(tmp_path / "run" / "run.lcmlog")])}
+    procs.update(start(sandbox, programs(tmp_path / "run", task=None), tmp_path / "run"))
     procs["skills"].wait_for("registered", 60)
     return procs
 
@@ -87,16 +90,34 @@ def same_tree(rows: list[dict], tree: list[dict]) -> None:
         [(n["id"], n["state"], n["message"]) for n in tree]
 
 
-@pytest.mark.parametrize("lose_every", [0, 3], ids=["all-heard", "every-third-progress-lost"])
-def test_clear_table_started_from_the_form_runs_to_success_and_the_page_ends_with_the_managers_tree(
-        sandbox, system, lose_every):
-    url = console(sandbox, *(["--lose-progress-every", str(lose_every)] if lose_every else []))
+def test_clear_table_started_from_the_form_runs_to_success_and_its_recording_replays(sandbox, system, tmp_path):
+    url = console(sandbox)
     seen = browser(sandbox, url, "start_clear_table")
     assert seen["states"][0] == "Running" and seen["states"][-1] == "Success", seen["states"]
     assert f"task {seen['task']} started: ClearTable" in seen["message"]
     final = manager_final_tree(sandbox, seen["task"])
     assert len(final) > 10  # a whole ClearTable: locate, pick and place of every cube
     same_tree(seen["rows"], final)  # no state of any node lost on the way
+    assert seen["canvas"] == 1 and re.match(r"frame \d+ ", seen["live3d"]), seen  # the live 3D view draws
+
+    # The run, recorded by lcm-logger, on the Replay page: scrubbed to a frame where a
+    # cube is in the gripper, in the world model and in the physics (finger contacts).
+    system["logger"].popen.send_signal(signal.SIGINT)  # (it closes its log)
+    assert sandbox.wait(system["logger"], 10) is not None
+    seen = browser(sandbox, url, "replay_log", "--log", str(tmp_path / "run" / "run.lcmlog"))
+    assert seen["first"] < seen["frame"] < seen["last"], seen
+    assert "finger_left" in seen["contacts"] and "finger_right" in seen["contacts"], seen
+    assert re.search(r"session digest [0-9a-f]{64}", seen["digest"]), seen
+    assert "Grasp" in seen["tasks"] and "Running" in seen["tasks"], seen
+
+
+def test_with_every_third_progress_lost_the_page_still_ends_with_the_managers_tree(sandbox, system):
+    """The console hears only two progress messages in three (a full queue, a lossy
+    network): it reads what it missed from the manager (SKILL.tasks)."""
+    url = console(sandbox, "--lose-progress-every", "3")
+    seen = browser(sandbox, url, "start_clear_table")
+    assert seen["states"][-1] == "Success", seen["states"]
+    same_tree(seen["rows"], manager_final_tree(sandbox, seen["task"]))
 
 
 def test_a_task_started_from_the_cli_is_paused_stepped_resumed_and_stopped_from_the_page(sandbox, system):
@@ -131,5 +152,6 @@ def test_screenshots_are_in_the_docs():
     """The docs show the pages the tests above photographed (copied from the artefacts
     when they change: cp build/test-artifacts/console/console-*.png docs/images/)."""
     text = (paths.REPO_ROOT / "docs" / "console.md").read_text()
-    for name in ("console-skills.png", "console-task-running.png", "console-task-paused.png", "console-world.png"):
+    for name in ("console-skills.png", "console-task-running.png", "console-task-paused.png", "console-world.png",
+                 "console-world-stale.png", "console-replay.png", "console-3d.png"):
         assert f"images/{name}" in text and (paths.REPO_ROOT / "docs" / "images" / name).exists(), name

@@ -14,6 +14,10 @@ def add_parser(sub) -> None:
                    help="the address to serve on (default: this machine only; 0.0.0.0 serves every network the "
                         "machine is on, to anyone who reaches it: the console starts and stops tasks)")
     c.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
+    c.add_argument("--scene", default=None, metavar="FILE.scene.json",
+                   help="the scene the 3D view draws (default: the demo's)")
+    c.add_argument("--log", default=None, metavar="FILE.lcmlog",
+                   help="open this recorded run for replay at once (the Replay page opens others)")
     # test: lose every N-th progress message it hears (the catch-up from SKILL.tasks must
     # still give every task its final tree)
     c.add_argument("--lose-progress-every", type=int, default=0, help=argparse.SUPPRESS)
@@ -35,7 +39,13 @@ def main(args: argparse.Namespace) -> int:
             b = DropEveryNthReceivedBus(b, args.lose_progress_every, ("SB_SKILL_PROGRESS",))
         return b
 
-    app = create_app(bus)
+    from pathlib import Path
+    from skillbus.console.live import ConsoleError
+    try:
+        app = create_app(bus, Path(args.scene) if args.scene else None, Path(args.log) if args.log else None)
+    except (ConsoleError, OSError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     # The socket is bound here, so a port in use is one line, and --port 0's port is known.
     try:
         sock = socket.create_server((args.host, args.port))

@@ -51,19 +51,46 @@ class Broadcaster:
                 q.put_nowait_overflow = True  # type: ignore[attr-defined]
 
 
-def create_app(open_bus: Callable[[], Any]) -> FastAPI:
-    """The console app on a bus opened by `open_bus` (on the bus thread)."""
+THREE_JS = Path("/usr/share/javascript/three")  # Debian's libjs-three (deploy/setup.sh installs it)
+
+
+def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path | None = None) -> FastAPI:
+    """The console app on a bus opened by `open_bus` (on the bus thread); the 3D view
+    draws `scene` (default: the demo's); `log` is opened for replay at once."""
+    from skillbus import paths
+    from skillbus.console.replay import ReplayError, ReplayLog
+    from skillbus.console.scene3d import Scene3D
+    from skillbus.console.views3d import SEND_PERIOD_S, LiveSim, frame_view
+
     app = FastAPI(title="skillbus console", docs_url="/api/docs", redoc_url=None)
     worker = BusWorker(open_bus)
     hub = Broadcaster()
-    state: dict[str, Any] = {}
+    state: dict[str, Any] = {"scene": Scene3D(scene or paths.demo_scene()), "replay": None}
 
     def setup() -> None:  # on the bus thread
         state["skills"] = LiveSkills(worker.bus, hub.emit_threadsafe)
         state["world"] = LiveWorld(worker.bus, state["skills"].emit)
+        state["sim"] = LiveSim(worker.bus, state["scene"], state["skills"].emit)
         worker.every(0.5, state["world"].say_version)
         worker.every(PROBE_PERIOD_S, state["skills"].probe)
         worker.every(CATCH_UP_S / 2, state["skills"].catch_up_quiet_tasks)
+        worker.every(SEND_PERIOD_S, state["sim"].send)
+
+    def open_replay(path: Path) -> dict[str, Any]:
+        """Reads a log (in a worker thread: seconds for a long run); its summary."""
+        if path.suffix != ".lcmlog":
+            raise ConsoleError(f"{path}: the console replays LCM logs, named *.lcmlog")
+        try:
+            r = ReplayLog(path)
+        except ReplayError as e:
+            raise ConsoleError(str(e)) from None
+        scenes = sorted((path.parent / "scene").glob("*.scene.json"))  # a `skillbus demo` run folder's
+        r.scene = Scene3D(scenes[0]) if scenes else state["scene"]
+        state["replay"] = r
+        return r.summary()
+
+    if log is not None:
+        open_replay(Path(log))
 
     @app.on_event("startup")
     async def _start() -> None:
@@ -93,6 +120,46 @@ def create_app(open_bus: Callable[[], Any]) -> FastAPI:
         return FileResponse(STATIC / "index.html")
 
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
+    if THREE_JS.is_dir():
+        app.mount("/vendor/three", StaticFiles(directory=THREE_JS), name="three")
+
+    @app.get("/api/scene3d")
+    async def scene3d(replay: bool = False) -> dict[str, Any]:
+        r = state["replay"]
+        sc = r.scene if replay and r is not None else state["scene"]
+        return {"scene": str(sc.path), "bodies": sc.shapes(), "three": THREE_JS.is_dir()}
+
+    @app.get("/api/sim")
+    async def sim_now() -> dict[str, Any]:
+        latest = await on_bus(lambda: state["sim"].latest())
+        if latest is None:
+            raise HTTPException(404, "no physics state heard yet (SB_SIM_STATE)")
+        return latest
+
+    @app.post("/api/replay/open")
+    async def replay_open(body: dict[str, Any]) -> dict[str, Any]:
+        path = Path(str(body.get("path", ""))).expanduser()
+        try:
+            return await asyncio.get_running_loop().run_in_executor(None, open_replay, path)
+        except ConsoleError as e:
+            raise HTTPException(400, str(e)) from None
+
+    @app.get("/api/replay")
+    async def replay_summary() -> dict[str, Any]:
+        if state["replay"] is None:
+            raise HTTPException(404, "no log open")
+        return state["replay"].summary()
+
+    @app.get("/api/replay/frame/{frame}")
+    async def replay_frame(frame: int) -> dict[str, Any]:
+        r = state["replay"]
+        if r is None:
+            raise HTTPException(404, "no log open")
+        f = r.nearest_frame(frame)
+        sim = r.sim_at(f)
+        return {"frame": f, "sim_time_s": r.sim_time_ns[f] * 1e-9, "tasks": r.tasks_at(f),
+                "world": r.world_at(f).tree(),
+                "sim": frame_view(r.scene, sim, r.arm_cmd_at(f), f) if sim is not None else None}
 
     @app.get("/api/managers")
     async def managers() -> list[dict[str, Any]]:

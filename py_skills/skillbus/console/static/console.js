@@ -32,7 +32,7 @@ async function api(method, path, body) {
 }
 
 // ---- pages ------------------------------------------------------------------
-const pages = {skills: loadSkills, tasks: () => {}, world: loadWorld};
+const pages = {skills: loadSkills, tasks: () => {}, world: loadWorld, view3d: showLive3d, replay: showReplay};
 function show(page) {
   for (const b of document.querySelectorAll("header nav button")) b.classList.toggle("active", b.dataset.page === page);
   for (const p of document.querySelectorAll(".page")) p.hidden = p.id !== `page-${page}`;
@@ -233,6 +233,8 @@ function connect() {
     } else if (ev.kind === "world") {
       worldVersion = ev.version;
       if (!$("#page-world").hidden) scheduleWorldReload();
+    } else if (ev.kind === "sim") {
+      if (live3d && !$("#page-view3d").hidden) { live3d.show(ev); $("#live-contacts").textContent = contactsText(ev); }
     } else if (ev.kind === "overflow") {
       say(ev.message, true);
     }
@@ -333,6 +335,78 @@ async function showElement(id) {
     el("h3", {}, "Remove"),
     el("button", {"data-testid": "remove-element", onclick: () => { if (confirm(`Remove ${id} and its relations?`))
       edit({op: "remove", id, read}, `remove ${id}`); }}, `Remove ${id}`));
+}
+
+// ---- 3D (live) -------------------------------------------------------------------------
+let live3d = null;
+async function showLive3d() {
+  if (!live3d) live3d = new View3D($("#live-3d"), false);
+  try { const f = await api("GET", "/api/sim"); live3d.show(f); $("#live-contacts").textContent = contactsText(f); }
+  catch (e) { $("#live-contacts").textContent = e.message; }
+}
+
+// ---- replay --------------------------------------------------------------------------------
+let replay3d = null, replayTimer = null, replayWanted = null;
+async function showReplay() {
+  try { showReplaySummary(await api("GET", "/api/replay")); } catch (e) { /* no log open yet */ }
+}
+
+function showReplaySummary(s) {
+  const missing = Object.entries(s.missing || {}).map(([c, n]) => `${n} on ${c}`).join(", ");
+  $("#replay-summary").replaceChildren(
+    el("div", {}, `${s.file}: ${s.frames} frames, ${s.sim_time_s.toFixed(2)} s of sim time, ${s.tasks} task(s)`),
+    el("div", {class: "digest", "data-testid": "replay-digest"}, `session digest ${s.digest}`),
+    missing ? el("div", {class: "muted"}, `the log lacks messages the clocks announced (${missing}): ` +
+                                           "this digest cannot equal the run's") : null);
+  const t = $("#timeline");
+  t.min = s.first; t.max = s.last; t.disabled = false;
+  if (!replay3d) replay3d = new View3D($("#replay-3d"), true);
+  replayFrame(Number(t.value));
+}
+
+$("#replay-open").addEventListener("submit", async (ev) => {
+  ev.preventDefault();
+  say("reading the log ...");
+  try {
+    const s = await api("POST", "/api/replay/open", {path: ev.target.path.value});
+    replay3d = null;
+    $("#timeline").value = s.first;
+    showReplaySummary(s);
+    say(`opened ${s.file}`);
+  } catch (e) { say(`replay: ${e.message}`, true); }
+});
+
+$("#timeline").addEventListener("input", () => replayFrame(Number($("#timeline").value)));
+
+// One frame request at a time; while one is under way only the latest wish waits.
+async function replayFrame(frame) {
+  replayWanted = frame;
+  if (replayTimer) return;
+  replayTimer = true;
+  while (replayWanted !== null) {
+    const f = replayWanted;
+    replayWanted = null;
+    try { renderReplay(await api("GET", `/api/replay/frame/${f}`)); } catch (e) { say(`replay: ${e.message}`, true); }
+  }
+  replayTimer = null;
+}
+
+function renderReplay(r) {
+  $("#replay-frame").replaceChildren(el("b", {"data-testid": "replay-frame-number", "data-frame": r.frame},
+                                        `frame ${r.frame}`), ` · ${r.sim_time_s.toFixed(2)} s`);
+  const item = (n, depth, parent) => [el("div", {class: "item", "data-element": n.id, "data-parent": parent,
+      style: `padding-left:${depth * 1.2 + .5}em`}, n.id, el("small", {}, n.label || "")),
+    ...n.children.flatMap(c => item(c, depth + 1, n.id))];
+  $("#replay-world").replaceChildren(...r.world.flatMap(n => item(n, 0, "")));
+  const rows = [];
+  for (const t of r.tasks) {
+    rows.push(el("div", {class: "robot"}, `task ${t.task}${t.robot ? " · " + t.robot : ""}: ${t.skill} ${t.state} · tick ${t.tick}`));
+    const depth = [];
+    t.nodes.forEach((n, i) => { depth[i] = n.parent >= 0 ? depth[n.parent] + 1 : 0; rows.push(nodeRow(n, depth[i])); });
+  }
+  $("#replay-tasks").replaceChildren(...rows);
+  $("#replay-contacts").textContent = contactsText(r.sim);
+  if (replay3d && r.sim) replay3d.show(r.sim);
 }
 
 // ---- start ----------------------------------------------------------------------------
