@@ -85,6 +85,7 @@ bench: build
 	$(PY) bench/demo_obstacle.py
 	$(PY) bench/planning_bench.py
 	$(PY) bench/dds_transport.py
+	$(PY) bench/console_overhead.py
 	$(BUILD)/bench/perception_bench
 	$(BUILD)/bench/motion_bench
 

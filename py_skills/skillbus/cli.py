@@ -109,6 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
     plan_cli.add_parser(sub)
     from skillbus.console import cli as console_cli
     console_cli.add_parser(sub)
+    from skillbus.skill import tree_view
+    tree_view.add_parser(sub)
     return ap
 
 
@@ -191,6 +193,9 @@ def dispatch(args: argparse.Namespace) -> int:
     if args.command == "plan":
         from skillbus.planning import cli as plan_cli
         return plan_cli.main(args)
+    if args.command == "tree":
+        from skillbus.skill import tree_view
+        return tree_view.main(args)
     if args.command == "console":
         from skillbus.console import cli as console_cli
         return console_cli.main(args)

@@ -148,6 +148,17 @@ def test_an_edit_on_the_world_page_is_in_the_world_model_and_a_stale_one_is_refu
     assert json.loads(out)["label"] == "renamed by someone else"  # the refused edit changed nothing
 
 
+def test_tree_expands_clear_table_before_it_runs(sandbox, system):
+    """`skillbus tree`: nested compounds expanded by their skill process, down to the
+    primitives, with the world as it is (three cubes: three transfers)."""
+    rc, out, err = cli(sandbox, "tree", "ClearTable")
+    assert rc == 0, out + err
+    lines = out.splitlines()
+    assert lines[0].startswith("ClearTable ["), out
+    assert sum(1 for line in lines if line.strip().startswith("Grasp")) == 3, out
+    assert "cannot expand" not in out, out
+
+
 def test_screenshots_are_in_the_docs():
     """The docs show the pages the tests above photographed (copied from the artefacts
     when they change: cp build/test-artifacts/console/console-*.png docs/images/)."""

@@ -74,6 +74,14 @@ def test_the_live_view_follows_the_task_to_its_end(box, tmp_path):  # noqa: F811
     assert result and result.group(2).startswith(state), out[-3000:]
     assert (rc == 0) == (result.group(1) == "ok"), (rc, out[-2000:])
 
+    # The console's replay recomputes the session digest from the log: the run's own
+    # when the log holds every message the clocks announced (else it names what is lacking).
+    from skillbus.console.replay import ReplayLog
+    replay = ReplayLog(run_dir / "demo.lcmlog")
+    printed = re.search(r"session digest\s+([0-9a-f]{64})", out).group(1)
+    assert (replay.digest == printed) == (not replay.missing), (replay.digest, printed, replay.missing)
+    assert replay.tasks_at(replay.frames[-1])[0]["state"] == state
+
 
 def test_an_interrupted_demo_shuts_its_system_down(box, tmp_path):  # noqa: F811
     run_dir = tmp_path / "demo"

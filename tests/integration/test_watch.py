@@ -67,3 +67,18 @@ reply = RpcClient(open_bus(), "SKILL", "probe").call("tasks", skill_start_t(), s
 print(json.dumps([{"task": p.task, "state": p.state, "tick": p.tick, "message": p.nodes[0].message}
                   for p in reply.tasks]))
 """
+
+
+def test_tree_shows_a_skill_expanded_before_it_runs_and_a_tasks_tree_now(sandbox):
+    start_system(sandbox, "flow_skills")
+    rc, out, err = cli(sandbox, "tree", "Chain")
+    assert rc == 0, out + err
+    # the compound's tree from its skill process, anonymous groups by their processor
+    assert out.splitlines() == ["Chain [SerialStar]", "  Produce", "  Consume", "  Consume", "  Mode",
+                                "  (Selector)", "    Fails", "    Consume"], out
+    rc, dot, err = cli(sandbox, "tree", "Chain", "--dot")
+    assert rc == 0 and dot.startswith('digraph "Chain" {') and "->" in dot, dot + err
+    rc, out, err = cli(sandbox, "tree", "NoSuchSkill")
+    assert rc == 2 and "unknown skill 'NoSuchSkill'" in err, err
+    rc, out, err = cli(sandbox, "tree", "999")
+    assert rc == 2 and "does not know task 999" in err, err

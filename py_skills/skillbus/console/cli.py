@@ -33,7 +33,7 @@ def main(args: argparse.Namespace) -> int:
     from skillbus.monitor import watch_url
 
     def bus():
-        b = open_bus(watch_url(args.url))
+        b = open_bus(watch_url(args.url), watcher=True)
         if args.lose_progress_every > 0:
             from skillbus.bus import DropEveryNthReceivedBus
             b = DropEveryNthReceivedBus(b, args.lose_progress_every, ("SB_SKILL_PROGRESS",))
@@ -55,6 +55,8 @@ def main(args: argparse.Namespace) -> int:
     host, port = sock.getsockname()[:2]
     print(f"skillbus console: http://{host}:{port}/", flush=True)
     logging.getLogger("uvicorn.error").setLevel(logging.WARNING)
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on"))
+    # (open live pages would hold a graceful shutdown for ever: they get 2 s)
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2,
+                                          ws_per_message_deflate=False))  # (loopback: compressing costs, saves nothing)
     server.run(sockets=[sock])
     return 0

@@ -16,6 +16,7 @@ not its last.
 from __future__ import annotations
 
 import logging
+import struct
 import time
 from typing import Any, Callable
 
@@ -29,9 +30,30 @@ from skillbus.skill.task_tree import TaskTrees
 log = logging.getLogger("skillbus.console")
 
 CATCH_UP_S = 1.0        # a running task not heard of this long is read from its manager
+FLUSH_PERIOD_S = 0.05   # trees are updated (and changes sent) at most this often per task
 PROBE_PERIOD_S = 3.0    # managers are looked for again this often
 MANAGER_TIMEOUT_S = 2.0
 VERBS = ("pause", "step", "resume", "stop")
+
+
+def task_of(data: bytes) -> int | None:
+    """The task id of an encoded skill_progress_t, read without decoding the tree: after
+    the fingerprint, header_t (frame, sim time, sender, seq), then the task (LCM: big
+    endian, a string as u32 length with its NUL, then the bytes).
+
+    >>> from skillbus.msgs import skill_progress_t
+    >>> p = skill_progress_t(); p.task = 42; p.header.sender = "skill_mgr"
+    >>> task_of(p.encode()), task_of(b"short")
+    (42, None)
+    """
+    try:
+        (n,) = struct.unpack_from(">I", data, 24)
+        (task,) = struct.unpack_from(">q", data, 28 + n + 4)
+    except struct.error:
+        return None
+    if data[:8] != skill_progress_t._get_packed_fingerprint():
+        return None
+    return task
 
 
 class ConsoleError(RuntimeError):
@@ -61,6 +83,8 @@ class LiveSkills:
         self.managers: dict[str, Manager] = {}
         self.trees = TaskTrees()
         self._heard: dict[tuple[str, int], float] = {}
+        self._pending: dict[tuple[str, int], bytes] = {}
+        self._flushed = 0.0
         bus.subscribe(robot_channel("SB_MANAGERS", ""), self._on_manager)
 
     # -- managers -----------------------------------------------------------
@@ -97,9 +121,27 @@ class LiveSkills:
 
     # -- tasks --------------------------------------------------------------
     def _on_progress(self, robot: str, data: bytes) -> None:
-        p = decode(skill_progress_t, data)
-        if p is not None:
-            self._take(robot, p)
+        # Kept undecoded, the latest per task, until flush(): a manager publishes a tree
+        # after every tick, many times faster than a page can show or a person read.
+        task = task_of(data)
+        if task is None:
+            return
+        self._heard[(robot, task)] = time.monotonic()
+        self._pending[(robot, task)] = data
+
+    def flush(self, idle_period_s: float | None = None) -> None:
+        """Chore (every FLUSH_PERIOD_S, and before a snapshot): the latest progress heard
+        of each task into its tree; the changes to browsers. With `idle_period_s` (no page
+        open) only that often."""
+        now = time.monotonic()
+        if idle_period_s is not None and now - self._flushed < idle_period_s:
+            return
+        self._flushed = now
+        pending, self._pending = self._pending, {}
+        for (robot, _task), data in sorted(pending.items()):
+            p = decode(skill_progress_t, data)
+            if p is not None:
+                self._take(robot, p)
 
     def _take(self, robot: str, p: skill_progress_t) -> None:
         self._heard[(robot, p.task)] = time.monotonic()
@@ -150,10 +192,12 @@ class LiveSkills:
 
     def snapshot(self) -> dict[str, Any]:
         """What a browser sees first: the managers and every task's tree, as of event seq."""
+        self.flush()
         return {"kind": "hello", "seq": self.seq, "managers": self.manager_list(), "tasks": self.tasks()}
 
     def tasks(self) -> list[dict[str, Any]]:
         """Every task kept: its summary and whole tree (a browser's first view)."""
+        self.flush()
         return [dict(t.summary(), nodes=t.nodes) for _, t in sorted(self.trees.trees.items())]
 
     # -- skills and commands ------------------------------------------------

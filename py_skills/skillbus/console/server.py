@@ -20,7 +20,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from skillbus.console.bus_worker import BusWorker
-from skillbus.console.live import CATCH_UP_S, PROBE_PERIOD_S, ConsoleError, LiveSkills
+from skillbus.console.live import CATCH_UP_S, FLUSH_PERIOD_S, PROBE_PERIOD_S, ConsoleError, LiveSkills
 from skillbus.console.world import LiveWorld
 
 log = logging.getLogger("skillbus.console")
@@ -30,25 +30,40 @@ JOB_TIMEOUT_S = 15.0
 
 
 class Broadcaster:
-    """Fans events out to every connected browser, on the server's event loop."""
+    """Fans events out to every connected browser. The bus thread collects events
+    (:meth:`emit`) and hands them over in one batch per period (:meth:`send`): one wake-up
+    of the server's event loop, not one per event. With no browser connected nothing is
+    kept: a browser that connects starts from a snapshot."""
 
     def __init__(self) -> None:
         self.loop: asyncio.AbstractEventLoop | None = None
         self.queues: set[asyncio.Queue] = set()
+        self._batch: list[dict[str, Any]] = []
         self.sent = 0
 
-    def emit_threadsafe(self, event: dict[str, Any]) -> None:
-        if self.loop is not None:
-            self.loop.call_soon_threadsafe(self._put, event)
+    @property
+    def watched(self) -> bool:
+        return bool(self.queues)  # (read from the bus thread: a set's truth is one atomic read)
 
-    def _put(self, event: dict[str, Any]) -> None:
-        self.sent += 1
+    def emit(self, event: dict[str, Any]) -> None:  # on the bus thread
+        if self.watched:
+            self._batch.append(event)
+
+    def send(self) -> None:  # chore on the bus thread
+        if self._batch and self.loop is not None:
+            batch, self._batch = self._batch, []
+            self.loop.call_soon_threadsafe(self._put, batch)
+
+    def _put(self, batch: list[dict[str, Any]]) -> None:
+        self.sent += len(batch)
         for q in list(self.queues):
-            try:
-                q.put_nowait(event)
-            except asyncio.QueueFull:
-                self.queues.discard(q)
-                q.put_nowait_overflow = True  # type: ignore[attr-defined]
+            for event in batch:
+                try:
+                    q.put_nowait(event)
+                except asyncio.QueueFull:
+                    self.queues.discard(q)
+                    q.put_nowait_overflow = True  # type: ignore[attr-defined]
+                    break
 
 
 THREE_JS = Path("/usr/share/javascript/three")  # Debian's libjs-three (deploy/setup.sh installs it)
@@ -68,13 +83,17 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
     state: dict[str, Any] = {"scene": Scene3D(scene or paths.demo_scene()), "replay": None}
 
     def setup() -> None:  # on the bus thread
-        state["skills"] = LiveSkills(worker.bus, hub.emit_threadsafe)
+        state["skills"] = LiveSkills(worker.bus, hub.emit)
         state["world"] = LiveWorld(worker.bus, state["skills"].emit)
         state["sim"] = LiveSim(worker.bus, state["scene"], state["skills"].emit)
         worker.every(0.5, state["world"].say_version)
         worker.every(PROBE_PERIOD_S, state["skills"].probe)
         worker.every(CATCH_UP_S / 2, state["skills"].catch_up_quiet_tasks)
-        worker.every(SEND_PERIOD_S, state["sim"].send)
+        # What only a page needs is done only while one is open: the physics state is not
+        # even heard without one (it comes every frame), trees are updated every 2 s.
+        worker.every(SEND_PERIOD_S, lambda: state["sim"].send(hub.watched))
+        worker.every(FLUSH_PERIOD_S, lambda: state["skills"].flush(idle_period_s=None if hub.watched else 2.0))
+        worker.every(FLUSH_PERIOD_S, hub.send)
 
     def open_replay(path: Path) -> dict[str, Any]:
         """Reads a log (in a worker thread: seconds for a long run); its summary."""

@@ -24,19 +24,34 @@ def frame_view(scene: Scene3D, state, arm_cmd, frame: int) -> dict[str, Any]:
 
 
 class LiveSim:
-    """Hears the robot's physics state and arm commands; a chore sends the latest frame."""
+    """The robot's physics state and arm commands, for the 3D view. The state comes every
+    frame: it is heard only while a page is open (send(watched)), and decoded at most
+    every SEND_PERIOD_S."""
 
     def __init__(self, bus, scene: Scene3D, emit: Callable[[dict[str, Any]], None], robot: str = "") -> None:
-        self.scene, self.emit = scene, emit
+        self.bus, self.scene, self.emit, self.robot = bus, scene, emit, robot
         self.state: Any = None
         self._raw: bytes | None = None
+        self._state_sub: int | None = None
         self.arm_cmd: Any = None
+        self._path: tuple[Any, list] = (None, [])  # (the command, its tool path): computed once per command
         self._sent = None
-        bus.subscribe(robot_channel("SB_SIM_STATE", robot), self._on_state)
         bus.subscribe(robot_channel("SB_ROBOT_ARM_CMD", robot), self._on_cmd)
+
+    def hear(self, on: bool) -> None:
+        if on and self._state_sub is None:
+            self._state_sub = self.bus.subscribe(robot_channel("SB_SIM_STATE", self.robot), self._on_state)
+        elif not on and self._state_sub is not None:
+            self.bus.unsubscribe(self._state_sub)
+            self._state_sub = None
 
     def _on_state(self, ch: str, data: bytes) -> None:
         self._raw = data  # decoded when sent: at most every SEND_PERIOD_S, not every frame
+
+    def _on_cmd(self, ch: str, data: bytes) -> None:
+        c = decode(robot_arm_cmd_t, data)
+        if c is not None:
+            self.arm_cmd = c
 
     def _decoded(self) -> None:
         raw, self._raw = self._raw, None
@@ -45,19 +60,22 @@ class LiveSim:
             if s is not None:
                 self.state = s
 
-    def _on_cmd(self, ch: str, data: bytes) -> None:
-        c = decode(robot_arm_cmd_t, data)
-        if c is not None:
-            self.arm_cmd = c
-
     def latest(self) -> dict[str, Any] | None:
+        self.hear(True)
         self._decoded()
         if self.state is None:
             return None
-        return frame_view(self.scene, self.state, self.arm_cmd, self.state.header.frame)
+        if self._path[0] is not self.arm_cmd:
+            self._path = (self.arm_cmd, frame_view(self.scene, self.state, self.arm_cmd, 0)["path"])
+        view = frame_view(self.scene, self.state, None, self.state.header.frame)
+        view["path"] = self._path[1]
+        return view
 
-    def send(self) -> None:
-        """Chore: the latest frame to browsers, when there is a new one."""
+    def send(self, watched: bool) -> None:
+        """Chore: the latest frame to browsers, when there is a new one and a page open."""
+        self.hear(watched)
+        if not watched:
+            return
         self._decoded()
         if self.state is None or self._sent is self.state:
             return
