@@ -36,7 +36,8 @@ from websockets.sync.client import connect
 events = size = 0
 kinds = {}
 try:
-    with connect(sys.argv[1].replace("http", "ws") + "api/live", max_size=None) as ws:
+    base, _, query = sys.argv[1].partition("?")
+    with connect(base.replace("http", "ws") + "api/live?" + query, max_size=None) as ws:
         print("connected", flush=True)
         for m in ws:
             events += 1; size += len(m)

@@ -130,7 +130,8 @@ def edit_element(page: Page, shots: Path, args) -> dict:
     page.wait_for_function("document.querySelector('[data-testid=label-input]').value === 'renamed in the console'")
     page.screenshot(path=str(shots / "console-world.png"))
 
-    other = open_console(page.context.browser, page.url.split("#")[0] + "#world")
+    other = open_console(page.context.browser, args.url)  # (a browser of its own: the URL with the token)
+    other.click("[data-testid=tab-world]")
     other.click(f'[data-testid=world-tree] .item[data-element="{args.element}"]')
     other.wait_for_selector("[data-testid=label-input]")
     other.fill("[data-testid=label-input]", "renamed by someone else")

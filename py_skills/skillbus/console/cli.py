@@ -16,6 +16,10 @@ def add_parser(sub) -> None:
     c.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
     c.add_argument("--scene", default=None, metavar="FILE.scene.json",
                    help="the scene the 3D view draws (default: the demo's)")
+    c.add_argument("--token", default=None, help="the token the API asks for (default: a new one each run, "
+                                                 "in the URL it prints)")
+    c.add_argument("--no-token", action="store_true",
+                   help="no token: anyone who reaches the port commands the robot (behind an authenticating proxy)")
     c.add_argument("--log", default=None, metavar="FILE.lcmlog",
                    help="open this recorded run for replay at once (the Replay page opens others)")
     # test: lose every N-th progress message it hears (the catch-up from SKILL.tasks must
@@ -42,7 +46,9 @@ def main(args: argparse.Namespace) -> int:
     from pathlib import Path
     from skillbus.console.live import ConsoleError
     try:
-        app = create_app(bus, Path(args.scene) if args.scene else None, Path(args.log) if args.log else None)
+        from skillbus.console import access
+        token = None if args.no_token else (args.token or access.new_token())
+        app = create_app(bus, Path(args.scene) if args.scene else None, Path(args.log) if args.log else None, token)
     except (ConsoleError, OSError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
@@ -53,7 +59,7 @@ def main(args: argparse.Namespace) -> int:
         print(f"error: cannot serve on {args.host}:{args.port}: {e.strerror or e}", file=sys.stderr)
         return 1
     host, port = sock.getsockname()[:2]
-    print(f"skillbus console: http://{host}:{port}/", flush=True)
+    print(f"skillbus console: http://{host}:{port}/" + (f"?token={token}" if token else ""), flush=True)
     logging.getLogger("uvicorn.error").setLevel(logging.WARNING)
     # (open live pages would hold a graceful shutdown for ever: they get 2 s)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2,

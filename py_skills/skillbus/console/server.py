@@ -69,9 +69,14 @@ class Broadcaster:
 THREE_JS = Path("/usr/share/javascript/three")  # Debian's libjs-three (deploy/setup.sh installs it)
 
 
-def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path | None = None) -> FastAPI:
+def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path | None = None,
+               token: str | None = None) -> FastAPI:
     """The console app on a bus opened by `open_bus` (on the bus thread); the 3D view
-    draws `scene` (default: the demo's); `log` is opened for replay at once."""
+    draws `scene` (default: the demo's); `log` is opened for replay at once; with `token`
+    only its holders use the API (console.access)."""
+    from fastapi.responses import RedirectResponse
+
+    from skillbus.console import access
     from skillbus import paths
     from skillbus.console.replay import ReplayError, ReplayLog
     from skillbus.console.scene3d import Scene3D
@@ -130,12 +135,25 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         except asyncio.TimeoutError:
             raise HTTPException(status_code=504, detail=f"the bus did not answer within {JOB_TIMEOUT_S:g} s") from None
 
+    @app.middleware("http")
+    async def _token(request: Request, call_next):
+        if request.url.path.startswith("/api/") and not access.allowed(
+                token, access.presented(request.headers, dict(request.query_params), request.cookies)):
+            return JSONResponse({"error": access.NEEDS_TOKEN}, status_code=401)
+        return await call_next(request)
+
     @app.exception_handler(HTTPException)
     async def _http_error(request: Request, exc: HTTPException) -> JSONResponse:
         return JSONResponse({"error": exc.detail}, status_code=exc.status_code)
 
     @app.get("/")
-    async def index() -> FileResponse:
+    async def index(request: Request):
+        given = request.query_params.get("token", "")
+        if given and token is not None and access.allowed(token, given):
+            # the token into a cookie, out of the address bar (and of the history)
+            r = RedirectResponse("/", status_code=303)
+            r.set_cookie(access.COOKIE, given, httponly=True, samesite="strict")
+            return r
         return FileResponse(STATIC / "index.html")
 
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
@@ -225,6 +243,9 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
 
     @app.websocket("/api/live")
     async def live(ws: WebSocket) -> None:
+        if not access.allowed(token, access.presented(ws.headers, dict(ws.query_params), ws.cookies)):
+            await ws.close(code=4401, reason="token needed")
+            return
         await ws.accept()
         q: asyncio.Queue = asyncio.Queue(LIVE_QUEUE)
         hub.queues.add(q)  # (before the snapshot: what happens after it is queued)

@@ -1,0 +1,40 @@
+"""Who may use the console: the holder of its token.
+
+The console commands the robot (it holds the bus key), over HTTP on a TCP port that
+every user and every web page in a browser on the machine can reach. So each run makes
+a token and prints the URL with it (``http://127.0.0.1:8080/?token=...``, as Jupyter
+does). Opening that URL sets a cookie (HttpOnly, SameSite=Strict: a page of another
+site that posts to the console does not carry it) and drops the token from the address;
+every API request and the live WebSocket must then carry the cookie, the
+``X-Skillbus-Token`` header, or ``?token=``. The page and its static files need none:
+they hold nothing. ``--token`` sets the token (a script's); ``--no-token`` turns the
+check off (a console behind a proxy that authenticates).
+"""
+
+from __future__ import annotations
+
+import hmac
+import secrets
+
+COOKIE = "skillbus_console"
+HEADER = "x-skillbus-token"
+
+
+def new_token() -> str:
+    return secrets.token_urlsafe(24)
+
+
+def presented(headers, query: dict[str, str], cookies: dict[str, str]) -> str:
+    return query.get("token") or headers.get(HEADER, "") or cookies.get(COOKIE, "")
+
+
+def allowed(token: str | None, given: str) -> bool:
+    """No token: everyone; else the same token (compared in constant time).
+
+    >>> allowed(None, ""), allowed("abc", "abc"), allowed("abc", "abd"), allowed("abc", "")
+    (True, True, False, False)
+    """
+    return token is None or (bool(given) and hmac.compare_digest(token.encode(), given.encode()))
+
+
+NEEDS_TOKEN = "this console needs its token: open the URL `skillbus console` printed (with ?token=...)"

@@ -1,0 +1,159 @@
+"""The console's HTTP API off the happy path: each wrong request is refused with a
+message naming what is wrong (and the console goes on); a manager that appears after
+the console, or restarts while its task runs, is followed; a port in use is one line."""
+
+import json
+import re
+import sys
+from pathlib import Path
+
+from skillbus.waiting import wait_until
+from test_skills import mgr_binary, start_system, start_wm
+
+PROBE = Path(__file__).parent / "console_api.py"
+
+
+def console(sandbox, *extra: str) -> tuple[object, str]:
+    p = sandbox.start(f"console-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", "console", "--port", "0",
+                                                        *extra])
+    return p, p.wait_for(re.compile(r"skillbus console: (http://\S+)"), 30, stream="stdout").group(1)
+
+
+def ask(sandbox, url: str, *requests) -> list:
+    p = sandbox.start(f"ask-{len(sandbox.procs)}", [sys.executable, str(PROBE), url, json.dumps(requests)])
+    assert sandbox.wait(p, 60) == 0, p.stderr()
+    return json.loads(p.stdout())
+
+
+def test_wrong_requests_are_refused_naming_what_is_wrong(sandbox, tmp_path):
+    start_wm(sandbox, tmp_path / "wm")
+    start_system(sandbox, "flow_skills")
+    proc, url = console(sandbox)
+    wait_until(lambda: ask(sandbox, url, ["GET", "/api/managers", None])[0][1], 20, "the console finds the manager")
+    (lst,) = ask(sandbox, url, ["GET", "/api/skills", None])
+    assert lst[0] == 200 and {"Chain", "Wait"} <= {s["type"] for s in lst[1]}, lst
+    (read,) = ask(sandbox, url, ["GET", "/api/world/element/skiros:Cube-2", None])
+    assert read[0] == 200 and read[1]["label"] == "red", read
+    token = read[1]["read"]
+    replies = ask(
+        sandbox, url,
+        ["POST", "/api/tasks", {"skill": "NoSuchSkill"}],
+        ["POST", "/api/tasks", {"skill": "Wait", "params": {"Ticks": "many"}}],
+        ["POST", "/api/tasks", {"skill": "Wait", "params": {"Nope": "1"}}],
+        ["POST", "/api/tasks", {"skill": "Wait", "robot": "r9"}],
+        ["POST", "/api/tasks", {"params": []}],
+        ["POST", "/api/tasks/999/pause", None],
+        ["POST", "/api/tasks/1/dance", None],
+        ["GET", "/api/world/element/skiros:Cube-99", None],
+        ["POST", "/api/world/edit", {"op": "set_label", "read": "forged", "label": "x"}],
+        ["POST", "/api/world/edit", {"op": "set_property", "read": token, "key": "skiros:Size", "values": ["big"]}],
+        ["POST", "/api/world/edit", {"op": "set_property", "read": token, "key": "skiros:Shiny", "values": ["1"]}],
+        ["POST", "/api/world/edit", {"op": "relate", "read": token, "subject": "skiros:Table-1",
+                                     "predicate": "skiros:contain", "object": "skiros:Bin-5"}],
+        ["POST", "/api/world/edit", {"op": "teleport", "read": token}],
+        ["POST", "/api/world/edit", {"op": "add", "type": "skiros:Cube", "parent": "skiros:Nowhere-1"}],
+        ["POST", "/api/replay/open", {"path": str(tmp_path / "missing.lcmlog")}],
+        ["POST", "/api/replay/open", {"path": "/etc/passwd"}],
+        ["GET", "/api/replay/frame/3", None],
+    )
+    (not_on_disk := tmp_path / "not_a_log.lcmlog").write_bytes(b"\x00garbage" * 100)
+    replies += ask(sandbox, url, ["POST", "/api/replay/open", {"path": str(not_on_disk)}])
+    expected = [
+        (400, "unknown skill NoSuchSkill"),
+        (400, "Ticks"),
+        (400, "Nope"),
+        (400, "no skill manager of robot r9"),
+        (400, "a start needs"),
+        (400, "no running task 999"),
+        (400, "unknown command 'dance'"),
+        (400, "unknown element id 'skiros:Cube-99'"),
+        (400, "names no element read by this console"),
+        (400, "'big' is not a float"),
+        (400, "has no property skiros:Shiny: say its value type"),
+        (400, "needs a predicate and skiros:Cube-2 at one end"),
+        (400, "unknown edit 'teleport'"),
+        (400, "skiros:Nowhere-1"),
+        (400, "no log file"),
+        (400, "the console replays LCM logs, named *.lcmlog"),
+        (404, "no log open"),
+        (400, "not"),
+    ]
+    assert len(replies) == len(expected)
+    for (status, reply), (want_status, want_text) in zip(replies, expected):
+        assert status == want_status and want_text in reply["error"], (status, reply, want_text)
+        print(status, reply["error"])
+    # nothing refused changed the world, and the console still answers
+    (again,) = ask(sandbox, url, ["GET", "/api/world/element/skiros:Cube-2", None])
+    assert again[1]["read"] == token and again[1]["label"] == "red", again
+    assert proc.returncode is None
+
+
+def test_without_the_token_the_api_and_the_live_feed_are_refused(sandbox):
+    proc, url = console(sandbox)
+    assert "?token=" in url
+    replies = ask(sandbox, url, ["GET", "/api/managers", None, ""], ["POST", "/api/tasks", {"skill": "Wait"}, "guess"],
+                  ["GET", "/api/managers", None], ["GET", "/", None, ""])
+    assert replies[0][0] == 401 and "needs its token" in replies[0][1]["error"], replies[0]
+    assert replies[1][0] == 401, replies[1]
+    assert replies[2] == [200, []]
+    assert replies[3][0] == 200 and "skillbus console" in replies[3][1]  # the page itself holds nothing
+    for given, said in ((url.split("?")[0], "HTTP 403"), (url, '"kind":"hello"')):  # the live feed
+        feed = sandbox.start(f"feed-{len(sandbox.procs)}", [sys.executable, "-c", FEED, given])
+        assert sandbox.wait(feed, 30) == 0, feed.stderr()
+        assert said in feed.stdout(), feed.stdout()
+
+
+FEED = """
+import sys
+from websockets.sync.client import connect
+base, _, query = sys.argv[1].partition("?")
+try:
+    with connect(base.replace("http", "ws") + "api/live?" + query) as ws:
+        print(ws.recv())
+except Exception as e:
+    print("refused", e)
+"""
+
+
+def test_a_manager_that_starts_later_is_found_and_one_that_restarts_loses_its_task_visibly(sandbox, tmp_path):
+    proc, url = console(sandbox)  # before any manager
+    assert ask(sandbox, url, ["GET", "/api/managers", None])[0] == [200, []]
+    mgr, _ = start_system(sandbox, "flow_skills")
+    wait_until(lambda: ask(sandbox, url, ["GET", "/api/managers", None])[0][1], 20, "the console finds the manager")
+    (started,) = ask(sandbox, url, ["POST", "/api/tasks", {"skill": "Wait", "params": {"Ticks": "100000"}}])
+    assert started[0] == 200, started
+    task = started[1]["task"]
+
+    def state() -> str:
+        tasks = ask(sandbox, url, ["GET", "/api/tasks", None])[0][1]
+        return next((t["state"] for t in tasks if t["task"] == task), "")
+
+    wait_until(lambda: state() == "Running", 20, "the task running in the console")
+    sandbox.kill(mgr)
+    sandbox.wait(mgr, 10)
+    sandbox.start("skill_mgr-again", [mgr_binary(), "--wall-clock"])
+    # the new manager registers the skills again and knows no task 1: the console says
+    # the task was lost rather than showing it running for ever
+    wait_until(lambda: state() == "Failure", 30, "the lost task marked failed")
+    tasks = ask(sandbox, url, ["GET", "/api/tasks", None])[0][1]
+    root = next(t for t in tasks if t["task"] == task)["nodes"][0]
+    assert "its manager no longer knows it" in root["message"], root
+    assert proc.returncode is None
+
+
+def test_a_port_in_use_is_one_line(sandbox):
+    holder = sandbox.start("holder", [sys.executable, "-c", HOLD])
+    port = int(holder.wait_for(re.compile(r"(\d+)"), 10, stream="stdout").group(1))
+    p = sandbox.start("console-busy", [sys.executable, "-m", "skillbus.cli", "console", "--port", str(port)])
+    assert sandbox.wait(p, 30) == 1
+    assert f"cannot serve on 127.0.0.1:{port}" in p.stderr() and "Traceback" not in p.stderr(), p.stderr()
+
+
+HOLD = """
+import socket, time
+s = socket.socket()
+s.bind(("127.0.0.1", 0))
+s.listen()
+print(s.getsockname()[1], flush=True)
+time.sleep(60)
+"""
