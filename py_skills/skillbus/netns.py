@@ -164,6 +164,12 @@ class Sandbox:
             return f"dds://{self.port % 200 + 1}"
         return f"udpm://239.255.76.67:{self.port}?ttl=0"
 
+    @property
+    def namespace_pid(self) -> int | None:
+        """A process in the namespace (for `nsenter -t`, `skillbus console --netns`); None
+        when the sandbox is the host's network."""
+        return self._holder.pid if self.mode == "netns" else None
+
     def prefix(self) -> list[str]:
         """Command prefix that runs a program inside the namespace."""
         if self.mode == "netns":

@@ -141,6 +141,28 @@ def test_a_manager_that_starts_later_is_found_and_one_that_restarts_loses_its_ta
     assert proc.returncode is None
 
 
+def test_a_console_outside_the_namespace_serves_here_and_hears_the_system_there(sandbox):
+    """`--netns PID`: the page on this machine's loopback (where a browser is), the bus in
+    the system's private network namespace. Asked from this (the test's) network."""
+    import urllib.request
+    assert sandbox.namespace_pid, "needs a private network namespace"
+    start_system(sandbox, "flow_skills")
+    p = sandbox.start("console-host", [sys.executable, "-m", "skillbus.cli", "console", "--port", "0", "--netns",
+                                       str(sandbox.namespace_pid)], host_network=True)
+    url = p.wait_for(re.compile(r"skillbus console: (http://\S+)"), 30, stream="stdout").group(1)
+    base, token = url.split("/?token=")
+
+    def managers() -> list:
+        req = urllib.request.Request(base + "/api/managers", headers={"X-Skillbus-Token": token})
+        with urllib.request.urlopen(req, timeout=10) as r:
+            return json.loads(r.read())
+
+    wait_until(managers, 20, "the manager in the namespace, seen from here")
+    p2 = sandbox.start("console-nowhere", [sys.executable, "-m", "skillbus.cli", "console", "--port", "0", "--netns",
+                                           "999999999"], host_network=True)
+    assert sandbox.wait(p2, 20) == 1 and "--netns 999999999: no such process" in p2.stderr(), p2.stderr()
+
+
 def test_a_port_in_use_is_one_line(sandbox):
     holder = sandbox.start("holder", [sys.executable, "-c", HOLD])
     port = int(holder.wait_for(re.compile(r"(\d+)"), 10, stream="stdout").group(1))
