@@ -26,8 +26,14 @@ bool robot_scoped(const std::string& name) {
   return name == "SB_SIM_STATE" || name == "SB_SIM_GRIPPER_CMD" || name == "SB_SIM_CMD_REPLY";
 }
 
+// LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit
+// (skillbus.channels.MAX_ROBOT_NAME is the same).
+constexpr size_t kMaxRobotName = 24;
+
 bool valid_robot_name(const std::string& robot) {
-  if (robot.empty() || !std::isalpha(static_cast<unsigned char>(robot[0]))) return false;
+  // (LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit)
+  if (robot.empty() || robot.size() > kMaxRobotName || !std::isalpha(static_cast<unsigned char>(robot[0])))
+    return false;
   for (char c : robot)
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') return false;
   return true;
@@ -36,7 +42,8 @@ bool valid_robot_name(const std::string& robot) {
 void set_robot(const std::string& robot) {
   if (!robot.empty() && !valid_robot_name(robot))
     throw std::invalid_argument("robot name '" + robot +
-                                "': a letter, then letters, digits or _ (it becomes part of channel names)");
+                                "': a letter, then letters, digits or _, at most " + std::to_string(kMaxRobotName) +
+                                " (it becomes part of channel names)");
   std::lock_guard<std::mutex> lock(robot_mutex);
   robot_set = robot;
   robot_was_set = true;

@@ -22,6 +22,7 @@ import re
 _SCOPED_PREFIXES = ("SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_")
 _SCOPED = frozenset({"SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY"})
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+MAX_ROBOT_NAME = 24  # LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit
 
 _robot: str | None = None  # set_robot(); None: $SKILLBUS_ROBOT
 
@@ -33,7 +34,7 @@ def robot_scoped(name: str) -> bool:
 
 def valid_robot_name(robot: str) -> bool:
     """A letter, then letters, digits or _: it becomes part of channel and DDS topic names."""
-    return bool(_NAME.fullmatch(robot))
+    return len(robot) <= MAX_ROBOT_NAME and bool(_NAME.fullmatch(robot))
 
 
 def set_robot(robot: str) -> None:
@@ -41,7 +42,7 @@ def set_robot(robot: str) -> None:
     says). Raises ValueError for a name that cannot be part of a channel name."""
     global _robot
     if robot and not valid_robot_name(robot):
-        raise ValueError(f"robot name {robot!r}: a letter, then letters, digits or _ "
+        raise ValueError(f"robot name {robot!r}: a letter, then letters, digits or _, at most {MAX_ROBOT_NAME} "
                          f"(it becomes part of channel names)")
     _robot = robot
 

@@ -54,8 +54,8 @@ TEST(Channels, TheProcesssRobotComesFromSetRobotElseTheEnvironment) {
 
 TEST(Channels, RobotNamesThatCannotNameAChannelAreRefused) {
   RobotReset reset;
-  for (const char* good : {"r1", "left_arm", "A"}) EXPECT_TRUE(valid_robot_name(good)) << good;
-  for (const char* bad : {"", "1r", "r/2", "r 2", "r-2", "_r", "r.2", "ü"}) {
+  for (const char* good : {"r1", "left_arm", "A", "r23456789012345678901234"}) EXPECT_TRUE(valid_robot_name(good)) << good;
+  for (const char* bad : {"", "1r", "r/2", "r 2", "r-2", "_r", "r.2", "ü", "r234567890123456789012345"}) {
     EXPECT_FALSE(valid_robot_name(bad)) << bad;
     if (*bad) {
       EXPECT_THROW(set_robot(bad), std::invalid_argument) << bad;

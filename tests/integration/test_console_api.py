@@ -179,3 +179,77 @@ s.listen()
 print(s.getsockname()[1], flush=True)
 time.sleep(60)
 """
+
+
+def test_malformed_and_absurd_messages_on_every_channel_it_hears_do_not_break_it(sandbox):
+    """Random bytes, truncated messages and decodable ones with absurd values (a node whose
+    parent comes after it, a task id of -1, 5,000 nodes, a sim state with NaN joints) on
+    each channel the console hears, signed like any holder of the key sends them: the
+    console goes on answering and its pages' data stay JSON."""
+    start_system(sandbox, "flow_skills")
+    proc, url = console(sandbox)
+    wait_until(lambda: ask(sandbox, url, ["GET", "/api/managers", None])[0][1], 20, "the console finds the manager")
+    # a page open: the console hears the physics state too
+    feed = sandbox.start("feed", [sys.executable, "-c", FEED + "\nimport time; time.sleep(30)", url])
+    flood = sandbox.start("flood", [sys.executable, "-c", FLOOD])
+    assert sandbox.wait(flood, 120) == 0, flood.stderr()
+    replies = ask(sandbox, url, ["GET", "/api/tasks", None], ["GET", "/api/managers", None], ["GET", "/api/sim", None])
+    assert replies[0][0] == 200 and isinstance(replies[0][1], list), replies[0]
+    assert replies[1][0] == 200 and replies[1][1], replies[1]  # the real manager is still there
+    assert replies[2][0] in (200, 404), replies[2]
+    (started,) = ask(sandbox, url, ["POST", "/api/tasks", {"skill": "Wait", "params": {"Ticks": "3"}}])
+    assert started[0] == 200, started
+    assert proc.returncode is None and "Traceback" not in proc.stderr(), proc.stderr()[-3000:]
+    sandbox.kill(feed)
+
+
+FLOOD = """
+import math, random, struct
+from skillbus.bus import open_bus
+from skillbus.msgs import (skill_progress_t, skill_node_progress_t, skill_manager_info_t, sim_state_t, sim_object_t,
+                           robot_arm_cmd_t, joint_traj_point_t, wm_change_t)
+bus = open_bus()
+rnd = random.Random(7)
+channels = ["SB_SKILL_PROGRESS", "SB_MANAGERS", "SB_SIM_STATE", "SB_ROBOT_ARM_CMD", "SB_WM_CHANGES", "SB_SKILL_REP",
+            "SB_WM_REP"]
+
+def absurd(ch):
+    if ch == "SB_SKILL_PROGRESS":
+        p = skill_progress_t(); p.task = rnd.choice([-1, 0, 2**62, 7]); p.tick = rnd.choice([-5, 0, 2**40])
+        p.state = rnd.choice([0, 2, 3, 4, 99, -3]); n = rnd.choice([0, 1, 3, 5000])
+        for i in range(n):
+            x = skill_node_progress_t(); x.id = rnd.choice([i, -1, 10**6]); x.parent = rnd.choice([-1, i + 1, -7, i - 1])
+            x.state = rnd.choice([2, 77]); x.message = "\\u00ff" * rnd.choice([0, 3000]); x.params = "a=b\\n=\\nnoeq"
+            p.nodes.append(x)
+        p.num_nodes = len(p.nodes); return p.encode()
+    if ch == "SB_MANAGERS":
+        m = skill_manager_info_t(); m.robot = rnd.choice(["", "r1", "x" * 500]); m.name = "ghost"
+        m.incarnation = rnd.randint(0, 5); return m.encode()
+    if ch == "SB_SIM_STATE":
+        s = sim_state_t(); s.joint_names = ["joint1", "joint2", "nope"]; s.num_joints = 3
+        s.position = [math.nan, math.inf, 1e300]; s.velocity = [0.0] * 3; s.effort = [0.0] * 3
+        o = sim_object_t(); o.name = "red"; o.pose = [math.nan] * 7; s.objects = [o]; s.num_objects = 1
+        return s.encode()
+    if ch == "SB_ROBOT_ARM_CMD":
+        c = robot_arm_cmd_t(); c.joint_names = ["joint1"] * 2; c.num_joints = 2
+        pt = joint_traj_point_t(); pt.num_positions = 2; pt.positions = [math.nan, 1.0]; pt.num_velocities = 2; pt.velocities = [0.0, 0.0]
+        c.points = [pt] * 50; c.num_points = 50; return c.encode()
+    w = wm_change_t(); w.version = rnd.choice([-1, 2**60]); return w.encode()
+
+for i in range(6000):
+    ch = rnd.choice(channels)
+    kind = i % 3
+    if kind == 0:
+        data = bytes(rnd.getrandbits(8) for _ in range(rnd.choice([0, 7, 40, 300])))
+    else:
+        data = absurd(ch)
+        if kind == 2:
+            data = data[: rnd.randint(0, len(data))]
+    try:
+        bus.publish(ch, data)
+    except Exception:
+        pass
+    if i % 200 == 0:
+        bus.handle(0.01)
+print("flooded", flush=True)
+"""

@@ -20,7 +20,7 @@ import struct
 import time
 from typing import Any, Callable
 
-from skillbus.channels import robot_channel
+from skillbus.channels import robot_channel, valid_robot_name
 from skillbus.msgs import (decode, skill_list_t, skill_manager_info_t, skill_progress_list_t, skill_progress_t,
                            skill_start_t, skill_task_t)
 from skillbus.rpc import RpcClient, RpcError, RpcTimeout
@@ -32,6 +32,8 @@ log = logging.getLogger("skillbus.console")
 CATCH_UP_S = 1.0        # a running task not heard of this long is read from its manager
 FLUSH_PERIOD_S = 0.05   # trees are updated (and changes sent) at most this often per task
 PROBE_PERIOD_S = 3.0    # managers are looked for again this often
+MANAGER_CATCH_UP_S = 5.0  # a manager's tasks are read when it is met; an unanswered read is tried again after this
+MAX_MANAGERS = 64       # robots followed at once (announcements are bounded, forged or not)
 MANAGER_TIMEOUT_S = 2.0
 VERBS = ("pause", "step", "resume", "stop")
 
@@ -67,6 +69,7 @@ class Manager:
         self.rpc = RpcClient(bus, "SKILL", "console", robot=info.robot)
         self.sub = bus.subscribe(robot_channel("SB_SKILL_PROGRESS", info.robot), on_progress)
         self.heard = time.monotonic()
+        self.caught_up, self.catch_up_tried = False, 0.0  # its tasks read (SKILL.tasks)
 
     def call(self, method: str, req, reply_type, timeout: float = MANAGER_TIMEOUT_S):
         try:
@@ -85,6 +88,7 @@ class LiveSkills:
         self._heard: dict[tuple[str, int], float] = {}
         self._pending: dict[tuple[str, int], bytes] = {}
         self._flushed = 0.0
+        self.refused = 0  # manager announcements not followed (a bad robot name, too many)
         bus.subscribe(robot_channel("SB_MANAGERS", ""), self._on_manager)
 
     # -- managers -----------------------------------------------------------
@@ -98,7 +102,13 @@ class LiveSkills:
         info = decode(skill_manager_info_t, data)
         if info is None or info.header.sender == "console":
             return
+        if info.robot and not valid_robot_name(info.robot):
+            self.refused += 1  # (a name no channel can carry: nothing to call)
+            return
         known = self.managers.get(info.robot)
+        if known is None and len(self.managers) >= MAX_MANAGERS:
+            self.refused += 1
+            return
         if known is not None and known.incarnation == info.incarnation and known.name == info.name:
             known.heard = time.monotonic()
             known.agent = info.agent or known.agent
@@ -107,7 +117,8 @@ class LiveSkills:
             self.bus.unsubscribe(known.sub)
         self.managers[info.robot] = Manager(self.bus, info, lambda c, d, r=info.robot: self._on_progress(r, d))
         self.emit({"kind": "managers", "managers": self.manager_list()})
-        self._catch_up(info.robot, 0)  # its running tasks and recent history
+        # Its running tasks and recent history are read by the next chore, not here: a call
+        # waits, and announcements (true or forged) must not hold the bus thread each time.
 
     def manager_list(self) -> list[dict[str, Any]]:
         return [{"robot": m.robot, "name": m.name, "agent": m.agent} for _, m in sorted(self.managers.items())]
@@ -149,11 +160,12 @@ class LiveSkills:
         if change is not None:
             self.emit(change.as_json())
 
-    def _catch_up(self, robot: str, task: int) -> None:
-        """Reads the manager's latest trees: of `task`, or (0) of every task it knows."""
+    def _catch_up(self, robot: str, task: int) -> bool:
+        """Reads the manager's latest trees: of `task`, or (0) of every task it knows;
+        whether it answered."""
         m = self.managers.get(robot)
         if m is None:
-            return
+            return False
         req = skill_start_t()
         req.task = task
         try:
@@ -163,9 +175,10 @@ class LiveSkills:
                 self._lost(robot, task, f"its manager no longer knows it ({e})")
             else:
                 log.info("catching up with robot %s: %s", robot or "(none)", e)
-            return
+            return False
         for p in reply.tasks:
             self._take(robot, p)
+        return True
 
     def _lost(self, robot: str, task: int, why: str) -> None:
         tree = self.trees.get(robot, task)
@@ -178,8 +191,14 @@ class LiveSkills:
             self.emit(dict(change.as_json(), lost=True))
 
     def catch_up_quiet_tasks(self) -> None:
-        """Chore: each running task not heard of for CATCH_UP_S is read from its manager."""
+        """Chore: a manager met since the last chore has every task it knows read (at most
+        one such read per manager every MANAGER_CATCH_UP_S); each running task not heard of
+        for CATCH_UP_S is read from its manager."""
         now = time.monotonic()
+        for robot, m in list(self.managers.items()):
+            if not m.caught_up and now - m.catch_up_tried > MANAGER_CATCH_UP_S:
+                m.catch_up_tried = now
+                m.caught_up = self._catch_up(robot, 0)
         for tree in self.trees.running():
             key = (tree.robot, tree.task)
             if now - self._heard.get(key, 0.0) > CATCH_UP_S:
