@@ -91,17 +91,14 @@ def channel(name: str) -> str:
     return channels.channel(name)
 
 
-def open_bus(url: str | None = None, watcher: bool = False) -> Bus:
+def open_bus(url: str | None = None) -> Bus:
     """The bus the URL names; with a key ($SKILLBUS_KEY_FILE) every message is
     authenticated (AuthenticatedBus), and with a policy ($SKILLBUS_POLICY_FILE) only the
-    identities it names may send on a channel. A `watcher` (a process that hears a few
-    channels of a busy bus and answers nothing in lockstep: the console) receives on
-    udpm:// through LCM's own receive thread, which drops the channels it does not hear
-    in C, rather than reading every datagram of the group in Python."""
-    return authenticated(open_raw_bus(url, watcher))
+    identities it names may send on a channel."""
+    return authenticated(open_raw_bus(url))
 
 
-def open_raw_bus(url: str | None = None, watcher: bool = False) -> Bus:
+def open_raw_bus(url: str | None = None) -> Bus:
     """The backend the URL names (LCM or DDS) without the deployment's key: messages as
     they are on the wire. For what must see or forge those (a recorder, the tests' forgers
     and fuzzers); everything else uses open_bus."""
@@ -110,7 +107,7 @@ def open_raw_bus(url: str | None = None, watcher: bool = False) -> Bus:
     if scheme == "udpm":
         check_multicast_interface(url)
     if scheme in ("udpm", "memq", "file", "tcpq"):
-        return LcmBus(url, receive_thread=watcher)
+        return LcmBus(url)
     if scheme == "dds":
         from skillbus.dds import DdsBus
         return DdsBus(url)
@@ -255,7 +252,7 @@ class LcmBus(Bus):
     receive buffer is the queue. Other URLs (memq://, file://) use LCM both ways.
     """
 
-    def __init__(self, url: str, receive_thread: bool = False) -> None:
+    def __init__(self, url: str) -> None:
         self._url = url
         lane1 = lane1_url(url)
         self._lane_urls = [receive_buffer_url(url), receive_buffer_url(lane1) if lane1 else ""]
@@ -264,8 +261,7 @@ class LcmBus(Bus):
         self._subs: dict[int, tuple[int, object]] = {}
         self._next_id = 1
         # ($SKILLBUS_LCM_RECEIVE_THREAD set: LCM's own receive thread, as before; docs/transport.md)
-        self._direct = (url.startswith("udpm://") and not receive_thread
-                        and not os.environ.get("SKILLBUS_LCM_RECEIVE_THREAD"))
+        self._direct = url.startswith("udpm://") and not os.environ.get("SKILLBUS_LCM_RECEIVE_THREAD")
         self._receivers: list[UdpmReceiver | None] = [None, None]
         self._by_channel: dict[str, dict[int, Handler]] = {}
         self._turn = 0  # the lane read first by the next handle(): neither starves the other

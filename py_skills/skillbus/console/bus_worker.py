@@ -20,9 +20,10 @@ log = logging.getLogger("skillbus.console")
 
 
 class BusWorker:
-    def __init__(self, open_bus: Callable[[], Any], poll_s: float = 0.02) -> None:
+    def __init__(self, open_bus: Callable[[], Any], poll_s: float = 0.05) -> None:
         self._open_bus = open_bus
         self._poll_s = poll_s
+        self._wake = threading.Event()
         self._jobs: queue.SimpleQueue = queue.SimpleQueue()
         self._chores: list[tuple[float, Callable[[], None], list[float]]] = []
         self._stop = threading.Event()
@@ -40,6 +41,7 @@ class BusWorker:
 
     def stop(self, timeout: float = 5.0) -> None:
         self._stop.set()
+        self._wake.set()
         self._thread.join(timeout)
 
     def every(self, period_s: float, chore: Callable[[], None]) -> None:
@@ -50,6 +52,7 @@ class BusWorker:
         """Runs `fn()` on the bus thread; its result (or exception) in the future."""
         fut: concurrent.futures.Future = concurrent.futures.Future()
         self._jobs.put((fn, fut))
+        self._wake.set()
         return fut
 
     def on_thread(self) -> bool:
@@ -63,14 +66,20 @@ class BusWorker:
             self._ready.set()
             return
         self._ready.set()
+        # The bus is read in batches, every poll_s (or at once when a job comes): what
+        # arrived meanwhile waits in the socket's receive buffer. A watcher woken by each
+        # datagram of a busy lockstep bus (thousands a second) would take the cores from
+        # the participants that many times, for nothing it needs at once.
         while not self._stop.is_set():
             self._run_jobs()
             self._run_chores()
             try:
-                self.bus.handle(self._poll_s)
+                while self.bus.handle(0.0):
+                    pass
             except Exception:
                 log.exception("the bus failed while dispatching")
-                time.sleep(self._poll_s)
+            self._wake.wait(self._poll_s)
+            self._wake.clear()
         self._run_jobs(cancel=True)
 
     def _run_jobs(self, cancel: bool = False) -> None:

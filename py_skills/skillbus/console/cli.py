@@ -41,7 +41,7 @@ def main(args: argparse.Namespace) -> int:
     from skillbus.monitor import watch_url
 
     def bus():
-        b = open_bus(watch_url(args.url), watcher=True)
+        b = open_bus(watch_url(args.url))
         if args.lose_progress_every > 0:
             from skillbus.bus import DropEveryNthReceivedBus
             b = DropEveryNthReceivedBus(b, args.lose_progress_every, ("SB_SKILL_PROGRESS",))
