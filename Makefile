@@ -24,7 +24,7 @@ build: setup
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
-	$(PY) -m pytest -q -rs tests
+	$(PY) -m pytest -q -rs --durations=30 tests
 
 test-cpp: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
