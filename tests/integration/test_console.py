@@ -36,11 +36,15 @@ SHOTS = Path(os.environ.get("SKILLBUS_TEST_ARTIFACTS", paths.REPO_ROOT / "build"
 @pytest.fixture
 def system(sandbox, tmp_path):
     """The pick-and-place system under lockstep, without a task: tasks come from the page
-    or the CLI. lcm-logger records it from the start (for the replay)."""
+    or the CLI. lcm-logger (on DDS, skillbus dds-record) records it from the start (for
+    the replay)."""
     if not CHROMIUM.exists():
         pytest.fail(f"{CHROMIUM} is missing: `make test` installs Debian's chromium (deploy/setup.sh)")
     (tmp_path / "run").mkdir()
-    procs = {"logger": sandbox.start("logger", [str(paths.lcm_logger()), "-f", str(tmp_path / "run" / "run.lcmlog")])}
+    log = tmp_path / "run" / "run.lcmlog"
+    recorder = ([sys.executable, "-m", "skillbus.cli", "dds-record", str(log)] if sandbox.transport == "dds" else
+                [str(paths.lcm_logger()), "-f", str(log)])  # (the same log format from either transport)
+    procs = {"logger": sandbox.start("logger", recorder)}
     procs.update(start(sandbox, programs(tmp_path / "run", task=None), tmp_path / "run"))
     procs["skills"].wait_for("registered", 60)
     return procs

@@ -214,6 +214,8 @@ class Scene3D:
         link = tool_link or _last_link(urdf)
         path = []
         for p in points:
+            if not finite(p):
+                return []  # (a command no arm would play)
             t = urdf.link_poses(base, dict(zip(joint_names, p))).get(link)
             if t is not None:
                 path.append([round(float(v), 4) for v in t[:3, 3]])
@@ -226,8 +228,16 @@ def _last_link(urdf: Urdf) -> str:
     return rev[-1].child if rev else urdf.root()
 
 
+def finite(values) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
 def sim_state_view(s) -> tuple[dict[str, float], dict[str, list[float]], list[dict[str, Any]]]:
-    """A sim_state_t as (joint positions, object poses, contacts)."""
+    """A sim_state_t as (joint positions, object poses, contacts); ValueError for one that
+    cannot be drawn (a joint or pose that is not a finite number: no physics sends it)."""
+    if not finite(s.position) or not all(finite(o.pose) for o in s.objects) or \
+            not all(math.isfinite(c.normal_force) for c in s.contacts):
+        raise ValueError("a physics state with a value that is not a finite number")
     joints = dict(zip(s.joint_names, s.position))
     objects = {o.name: list(o.pose) for o in s.objects}
     contacts = [{"a": c.body_a, "b": c.body_b, "points": c.points, "force": round(c.normal_force, 3)}

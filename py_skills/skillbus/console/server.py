@@ -194,9 +194,13 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
             raise HTTPException(404, "no log open")
         f = r.nearest_frame(frame)
         sim = r.sim_at(f)
+        try:
+            view = frame_view(r.scene, sim, r.arm_cmd_at(f), f) if sim is not None else None
+        except ValueError:
+            view = None  # (a recorded state that cannot be drawn)
         return {"frame": f, "sim_time_s": r.sim_time_ns[f] * 1e-9, "tasks": r.tasks_at(f),
                 "world": r.world_at(f).tree(),
-                "sim": frame_view(r.scene, sim, r.arm_cmd_at(f), f) if sim is not None else None}
+                "sim": view}
 
     @app.get("/api/managers")
     async def managers() -> list[dict[str, Any]]:

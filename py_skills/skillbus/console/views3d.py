@@ -36,6 +36,7 @@ class LiveSim:
         self.arm_cmd: Any = None
         self._path: tuple[Any, list] = (None, [])  # (the command, its tool path): computed once per command
         self._sent = None
+        self.refused = 0  # physics states that could not be drawn (not finite)
         bus.subscribe(robot_channel("SB_ROBOT_ARM_CMD", robot), self._on_cmd)
 
     def hear(self, on: bool) -> None:
@@ -58,6 +59,11 @@ class LiveSim:
         if raw is not None:
             s = decode(sim_state_t, raw)
             if s is not None:
+                try:
+                    sim_state_view(s)
+                except ValueError:
+                    self.refused += 1  # (kept: the last state that can be drawn)
+                    return
                 self.state = s
 
     def latest(self) -> dict[str, Any] | None:

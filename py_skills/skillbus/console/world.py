@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import collections
 import hashlib
+import math
 from typing import Any
 
 from skillbus.channels import channel
@@ -27,6 +28,8 @@ WM_TIMEOUT_S = 3.0
 
 
 def value_json(v: wm_value_t) -> Any:
+    if v.type == wm_value_t.FLOAT and not math.isfinite(v.f):
+        return str(v.f)  # (JSON has no NaN or infinity: "nan", "inf")
     return {wm_value_t.STRING: v.s, wm_value_t.INT: v.i, wm_value_t.FLOAT: v.f, wm_value_t.BOOL: v.b}.get(v.type)
 
 

@@ -234,7 +234,7 @@ def progress_json(p: skill_progress_t) -> dict[str, Any]:
     return {"task": p.task, "tick": p.tick, "state": STATES.get(p.state, "?"), "sim_time_s": p.header.sim_time_ns * 1e-9,
             "nodes": [{"id": n.id, "parent": n.parent, "type": n.type, "label": n.label, "processor": n.processor,
                        "state": STATES.get(n.state, "?"), "message": n.message, "code": n.code,
-                       "progress": n.progress,
+                       "progress": n.progress if math.isfinite(n.progress) else None,  # (JSON has no NaN)
                        "params": dict(line.split("=", 1) for line in n.params.splitlines() if "=" in line)}
                       for n in p.nodes]}
 
