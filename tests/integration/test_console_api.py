@@ -158,6 +158,9 @@ def test_a_console_outside_the_namespace_serves_here_and_hears_the_system_there(
             return json.loads(r.read())
 
     wait_until(managers, 20, "the manager in the namespace, seen from here")
+    # the token went into the namespace in the environment, not in arguments every user sees
+    import subprocess
+    assert token not in subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True).stdout
     p2 = sandbox.start("console-nowhere", [sys.executable, "-m", "skillbus.cli", "console", "--port", "0", "--netns",
                                            "999999999"], host_network=True)
     assert sandbox.wait(p2, 20) == 1 and "--netns 999999999: no such process" in p2.stderr(), p2.stderr()

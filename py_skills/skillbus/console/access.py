@@ -7,8 +7,9 @@ does). Opening that URL sets a cookie (HttpOnly, SameSite=Strict: a page of anot
 site that posts to the console does not carry it) and drops the token from the address;
 every API request and the live WebSocket must then carry the cookie, the
 ``X-Skillbus-Token`` header, or ``?token=``. The page and its static files need none:
-they hold nothing. ``--token`` sets the token (a script's); ``--no-token`` turns the
-check off (a console behind a proxy that authenticates).
+they hold nothing. ``$SKILLBUS_CONSOLE_TOKEN`` (or ``--token``, which every user sees in
+the process list) sets the token (a script's); ``--no-token`` turns the check off (a
+console behind a proxy that authenticates).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import hmac
 import secrets
 
 COOKIE = "skillbus_console"
+TOKEN_ENV = "SKILLBUS_CONSOLE_TOKEN"  # a token of one's own, kept out of the process list
 HEADER = "x-skillbus-token"
 
 

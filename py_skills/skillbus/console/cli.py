@@ -16,8 +16,9 @@ def add_parser(sub) -> None:
     c.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
     c.add_argument("--scene", default=None, metavar="FILE.scene.json",
                    help="the scene the 3D view draws (default: the demo's)")
-    c.add_argument("--token", default=None, help="the token the API asks for (default: a new one each run, "
-                                                 "in the URL it prints)")
+    c.add_argument("--token", default=None, help="the token the API asks for (default: $SKILLBUS_CONSOLE_TOKEN, else a "
+                                                 "new one each run, in the URL it prints; an argument is visible to "
+                                                 "every user in the process list: prefer the variable)")
     c.add_argument("--no-token", action="store_true",
                    help="no token: anyone who reaches the port commands the robot (behind an authenticating proxy)")
     c.add_argument("--log", default=None, metavar="FILE.lcmlog",
@@ -32,6 +33,7 @@ def add_parser(sub) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    import os
     import socket
 
     import uvicorn
@@ -58,12 +60,13 @@ def main(args: argparse.Namespace) -> int:
             return 1
     if args.netns is not None:
         from skillbus.console import access
-        return _serve_from_namespace(args, sock, None if args.no_token else (args.token or access.new_token()))
+        return _serve_from_namespace(args, sock, None if args.no_token else
+                                     (args.token or os.environ.get(access.TOKEN_ENV) or access.new_token()))
     from pathlib import Path
     from skillbus.console.live import ConsoleError
     try:
         from skillbus.console import access
-        token = None if args.no_token else (args.token or access.new_token())
+        token = None if args.no_token else (args.token or os.environ.get(access.TOKEN_ENV) or access.new_token())
         app = create_app(bus, Path(args.scene) if args.scene else None, Path(args.log) if args.log else None, token)
     except (ConsoleError, OSError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
@@ -85,6 +88,8 @@ def _serve_from_namespace(args: argparse.Namespace, sock, token: str | None) -> 
     inherited, the same arguments otherwise."""
     import os
     import shutil
+
+    from skillbus.console import access
     if not os.path.exists(f"/proc/{args.netns}/ns/net"):
         print(f"error: --netns {args.netns}: no such process", file=sys.stderr)
         return 1
@@ -96,7 +101,9 @@ def _serve_from_namespace(args: argparse.Namespace, sock, token: str | None) -> 
     argv = [a for a in sys.argv[1:]]
     i = argv.index("--netns") if "--netns" in argv else -1
     argv = argv[:i] + argv[i + 2:] if i >= 0 else [a for a in argv if not a.startswith("--netns=")]
-    argv += ["--listen-fd", str(sock.fileno())] + (["--token", token] if token and "--token" not in argv else [])
+    argv += ["--listen-fd", str(sock.fileno())]
+    if token:  # (in the environment, which only this user reads; not in the arguments, which all users see)
+        os.environ[access.TOKEN_ENV] = token
     host, port = sock.getsockname()[:2]
     sys.stderr.write(f"serving http://{host}:{port}/ here, hearing the bus of process {args.netns}'s network\n")
     # Into its user namespace too when it has one of its own (netns-run's, the tests'), as
