@@ -113,6 +113,15 @@ def control_cli_task(page: Page, shots: Path, args) -> dict:
     return out
 
 
+def rename(page: Page, label: str) -> str:
+    """Saves a new label for the element the page shows; the page's answer."""
+    page.wait_for_selector("[data-testid=label-input]")
+    page.fill("[data-testid=label-input]", label)
+    page.click("[data-testid=save-label]")
+    wait_until(f"the answer to the rename to {label!r}", lambda: "done" in page.inner_text("[data-testid=message]"), 10)
+    return page.inner_text("[data-testid=message]")
+
+
 def edit_element(page: Page, shots: Path, args) -> dict:
     """Renames args.element from the element page; then a second page edits the element
     the first one shows, and the first page's edit of its stale read is refused."""
@@ -122,21 +131,14 @@ def edit_element(page: Page, shots: Path, args) -> dict:
     page.fill("[data-testid=search-type]", "skiros:Product")
     page.click("[data-testid=world-search] button")
     page.click(f'[data-testid=search-results] .item[data-element="{args.element}"]')
-    page.wait_for_selector("[data-testid=label-input]")
-    page.fill("[data-testid=label-input]", "renamed in the console")
-    page.click("[data-testid=save-label]")
-    wait_until("the edit's answer", lambda: "done" in page.inner_text("[data-testid=message]"), 10)
-    out["renamed"] = page.inner_text("[data-testid=message]")
+    out["renamed"] = rename(page, "renamed in the console")
     page.wait_for_function("document.querySelector('[data-testid=label-input]').value === 'renamed in the console'")
     page.screenshot(path=str(shots / "console-world.png"))
 
     other = open_console(page.context.browser, args.url)  # (a browser of its own: the URL with the token)
     other.click("[data-testid=tab-world]")
     other.click(f'[data-testid=world-tree] .item[data-element="{args.element}"]')
-    other.wait_for_selector("[data-testid=label-input]")
-    other.fill("[data-testid=label-input]", "renamed by someone else")
-    other.click("[data-testid=save-label]")
-    wait_until("the other page's edit", lambda: "done" in other.inner_text("[data-testid=message]"), 10)
+    rename(other, "renamed by someone else")
 
     page.fill("[data-testid=label-input]", "my stale rename")
     page.click("[data-testid=save-label]")
