@@ -20,7 +20,7 @@ import os
 import re
 
 _SCOPED_PREFIXES = ("SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_")
-_SCOPED = frozenset({"SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY"})
+_SCOPED = frozenset({"SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SIM_ATTACH"})
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 MAX_ROBOT_NAME = 24  # LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit
 

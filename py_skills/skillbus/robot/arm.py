@@ -147,6 +147,10 @@ class Arm:
         self._send(cmd_id, self.joint_names(), [traj_point(0.0, q)])
         return q
 
+    def send_joints(self, cmd_id: str, joint_names: list[str], points: list[joint_traj_point_t]) -> None:
+        """Plays a joint trajectory of the caller's own (a joint-space target, no planning)."""
+        self._send(cmd_id, joint_names, points)
+
     def _send(self, cmd_id: str, joint_names: list[str], points: list[joint_traj_point_t]) -> None:
         m = arm_command(cmd_id, joint_names, points)
         if self.participant is not None:

@@ -1,0 +1,2 @@
+"""The manipulation-command skill family (docs/manip.md): importing these modules
+registers the skills."""

@@ -1,0 +1,169 @@
+"""Each registered manipulation skill as a skill of the skill manager: a description
+(``Manip<Name>``: the parameters Arm, Gripper, Config, the skill's element parameters and
+its scalar defaults, its conditions) and a primitive (``manip_<key>``) that runs the
+command list with the executor, one step per tick. So a manipulation-command skill has
+parameters, conditions, preemption and progress like any other, and composes with
+processors into trees.
+
+``skills_module(module_name)`` makes the classes for every registered skill, named into
+that module (the skill process loads the classes a library module defines):
+skillbus.manip.library is such a module.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from skillbus import tick_context
+from skillbus.manip import config as manip_config
+from skillbus.manip.executor import ManipExecutor
+from skillbus.manip.registry import SKILLS
+from skillbus.manip.views import Controller, RobotInfo, TaskView, ViewError
+from skillbus.skill import Element, ParamTypes, PrimitiveBase, SkillDescription
+
+
+def camel(key: str) -> str:
+    return "".join(w.capitalize() for w in key.split("_"))
+
+
+def _robot_base(wmi: Any, arm_id: str) -> tuple[Any, str]:
+    """The arm's robot element and its world pose (the base frame); the world frame when
+    the world model names no robot for the arm."""
+    identity = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+    if wmi is None:
+        return identity, ""
+    from skillbus.world.poses import world_pose
+    robots = [r["src"] for r in wmi.get_relations("", "skiros:hasA", arm_id)]
+    if not robots:
+        return identity, ""
+    return world_pose(wmi, robots[0]), robots[0]
+
+
+def _service(getter: Any) -> Any:
+    try:
+        return getter()
+    except Exception:
+        return None
+
+
+class _ManipPrimitive(PrimitiveBase):
+    manip_class: Any = None
+
+    def createDescription(self):  # bound per skill by make_classes
+        raise NotImplementedError
+
+    def _cfg(self) -> dict:
+        cls = self.manip_class
+        params: dict[str, Any] = {}
+        for key in cls.defaults:
+            if key in self.params and self.params[key].value is not None:
+                params[key] = self.params[key].value
+        for key in list(cls.elements) + list(cls.optional_elements):
+            e = self.params[key].value if key in self.params else None
+            if e is not None and getattr(e, "id", ""):
+                params[key] = e.id
+        return manip_config.merge(cls.defaults, self.params["Config"].value or "", params)
+
+    def onStart(self):
+        from skillbus.robot import arm as arm_service
+        cls = self.manip_class
+        try:
+            cfg = self._cfg()
+        except manip_config.ConfigError as e:
+            self.message = f"{cls.key}: {e}"
+            return False
+        try:
+            arm = arm_service.arm()
+        except arm_service.ArmError as e:
+            self.message = f"{cls.key}: {e}"
+            return False
+        arm_id = self.params["Arm"].value.id
+        gripper = self.params["Gripper"].value
+        gripper_id = gripper.id if gripper is not None else ""
+        base, robot_id = _robot_base(self.wmi, arm_id)
+        from skillbus.can import gripper_service
+        from skillbus.robot import interfaces
+        self.controller = Controller(arm, base)
+        task = TaskView(base, self.wmi, _service(lambda: interfaces.get("camera")),
+                        _service(lambda: interfaces.get("articulation")))
+        self.skill = cls(RobotInfo(arm_id, gripper_id, robot_id), self.controller, task, cfg)
+        try:
+            self.skill.simple_generate_manip_cmds()
+        except (ViewError, ValueError, KeyError) as e:
+            self.message = f"{cls.key}: cannot build its commands: {e}"
+            return False
+        self.executor = ManipExecutor(self.skill, self.controller, tick_context.now_s, self._command_id,
+                                      _service(gripper_service.driver), _service(lambda: interfaces.get("attach")))
+        self.writing = False
+        return True
+
+    @staticmethod
+    def _command_id(label: str) -> str:
+        tick = tick_context.current_tick()
+        return f"{label}@{tick.frame}" if tick is not None else f"{label}@{time.monotonic_ns()}"
+
+    def execute(self):
+        if self.writing:
+            if self.skill.world_shows():
+                return self.success(self.done_message)
+            return self.step(f"{self.skill.key}: writing what it did into the world model")
+        out = self.executor.tick()
+        self.progress = self.executor.progress
+        if out.state == "running":
+            return self.step(out.message)
+        if out.state == "failure":
+            return self.fail(out.message, out.code or -1)
+        ops = self.skill.world_ops() if self.wmi is not None else []
+        if ops:
+            self.wmi.write(ops)
+            self.writing, self.done_message = True, out.message
+            return self.step(f"{self.skill.key}: writing what it did into the world model")
+        return self.success(out.message)
+
+    def onPreempt(self):
+        """Stopped: the arm holds where it is (a command in flight is replaced)."""
+        try:
+            self.controller.arm.hold(self._command_id(f"{self.skill.key}-stop"))
+        except Exception as e:
+            return self.fail(f"preempted: {self.skill.key}: the arm could not be stopped: {e}", -1)
+        return self.fail(f"preempted: {self.skill.key} at command {self.executor.done_count + 1} of "
+                         f"{self.executor.total}", -1)
+
+
+def make_classes(key: str, cls: Any, module: str) -> tuple[type, type]:
+    """The description and the primitive of the registered skill `key`."""
+    def create(self):
+        self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
+        self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Optional,
+                      description="needed by open_gripper and close_gripper")
+        self.addParam("Config", "", ParamTypes.Optional,
+                      description="YAML text or a .yaml file: the skill's configuration (skillbus.manip.config)")
+        for name, concept in cls.elements.items():
+            self.addParam(name, Element(concept), ParamTypes.Required)
+        for name, concept in cls.optional_elements.items():
+            self.addParam(name, Element(concept), ParamTypes.Optional)
+        for name, value in cls.defaults.items():
+            if isinstance(value, (bool, int, float, str)):
+                self.addParam(name, value, ParamTypes.Optional)
+        cls.describe(self)
+
+    desc = type(f"Manip{camel(key)}", (SkillDescription,), {"createDescription": create, "__module__": module,
+                                                           "__doc__": cls.__doc__})
+
+    def bind(self):
+        self.setDescription(desc(), f"manip_{key}")
+
+    prim = type(f"manip_{key}", (_ManipPrimitive,), {"createDescription": bind, "manip_class": cls,
+                                                     "__module__": module, "__doc__": cls.__doc__})
+    return desc, prim
+
+
+def skills_module(module: str) -> dict[str, type]:
+    """Classes for every registered skill, by class name, for a library module's globals()."""
+    out: dict[str, type] = {}
+    for key, cls in sorted(SKILLS.items()):
+        d, p = make_classes(key, cls, module)
+        out[d.__name__] = d
+        out[p.__name__] = p
+    return out

@@ -1,0 +1,231 @@
+"""The manipulation-command skill SDK (skillbus.manip) without a robot: the registry, the
+command entries, the configuration, and the executor driving a command list against a
+stand-in arm, gripper and attach interface (fakes only here, in a unit test; the family's
+skills run against the real physics in tests/integration/test_manip_skills.py)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from skillbus.manip import ManipCommand, ManipSkill, register_skill, skill_key
+from skillbus.manip import config as manip_config
+from skillbus.manip.executor import ManipExecutor
+from skillbus.manip.family.geometry import rotate_about, top_down
+from skillbus.manip.views import Controller
+
+IDENTITY = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+
+
+class FakeArm:
+    """Plans refuse targets whose x is above `reach`; an accepted trajectory ends `ticks`
+    checks later with the tool at its target."""
+
+    def __init__(self, reach: float = 1.0, ticks: int = 2) -> None:
+        self.tool = [0.3, 0.0, 0.5, 0.0, 1.0, 0.0, 0.0]
+        self.reach, self.ticks = reach, ticks
+        self.plans: list[tuple[list[float], bool]] = []
+        self.sent: dict[str, list] = {}
+        self.checks: dict[str, int] = {}
+        self.refuse_next = ""
+
+    @property
+    def state(self):
+        return SimpleNamespace(tool_pose=list(self.tool))
+
+    def plan(self, target, cartesian=False, speed_scale=0.5):
+        self.plans.append((list(target), cartesian))
+        if target[0] > self.reach:
+            raise RuntimeError(f"no inverse kinematics for x {target[0]:.2f}")
+        return SimpleNamespace(target=list(target))
+
+    def execute(self, plan, cid):
+        self.sent[cid] = plan.target
+
+    def finished(self, cid, tolerance=0.01):
+        if self.refuse_next:
+            return True, self.refuse_next
+        self.checks[cid] = self.checks.get(cid, 0) + 1
+        if self.checks[cid] >= self.ticks:
+            self.tool = list(self.sent[cid])
+            return True, ""
+        return False, ""
+
+    def joint_names(self):
+        return ["j1"]
+
+    def joints(self):
+        return [0.0]
+
+
+class FakeGripper:
+    def __init__(self) -> None:
+        self.commands: list[int] = []
+        self.faults: list[str] = []
+
+    def command(self, um):
+        self.commands.append(um)
+
+    def status(self):
+        return SimpleNamespace(faults=self.faults, fresh=True, moving=False, target_reached=True, gripped=False,
+                               position_um=self.commands[-1] if self.commands else 0)
+
+
+class FakeAttacher:
+    def __init__(self, refuse: str = "") -> None:
+        self.requests: list[tuple[bool, str]] = []
+        self.refuse = refuse
+
+    def request(self, attach, obj, label):
+        self.requests.append((attach, obj))
+        return label
+
+    def result(self, rid):
+        return (not self.refuse, self.refuse)
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.t = 0.0
+
+    def __call__(self) -> float:
+        self.t += 0.02
+        return self.t
+
+
+@register_skill
+class UnitPickLike(ManipSkill):
+    defaults = {"x": 0.4}
+
+    def simple_generate_manip_cmds(self):
+        q = top_down(0.0)
+        self.manip_list = [([self.cfg["x"], 0, 0.6], q, "open_gripper", {"motion": "free"}),
+                           ([self.cfg["x"], 0, 0.45], q, "close_gripper", {"motion": "linear"}),
+                           ([self.cfg["x"], 0, 0.45], q, "attach_obj", {"motion": "none", "object": "red"}),
+                           ([self.cfg["x"], 0, 0.6], q, "dummy_forward", {"motion": "linear"})]
+
+
+def run(skill_cfg: dict, arm=None, gripper=None, attacher=None, max_ticks: int = 200):
+    arm = arm or FakeArm()
+    controller = Controller(arm, IDENTITY)
+    skill = UnitPickLike(None, controller, None, {**UnitPickLike.defaults, **skill_cfg})
+    skill.simple_generate_manip_cmds()
+    ids = iter(range(10_000))
+    ex = ManipExecutor(skill, controller, Clock(), lambda label: f"{label}@{next(ids)}", gripper, attacher)
+    for _ in range(max_ticks):
+        out = ex.tick()
+        if out.state != "running":
+            return out, ex, arm
+    raise AssertionError(f"still running after {max_ticks} ticks: {out.message}")
+
+
+def test_registry_keys_and_a_second_class_under_one_key_is_refused():
+    assert skill_key("GotoPose") == skill_key("Goto_Pose") == "goto_pose"
+    assert UnitPickLike.key == "unit_pick_like"
+
+    class UnitPickLike2(ManipSkill):  # noqa: D401 (a different class, a clashing key)
+        pass
+    UnitPickLike2.__name__ = "UnitPickLike"
+    with pytest.raises(ValueError, match="'unit_pick_like' is taken by"):
+        register_skill(UnitPickLike2)
+    with pytest.raises(TypeError, match="not a ManipSkill subclass"):
+        register_skill(int)
+
+
+def test_command_entries_are_checked_naming_what_is_wrong():
+    c = ManipCommand.from_entry((np.array([0.4, 0.0, 0.5]), np.array([0.0, 0.0, 2.0, 0.0]), "close_gripper", {}, 0.3))
+    assert c.quaternion == (0.0, 0.0, 1.0, 0.0) and c.speed == 0.3 and c.motion == "free"
+    bad = [((0, 0), (1, 0, 0, 0), "dummy_forward", {}), "the position must be 3 numbers",
+           ((0, 0, float("nan")), (1, 0, 0, 0), "dummy_forward", {}), "not finite",
+           ((0, 0, 0), (1, 0, 0, 0), "teleport", {}), "unknown action 'teleport'",
+           ((0, 0, 0), (1, 0, 0, 0), "dummy_forward", {"motion": "fly"}), "motion 'fly'",
+           ((0, 0, 0), (1, 0, 0, 0), "dummy_forward", {"motion": "joints"}), "needs params\\['joints'\\]",
+           ((0, 0, 0), (1, 0, 0, 0), "attach_obj", {}), "attach_obj needs params\\['object'\\]",
+           ((0, 0, 0), (1, 0, 0, 0), "dummy_forward", {}, 2.0), "speed 2.0 must be in",
+           "not a tuple", "expected \\(p, q, action, params"]
+    for entry, why in zip(bad[::2], bad[1::2]):
+        with pytest.raises(ValueError, match=why):
+            ManipCommand.from_entry(entry)
+
+
+def test_configuration_merges_defaults_yaml_and_parameters(tmp_path):
+    f = tmp_path / "pick.yaml"
+    f.write_text("approach: 0.2\nlift: 0.3\n")
+    assert manip_config.merge({"approach": 0.1, "lift": 0.1, "x": 1}, str(f), {"lift": 0.4}) == \
+        {"approach": 0.2, "lift": 0.4, "x": 1}
+    with pytest.raises(manip_config.ConfigError, match="does not exist"):
+        manip_config.load(str(tmp_path / "missing.yaml"))
+    with pytest.raises(manip_config.ConfigError, match="not valid YAML"):
+        manip_config.load("a: [1, 2")
+    task = tmp_path / "task.yaml"
+    task.write_text("skills:\n  - name: open\n  - distance: 1\n")
+    with pytest.raises(manip_config.ConfigError, match="skills\\[1\\] must be a mapping with a 'name'"):
+        manip_config.load_task(str(task))
+
+
+def test_the_executor_plays_each_command_then_its_action_in_order():
+    g, a = FakeGripper(), FakeAttacher()
+    out, ex, arm = run({}, gripper=g, attacher=a)
+    assert out.state == "success", out.message
+    assert [linear for _, linear in arm.plans] == [False, True, True]  # the attach needs no motion
+    assert g.commands == [80_000, 0] and a.requests == [(True, "red")]
+    assert ex.done_count == 4 and ex.progress == 1.0
+    assert arm.tool[:3] == [0.4, 0, 0.6]
+
+
+def test_planning_failures_are_retried_until_the_skill_is_not_feasible():
+    arm = FakeArm(reach=0.35)
+    out, ex, _ = run({"max_plan_failures": 2}, arm=arm, gripper=FakeGripper(), attacher=FakeAttacher())
+    assert out.state == "failure" and out.code == -5
+    assert "not feasible: 3 planning failure(s), the last: no inverse kinematics for x 0.40" in out.message
+    assert len(arm.plans) == 3 and ex.done_count == 0
+
+
+def test_what_the_robot_refuses_and_missing_interfaces_fail_naming_them():
+    arm = FakeArm()
+    arm.refuse_next = "joint1 beyond its limit"
+    out, _, _ = run({}, arm=arm, gripper=FakeGripper(), attacher=FakeAttacher())
+    assert out.state == "failure" and "the robot refused the motion: joint1 beyond its limit" in out.message
+    out, _, _ = run({}, gripper=None, attacher=FakeAttacher())
+    assert out.state == "failure" and "has no gripper (--gripper CHANNEL:NODE)" in out.message
+    out, _, _ = run({}, gripper=FakeGripper(), attacher=None)
+    assert out.state == "failure" and "no attach interface" in out.message
+    out, _, _ = run({}, gripper=FakeGripper(), attacher=FakeAttacher(refuse="object 'red' is 0.30 m from the tool"))
+    assert out.state == "failure" and "attach_obj red: refused: object 'red' is 0.30 m from the tool" in out.message
+    g = FakeGripper()
+    g.faults = ["EMCY 0x5000 following error"]
+    out, _, _ = run({}, gripper=g, attacher=FakeAttacher())
+    assert out.state == "failure" and "gripper fault: EMCY 0x5000" in out.message
+
+
+def test_a_command_that_never_finishes_times_out_naming_it():
+    arm = FakeArm(ticks=10_000)
+    out, _, _ = run({"command_timeout_s": 1.0}, arm=arm, gripper=FakeGripper(), attacher=FakeAttacher())
+    assert out.state == "failure" and out.code == -2
+    assert "command 1 (open_gripper at (0.400 0.000 0.600) [free]) did not finish within 1 s (motion)" in out.message
+
+
+def test_is_success_decides_and_its_reason_is_the_message():
+    class Judged(UnitPickLike):
+        def is_success(self):
+            self.failure_reason = "the cube slipped"
+            return False
+    arm = FakeArm()
+    controller = Controller(arm, IDENTITY)
+    skill = Judged(None, controller, None, dict(UnitPickLike.defaults))
+    skill.simple_generate_manip_cmds()
+    ex = ManipExecutor(skill, controller, Clock(), lambda label: label, FakeGripper(), FakeAttacher())
+    for _ in range(100):
+        out = ex.tick()
+        if out.state != "running":
+            break
+    assert out.state == "failure" and out.code == -4 and out.message.endswith("not successful: the cube slipped")
+
+
+def test_a_door_handle_turns_with_the_door():
+    hinge, axis = np.array([0.5, 0.0, 0.3]), np.array([0.0, 0.0, 1.0])
+    p, q = rotate_about([0.5, 0.3, 0.3], axis, hinge, np.pi / 2, top_down(0.0))
+    assert np.allclose(p, [0.2, 0.0, 0.3])
+    assert np.allclose(np.abs(q), np.abs(top_down(np.pi / 2)))
