@@ -68,8 +68,10 @@ def locate_camera(scene: Path, perception: bool) -> list[str]:
 
 def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, lockstep: bool = True,
              stop_after_task: bool = True, extra_sim: tuple[str, ...] = (), frame_ms: float = FRAME_MS,
-             perception: bool = False) -> list[Program]:
-    """The processes, in start order. `task` is started at the manager's first tick.
+             perception: bool = False, manip: bool = False) -> list[Program]:
+    """The processes, in start order. `manip`: the skill process also serves the
+    manipulation-command skills (skillbus.manip.library) with their articulation and
+    attach interfaces. `task` is started at the manager's first tick.
     Every path is absolute: supervisord runs the programs in the repository's folder,
     not where the run folder was named."""
     run_dir = Path(run_dir).resolve()
@@ -100,6 +102,9 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
               "--gripper", f"{can}:5"]
     for lib in LIBRARIES:
         skills += ["--library", lib]
+    if manip:
+        skills += ["--library", "skillbus.manip.library", "--interface", "articulation=skillbus.robot.articulation",
+                   "--interface", "attach=skillbus.sim.attach"]
     if lockstep:
         skills.append("--lockstep")
     device = [*py, "gripper-device", "--channel", can, "--node-id", "5", "--name", "gripper"]

@@ -21,7 +21,6 @@ skillbus.manip.config.ConfigError: the configuration must be a mapping (key: val
 from __future__ import annotations
 
 import os
-from typing import Any
 
 import yaml
 

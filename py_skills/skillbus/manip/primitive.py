@@ -56,8 +56,8 @@ class _ManipPrimitive(PrimitiveBase):
     def _cfg(self) -> dict:
         cls = self.manip_class
         params: dict[str, Any] = {}
-        for key in cls.defaults:
-            if key in self.params and self.params[key].value is not None:
+        for key, default in cls.defaults.items():  # a parameter left at its default does not hide the YAML's value
+            if key in self.params and self.params[key].value is not None and self.params[key].value != default:
                 params[key] = self.params[key].value
         for key in list(cls.elements) + list(cls.optional_elements):
             e = self.params[key].value if key in self.params else None
