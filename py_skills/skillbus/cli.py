@@ -111,6 +111,8 @@ def build_parser() -> argparse.ArgumentParser:
     console_cli.add_parser(sub)
     from skillbus.skill import tree_view
     tree_view.add_parser(sub)
+    from skillbus.generate import cli as generate_cli
+    generate_cli.add_parser(sub)
     return ap
 
 
@@ -196,6 +198,9 @@ def dispatch(args: argparse.Namespace) -> int:
     if args.command == "tree":
         from skillbus.skill import tree_view
         return tree_view.main(args)
+    if args.command == "generate":
+        from skillbus.generate import cli as generate_cli
+        return generate_cli.main(args)
     if args.command == "console":
         from skillbus.console import cli as console_cli
         return console_cli.main(args)

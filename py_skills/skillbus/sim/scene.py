@@ -78,7 +78,8 @@ def save(doc: dict[str, Any], path: str | Path, source: str | Path) -> Path:
     URDF paths made absolute, since they are relative to the file they came from."""
     base = Path(source).resolve().parent
     doc = json.loads(json.dumps(doc))
-    for part in [doc.get("robot", {}), *doc.get("robots", []), *doc.get("fixtures", []), *doc.get("obstacles", [])]:
+    for part in [doc.get("robot", {}), *doc.get("robots", []), *doc.get("fixtures", []), *doc.get("obstacles", []),
+                 *doc.get("articulated", [])]:
         if isinstance(part, dict) and part.get("urdf"):
             part["urdf"] = str((base / part["urdf"]).resolve())
     Path(path).write_text(json.dumps(doc, indent=1))

@@ -1,0 +1,128 @@
+"""A LeRobot dataset (the v2.1 layout) written one episode at a time::
+
+    ROOT/meta/info.json              features, fps, totals, paths
+    ROOT/meta/tasks.jsonl            {"task_index", "task"}
+    ROOT/meta/episodes.jsonl         {"episode_index", "tasks", "length", + skillbus: seed, digests, success, ...}
+    ROOT/meta/episodes_stats.jsonl   per episode, per feature: min, max, mean, std, count
+    ROOT/data/chunk-000/episode_000000.parquet
+
+Why LeRobot's layout: one parquet file per episode, so an episode is written whole or
+not at all (a temporary file renamed into place, then its line in episodes.jsonl), and
+parallel workers never share a file; parquet is columnar and read by every data tool
+(pyarrow, pandas, Hugging Face datasets, which LeRobotDataset reads it with).
+An episode's row holds the features of skillbus.generate.record plus LeRobot's
+``timestamp``, ``frame_index``, ``episode_index``, ``index`` (over the dataset),
+``task_index``, ``next.done`` and ``next.success`` (the episode's label, on every row).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+CHUNK = 1000
+DATA_PATH = "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"
+VECTORS = ("observation.state", "observation.velocity", "observation.tool_pose", "observation.object_poses",
+           "observation.articulation", "action")
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+class DatasetWriter:
+    def __init__(self, root: Path, fps: float, robot_type: str = "arm6") -> None:
+        self.root, self.fps, self.robot_type = Path(root), fps, robot_type
+        (self.root / "meta").mkdir(parents=True, exist_ok=True)
+        self.episodes: list[dict[str, Any]] = []
+        self.tasks: dict[str, int] = {}
+        self.names: dict[str, list[str]] | None = None
+        self.total_frames = 0
+        for line in self._lines("episodes.jsonl"):  # an earlier run's episodes stay (generate appends)
+            self.episodes.append(line)
+            self.total_frames += line["length"]
+        for line in self._lines("tasks.jsonl"):
+            self.tasks[line["task"]] = line["task_index"]
+        info = self.root / "meta" / "info.json"
+        if info.exists():
+            self.names = {k: v["names"] for k, v in json.loads(info.read_text())["features"].items() if k in VECTORS}
+
+    def _lines(self, name: str) -> list[dict[str, Any]]:
+        p = self.root / "meta" / name
+        if not p.exists():
+            return []
+        return [json.loads(x) for x in p.read_text().splitlines() if x.strip()]
+
+    def write_episode(self, episode: Any, task: str, meta: dict[str, Any]) -> int:
+        """Writes one episode (skillbus.generate.record.Episode) labelled with `meta`;
+        returns its episode_index."""
+        if self.names is not None and self.names != episode.names:
+            raise ValueError("this episode's features differ from the dataset's (another scene or robot?)")
+        self.names = episode.names
+        index = len(self.episodes)
+        task_index = self.tasks.setdefault(task, len(self.tasks))
+        rows = episode.rows
+        n = len(rows)
+        success = bool(meta.get("success"))
+        cols: dict[str, Any] = {k: pa.array([r[k] for r in rows], type=pa.list_(pa.float32())) for k in VECTORS}
+        cols.update({
+            "timestamp": pa.array([r["timestamp"] for r in rows], type=pa.float32()),
+            "frame_index": pa.array(range(n), type=pa.int64()),
+            "episode_index": pa.array([index] * n, type=pa.int64()),
+            "index": pa.array(range(self.total_frames, self.total_frames + n), type=pa.int64()),
+            "task_index": pa.array([task_index] * n, type=pa.int64()),
+            "next.done": pa.array([i == n - 1 for i in range(n)], type=pa.bool_()),
+            "next.success": pa.array([success] * n, type=pa.bool_()),
+        })
+        path = self.root / DATA_PATH.format(episode_chunk=index // CHUNK, episode_index=index)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".tmp")
+        pq.write_table(pa.table(cols), tmp)
+        os.replace(tmp, path)  # whole, or not at all
+        line = {"episode_index": index, "tasks": [task], "length": n, **meta}
+        self.episodes.append(line)
+        self.total_frames += n
+        with open(self.root / "meta" / "episodes.jsonl", "a") as f:
+            f.write(json.dumps(line) + "\n")
+        with open(self.root / "meta" / "episodes_stats.jsonl", "a") as f:
+            f.write(json.dumps({"episode_index": index, "stats": stats(rows)}) + "\n")
+        self.write_meta()
+        return index
+
+    def write_meta(self) -> None:
+        names = self.names or {k: [] for k in VECTORS}
+        features: dict[str, Any] = {k: {"dtype": "float32", "shape": [len(names[k])], "names": names[k]}
+                                    for k in VECTORS}
+        features.update({k: {"dtype": t, "shape": [1], "names": None} for k, t in (
+            ("timestamp", "float32"), ("frame_index", "int64"), ("episode_index", "int64"), ("index", "int64"),
+            ("task_index", "int64"), ("next.done", "bool"), ("next.success", "bool"))})
+        n = len(self.episodes)
+        info = {"codebase_version": "v2.1", "robot_type": self.robot_type, "total_episodes": n,
+                "total_frames": self.total_frames, "total_tasks": len(self.tasks), "total_videos": 0,
+                "total_chunks": (n - 1) // CHUNK + 1 if n else 0, "chunks_size": CHUNK, "fps": self.fps,
+                "splits": {"train": f"0:{n}"}, "data_path": DATA_PATH, "video_path": None, "features": features}
+        _atomic_write(self.root / "meta" / "info.json", json.dumps(info, indent=2))
+        _atomic_write(self.root / "meta" / "tasks.jsonl",
+                      "".join(json.dumps({"task_index": i, "task": t}) + "\n" for t, i in sorted(self.tasks.items(),
+                                                                                            key=lambda x: x[1])))
+
+
+def stats(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k in VECTORS:
+        cols = list(zip(*[r[k] for r in rows])) if rows and rows[0][k] else []
+        if not cols:
+            continue
+        out[k] = {"min": [min(c) for c in cols], "max": [max(c) for c in cols],
+                  "mean": [sum(c) / len(c) for c in cols],
+                  "std": [math.sqrt(max(0.0, sum(x * x for x in c) / len(c) - (sum(c) / len(c)) ** 2)) for c in cols],
+                  "count": [len(rows)]}
+    return out

@@ -1,0 +1,115 @@
+"""An episode's rows from its LCM log (every message of a lockstep run is stamped with its
+frame, so the rows come from the frames, never from arrival times or the wall clock).
+
+A row every ``stride`` frames (the config's fps), from the physics server's state of that
+frame (SB_SIM_STATE) and the articulated objects' reading (SB_ROBOT_ARTICULATION):
+
+- ``observation.state``: the arm's joint positions, then the gripper's width (m);
+- ``observation.velocity``: the arm's joint velocities;
+- ``observation.tool_pose``: the tool centre point, x y z qx qy qz qw (world);
+- ``observation.object_poses``: each object's pose, in scene order, 7 numbers each;
+- ``observation.articulation``: each articulated joint's position, in report order;
+- ``action``: what the robot was commanded: the arm's joint positions at the next row
+  (the trajectory's effect over one row, as scripted demonstrations record it) and the
+  gripper's commanded width.
+
+The skill segments (which manipulation skill ran from which frame to which, and how it
+ended) come from the skill manager's progress (SB_SKILL_PROGRESS). A log that misses a
+frame's state is refused (RecordError): an episode with a hole is never written.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+class RecordError(RuntimeError):
+    pass
+
+
+@dataclass
+class Episode:
+    rows: list[dict[str, Any]]
+    names: dict[str, list[str]]          # per feature, the names of its values
+    segments: list[dict[str, Any]] = field(default_factory=list)
+    frames: int = 0
+
+
+STATES = {0: "Idle", 1: "Running", 2: "Success", 3: "Failure"}
+
+
+def read(log: Path, stride: int, frame_ms: float) -> Episode:
+    import lcm
+
+    from skillbus.msgs import articulation_state_t, decode, sim_state_t, skill_progress_t
+    states: dict[int, Any] = {}
+    arts: dict[int, Any] = {}
+    nodes: dict[int, dict[str, Any]] = {}  # node id -> segment
+    for ev in lcm.EventLog(str(log), "r"):
+        ch = ev.channel
+        if ch == "SB_SIM_STATE":
+            s = decode(sim_state_t, ev.data)
+            if s is not None:
+                states.setdefault(s.header.frame, s)
+        elif ch == "SB_ROBOT_ARTICULATION":
+            a = decode(articulation_state_t, ev.data)
+            if a is not None:
+                arts.setdefault(a.header.frame, a)
+        elif ch == "SB_SKILL_PROGRESS":
+            p = decode(skill_progress_t, ev.data)
+            if p is None:
+                continue
+            for n in p.nodes:
+                if not n.type.startswith("Manip") or n.type == "ManipTask":
+                    continue
+                seg = nodes.setdefault(n.id, {"skill": n.type, "label": n.label, "start_frame": None,
+                                              "end_frame": None, "state": "Idle", "message": ""})
+                if n.state == 1 and seg["start_frame"] is None:
+                    seg["start_frame"] = p.header.frame
+                if n.state in (2, 3):
+                    if seg["end_frame"] is None:
+                        seg["end_frame"] = p.header.frame
+                    seg["state"], seg["message"] = STATES[n.state], n.message
+    if not states:
+        raise RecordError(f"{log}: no physics state in the log")
+    first, last = min(states), max(states)
+    missing = [f for f in range(first, last + 1) if f not in states]
+    if missing:
+        raise RecordError(f"{log}: the physics state of {len(missing)} frame(s) is missing (first {missing[0]}): "
+                          "the recording lost messages")
+    s0 = states[first]
+    arm_idx = [i for i, n in enumerate(s0.joint_names) if "finger" not in n]
+    arm_names = [s0.joint_names[i] for i in arm_idx]
+    objects = [o.name for o in s0.objects]
+    a0 = arts.get(first)
+    joints = [f"{j.object}/{j.joint}" for j in a0.joints] if a0 is not None else []
+    names = {
+        "observation.state": arm_names + ["gripper_width"],
+        "observation.velocity": arm_names,
+        "observation.tool_pose": ["x", "y", "z", "qx", "qy", "qz", "qw"],
+        "observation.object_poses": [f"{o}.{k}" for o in objects for k in ("x", "y", "z", "qx", "qy", "qz", "qw")],
+        "observation.articulation": joints,
+        "action": arm_names + ["gripper_width"],
+    }
+    picked = list(range(first, last + 1, stride))
+    rows = []
+    for k, f in enumerate(picked):
+        s = states[f]
+        nxt = states[picked[k + 1]] if k + 1 < len(picked) else s
+        a = arts.get(f)
+        if joints and (a is None or len(a.joints) != len(joints)):
+            raise RecordError(f"{log}: the articulated objects' reading of frame {f} is missing")
+        rows.append({
+            "frame": f,
+            "timestamp": (f - first) * frame_ms / 1000.0,
+            "observation.state": [s.position[i] for i in arm_idx] + [s.finger_width],
+            "observation.velocity": [s.velocity[i] for i in arm_idx],
+            "observation.tool_pose": list(s.tool_pose),
+            "observation.object_poses": [v for o in s.objects for v in o.pose],
+            "observation.articulation": [j.position for j in a.joints] if joints else [],
+            "action": [nxt.position[i] for i in arm_idx] + [s.finger_width_target],
+        })
+    segments = sorted((v for v in nodes.values() if v["start_frame"] is not None), key=lambda v: v["start_frame"])
+    return Episode(rows, names, segments, frames=last - first + 1)

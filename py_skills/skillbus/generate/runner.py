@@ -1,0 +1,179 @@
+"""Episodes in parallel, and the dataset written in episode order.
+
+Locally (the default) each episode runs in a worker process of its own
+(skillbus.generate.worker: a PID namespace and a network namespace of its own), at most
+``workers`` at a time, dispatched by concurrent.futures; on a Ray cluster (``--ray
+ADDRESS``, or ``--ray local`` for Ray's local mode) each episode is a Ray task. An
+episode whose worker died or whose recording is incomplete is run again (``retries``
+times), then counted as broken with its reason: it never enters the dataset. Finished
+episodes, successes and failures alike (each labelled), are written in the order of
+their numbers as soon as every episode before them is settled, so the dataset is the
+same whatever order the workers finish in.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import os
+import pickle
+import shutil
+import subprocess
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from skillbus.generate.config import GenerateConfig, as_dict
+from skillbus.generate.lerobot import DatasetWriter
+
+
+@dataclass
+class Summary:
+    requested: int = 0
+    written: int = 0
+    successes: int = 0
+    broken: list[dict[str, Any]] = field(default_factory=list)
+    failures: Counter = field(default_factory=Counter)
+    retried: int = 0
+    wall_s: float = 0.0
+    results: dict[int, dict[str, Any]] = field(default_factory=dict)  # request -> the written episode's meta
+
+    def lines(self, workers: int) -> list[str]:
+        rate = self.successes / self.written if self.written else 0.0
+        per_hour = 3600.0 * self.written / self.wall_s if self.wall_s > 0 else 0.0
+        out = [f"episodes: {self.written} written of {self.requested} requested, {len(self.broken)} broken, "
+               f"{self.retried} retried",
+               f"success rate: {rate * 100:.1f}% ({self.successes}/{self.written})",
+               f"episodes per hour: {per_hour:.0f} on {workers} worker(s) ({per_hour / max(1, workers):.0f} per worker)"]
+        for reason, n in self.failures.most_common():
+            out.append(f"  failed {n}x: {reason}")
+        for b in self.broken:
+            out.append(f"  broken: episode {b['request']}: {b['error']}")
+        return out
+
+
+def worker_argv(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: Path, out: Path) -> list[str]:
+    return ["unshare", "-rmpn", "--fork", "--mount-proc", "--kill-child", "--",
+            sys.executable, "-m", "skillbus.generate.worker", str(cfg.path), str(seed), str(request), str(attempt),
+            str(work), str(out)]
+
+
+def run_local(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: Path) -> dict[str, Any]:
+    out = work / f"result-{request:06d}-{attempt}.pkl"
+    log = work / f"worker-{request:06d}-{attempt}.log"
+    with open(log, "wb") as f:
+        p = subprocess.run(worker_argv(cfg, seed, request, attempt, work, out), stdout=f, stderr=subprocess.STDOUT)
+    if not out.exists():
+        how = f"killed by signal {-p.returncode}" if p.returncode < 0 else f"exit {p.returncode}"
+        tail = log.read_text(errors="replace")[-400:].strip()
+        return {"error": f"the worker ended without a result ({how})" + (f": {tail}" if tail else "")}
+    r = pickle.loads(out.read_bytes())
+    out.unlink()
+    return r
+
+
+def run_ray_task(cfg_path: str, seed: int, request: int, attempt: int, work: str) -> dict[str, Any]:
+    """An episode as a Ray task: in-process in Ray's worker (or, in local mode, in the
+    driver), its processes in a sandbox of their own."""
+    from skillbus.generate.config import load
+    from skillbus.generate.episode import EpisodeError, run_episode
+    try:
+        return run_episode(load(cfg_path), seed, request, Path(work), attempt)
+    except EpisodeError as e:
+        return {"error": str(e)}
+
+
+def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: int = 2, first: int = 0,
+             ray: str | None = None, progress: Callable[[int, int], None] | None = None,
+             keep_work: bool = False) -> Summary:
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    work = out / "work"
+    work.mkdir(exist_ok=True)
+    writer = DatasetWriter(out, cfg.fps)
+    summary = Summary(requested=episodes)
+    requests = list(range(first, first + episodes))
+    attempts = {r: 0 for r in requests}
+    settled: dict[int, dict[str, Any]] = {}
+    next_to_write = 0
+    t0 = time.monotonic()
+
+    def settle(request: int, r: dict[str, Any]) -> bool:
+        """True when the episode is settled (a result, or broken for good)."""
+        if "error" in r:
+            if attempts[request] < cfg.retries:
+                attempts[request] += 1
+                summary.retried += 1
+                return False
+            summary.broken.append({"request": request, "error": r["error"]})
+        settled[request] = r
+        return True
+
+    def flush() -> None:
+        nonlocal next_to_write
+        while next_to_write < len(requests) and requests[next_to_write] in settled:
+            r = settled.pop(requests[next_to_write])
+            next_to_write += 1
+            if "error" in r:
+                continue
+            meta = {k: r[k] for k in ("request", "seed", "attempt", "success", "failure_reason", "task_result",
+                                      "state_digest", "session_digest", "sim_s", "randomized", "segments")}
+            meta["config"] = as_dict(cfg)["config"]
+            writer.write_episode(r["episode"], cfg.instruction, meta)
+            summary.written += 1
+            summary.successes += bool(r["success"])
+            if not r["success"]:
+                summary.failures[r["failure_reason"]] += 1
+            summary.results[r["request"]] = meta
+            if progress:
+                progress(summary.written + len(summary.broken), episodes)
+
+    if ray:
+        _run_with_ray(cfg, seed, requests, attempts, work, ray, settle, flush)
+    else:
+        with cf.ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+            pending = {pool.submit(run_local, cfg, seed, r, 0, work): r for r in requests}
+            while pending:
+                done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+                for fut in done:
+                    request = pending.pop(fut)
+                    try:
+                        r = fut.result()
+                    except Exception as e:  # (run_local itself failing: no worker could be started)
+                        r = {"error": f"{type(e).__name__}: {e}"}
+                    if not settle(request, r):
+                        pending[pool.submit(run_local, cfg, seed, request, attempts[request], work)] = request
+                flush()
+    flush()
+    summary.wall_s = time.monotonic() - t0
+    if not keep_work:
+        shutil.rmtree(work, ignore_errors=True)
+    return summary
+
+
+def _run_with_ray(cfg, seed, requests, attempts, work, address, settle, flush) -> None:
+    import ray
+    if not ray.is_initialized():
+        if address == "local":
+            ray.init(local_mode=True, include_dashboard=False, log_to_driver=False)
+        else:
+            ray.init(address=address, log_to_driver=False)
+    task = ray.remote(max_retries=0)(run_ray_task)
+    pending = {task.remote(str(cfg.path), seed, r, 0, str(work)): r for r in requests}
+    while pending:
+        done, _ = ray.wait(list(pending), num_returns=1)
+        for ref in done:
+            request = pending.pop(ref)
+            try:
+                r = ray.get(ref)
+            except Exception as e:  # a Ray worker that died mid-episode
+                r = {"error": f"the Ray worker failed: {type(e).__name__}: {e}"}
+            if not settle(request, r):
+                pending[task.remote(str(cfg.path), seed, request, attempts[request], str(work))] = request
+        flush()
+
+
+def default_workers() -> int:
+    return max(1, min(2, os.cpu_count() or 1))
