@@ -18,7 +18,7 @@ def add_parser(sub) -> None:
                                                             "the cores if fewer)")
     g.add_argument("--ray", default=None, metavar="ADDRESS",
                    help="run the episodes as tasks on this Ray cluster (\"auto\", ray://HOST:PORT), or \"local\" "
-                        "for Ray's local mode")
+                        "for a one-node Ray instance of this machine (Ray 2.5x has no local mode)")
     g.add_argument("--first", type=int, default=0, help="the first episode's number (default 0)")
     g.add_argument("--episode", type=int, default=None, metavar="K",
                    help="run episode K alone (nothing is written to a dataset): its result and digests, to compare "

@@ -3,7 +3,8 @@
 Locally (the default) each episode runs in a worker process of its own
 (skillbus.generate.worker: a PID namespace and a network namespace of its own), at most
 ``workers`` at a time, dispatched by concurrent.futures; on a Ray cluster (``--ray
-ADDRESS``, or ``--ray local`` for Ray's local mode) each episode is a Ray task. An
+ADDRESS``, or ``--ray local`` for a one-node Ray instance of this machine's) each episode
+is a Ray task running the same worker process. An
 episode whose worker died or whose recording is incomplete is run again (``retries``
 times), then counted as broken with its reason: it never enters the dataset. Finished
 episodes, successes and failures alike (each labelled), are written in the order of
@@ -74,15 +75,15 @@ def run_local(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: 
     return r
 
 
-def run_ray_task(cfg_path: str, seed: int, request: int, attempt: int, work: str) -> dict[str, Any]:
-    """An episode as a Ray task: in-process in Ray's worker (or, in local mode, in the
-    driver), its processes in a sandbox of their own."""
+def run_ray_task(cfg_path: str, seed: int, request: int, attempt: int) -> dict[str, Any]:
+    """An episode as a Ray task: the same worker process as locally (its own PID and
+    network namespaces, so a Ray worker that dies takes the episode's processes with it),
+    in a folder of the node's own; the result travels back in Ray's object store. Every
+    node needs skillbus and the config's files at the same paths."""
+    import tempfile
     from skillbus.generate.config import load
-    from skillbus.generate.episode import EpisodeError, run_episode
-    try:
-        return run_episode(load(cfg_path), seed, request, Path(work), attempt)
-    except EpisodeError as e:
-        return {"error": str(e)}
+    with tempfile.TemporaryDirectory(prefix="skillbus-episode-") as work:
+        return run_local(load(cfg_path), seed, request, attempt, Path(work))
 
 
 def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: int = 2, first: int = 0,
@@ -131,7 +132,7 @@ def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: 
                 progress(summary.written + len(summary.broken), episodes)
 
     if ray:
-        _run_with_ray(cfg, seed, requests, attempts, work, ray, settle, flush)
+        _run_with_ray(cfg, seed, requests, attempts, workers, ray, settle, flush)
     else:
         with cf.ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
             pending = {pool.submit(run_local, cfg, seed, r, 0, work): r for r in requests}
@@ -153,15 +154,15 @@ def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: 
     return summary
 
 
-def _run_with_ray(cfg, seed, requests, attempts, work, address, settle, flush) -> None:
+def _run_with_ray(cfg, seed, requests, attempts, workers, address, settle, flush) -> None:
     import ray
     if not ray.is_initialized():
-        if address == "local":
-            ray.init(local_mode=True, include_dashboard=False, log_to_driver=False)
+        if address == "local":  # a one-node cluster of this machine's (Ray 2.5x has no local mode any more)
+            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
         else:
             ray.init(address=address, log_to_driver=False)
-    task = ray.remote(max_retries=0)(run_ray_task)
-    pending = {task.remote(str(cfg.path), seed, r, 0, str(work)): r for r in requests}
+    task = ray.remote(max_retries=0, num_cpus=1)(run_ray_task)
+    pending = {task.remote(str(cfg.path), seed, r, 0): r for r in requests}
     while pending:
         done, _ = ray.wait(list(pending), num_returns=1)
         for ref in done:
@@ -171,7 +172,7 @@ def _run_with_ray(cfg, seed, requests, attempts, work, address, settle, flush) -
             except Exception as e:  # a Ray worker that died mid-episode
                 r = {"error": f"the Ray worker failed: {type(e).__name__}: {e}"}
             if not settle(request, r):
-                pending[task.remote(str(cfg.path), seed, request, attempts[request], str(work))] = request
+                pending[task.remote(str(cfg.path), seed, request, attempts[request])] = request
         flush()
 
 

@@ -1,0 +1,154 @@
+"""`skillbus generate` end to end (issue "Manipulation-command skills", episode
+generation): real episodes of the drawer task on the cabinet scene, each a whole system in
+lockstep in namespaces of its own, recorded into a LeRobot dataset that Hugging Face
+`datasets` loads."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from conftest import last_json
+from skillbus import paths
+
+CONFIG = paths.REPO_ROOT / "deploy" / "generate" / "drawer.yaml"
+EPISODES = int(os.environ.get("SKILLBUS_GENERATE_EPISODES", "20"))
+
+
+def generate(*args: str, timeout: float) -> tuple[int, str, str]:
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "generate", str(CONFIG), *map(str, args)],
+                       capture_output=True, text=True, timeout=timeout)
+    return p.returncode, p.stdout, p.stderr
+
+
+def episodes_of(root: Path) -> list[dict]:
+    return [json.loads(x) for x in (root / "meta" / "episodes.jsonl").read_text().splitlines()]
+
+
+def load(root: Path):
+    import datasets
+    files = sorted(str(p) for p in (root / "data").rglob("*.parquet"))
+    return datasets.load_dataset("parquet", data_files=files, split="train", cache_dir=str(root.parent / "hf-cache"))
+
+
+def test_twenty_episodes_on_two_workers_and_any_episode_again_alone(tmp_path):
+    out = tmp_path / "drawer"
+    rc, stdout, err = generate("--episodes", EPISODES, "--seed", 1, "--workers", 2, "--out", out,
+                               timeout=60 * EPISODES + 300)
+    assert rc == 0, stdout + err[-3000:]
+    assert f"episodes: {EPISODES} written of {EPISODES} requested, 0 broken" in stdout, stdout
+    assert "success rate: " in stdout and "episodes per hour: " in stdout, stdout
+    eps = episodes_of(out)
+    assert [e["request"] for e in eps] == list(range(EPISODES)) and len({e["seed"] for e in eps}) == EPISODES
+    successes = sum(e["success"] for e in eps)
+    assert f"success rate: {100.0 * successes / EPISODES:.1f}% ({successes}/{EPISODES})" in stdout, stdout
+    assert successes >= EPISODES * 0.8, [(e["request"], e["failure_reason"]) for e in eps if not e["success"]]
+    for e in eps:
+        assert e["session_digest"] and e["state_digest"] and e["segments"], e
+        if e["success"]:
+            assert [s["skill"] for s in e["segments"]] == ["ManipOpen", "ManipPick", "ManipPlace", "ManipClose"], e
+    ds = load(out)
+    info = json.loads((out / "meta" / "info.json").read_text())
+    assert len(ds) == info["total_frames"] == sum(e["length"] for e in eps)
+    assert ds["index"] == list(range(len(ds)))
+    first = ds.filter(lambda r: r["episode_index"] == 0)
+    assert first["next.success"][0] == eps[0]["success"] and first["next.done"][-1]
+    assert len(first[0]["observation.state"]) == len(info["features"]["observation.state"]["names"]) == 7
+    # the drawer moved in the recording of a successful episode (open, then closed)
+    ok = next(e for e in eps if e["success"])
+    drawer = [r[0] for r in ds.filter(lambda r: r["episode_index"] == ok["episode_index"])["observation.articulation"]]
+    assert max(drawer) > 0.12 and drawer[-1] < 0.03
+    # any episode again alone: the same digests (the first and the last of the run)
+    for k in (0, EPISODES - 1):
+        rc, stdout, err = generate("--episode", k, "--seed", 1, "--out", tmp_path / "alone", timeout=600)
+        assert rc == 0, stdout + err[-2000:]
+        alone = last_json(stdout)
+        assert (alone["state_digest"], alone["session_digest"], alone["success"]) == \
+            (eps[k]["state_digest"], eps[k]["session_digest"], eps[k]["success"]), (k, alone, eps[k])
+
+
+def worker_pids(out: Path, request: int) -> list[int]:
+    found = []
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            argv = (d / "cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        if b"skillbus.generate.worker" in argv and str(out).encode() in b" ".join(argv) \
+                and argv[argv.index(b"skillbus.generate.worker") + 3] == str(request).encode():
+            found.append(int(d.name))
+    return found
+
+
+def processes_of(folder: Path) -> list[int]:
+    pids = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                if str(folder).encode() in (d / "cmdline").read_bytes():
+                    pids.append(int(d.name))
+            except OSError:
+                pass
+    return pids
+
+
+def test_a_worker_killed_mid_episode_is_retried_and_leaves_nothing(tmp_path):
+    out = tmp_path / "killed"
+    p = subprocess.Popen([sys.executable, "-m", "skillbus.cli", "generate", str(CONFIG), "--episodes", "2", "--seed", "3",
+                          "--workers", "2", "--out", str(out), "--json", "--keep-work"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        attempt0 = out / "work" / "episode-000000" / "attempt-0"
+        end = time.monotonic() + 120
+        # mid-episode: the session is running (the skill process has registered its skills)
+        while time.monotonic() < end and "registered" not in _read(attempt0 / "logs" / "skills.err"):
+            time.sleep(0.2)
+        assert "registered" in _read(attempt0 / "logs" / "skills.err"), "episode 0 never got going"
+        time.sleep(3.0)
+        pids = [pid for pid in worker_pids(out, 0) if _is_python(pid)]
+        assert pids, "no worker process of episode 0"
+        for pid in pids:
+            os.kill(pid, signal.SIGKILL)
+        stdout, err = p.communicate(timeout=900)
+    finally:
+        p.kill()
+    assert p.returncode == 0, stdout + err[-3000:]
+    r = last_json(stdout)
+    assert r["written"] == 2 and r["retried"] == 1 and not r["broken"], r
+    eps = episodes_of(out)
+    assert [(e["request"], e["attempt"]) for e in eps] == [(0, 1), (1, 0)], eps
+    assert not list(out.rglob("*.tmp"))
+    assert processes_of(attempt0) == [], "processes of the killed episode are still running"
+    assert len(load(out)) == sum(e["length"] for e in eps)
+
+
+def _read(p: Path) -> str:
+    try:
+        return p.read_text(errors="replace")
+    except OSError:
+        return ""
+
+
+def _is_python(pid: int) -> bool:
+    try:
+        return b"python" in Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")[0]
+    except OSError:
+        return False
+
+
+def test_episodes_as_ray_tasks(sandbox, tmp_path):
+    out = tmp_path / "ray"
+    p = sandbox.start("generate-ray", [sys.executable, "-m", "skillbus.cli", "generate", str(CONFIG), "--episodes", "2",
+                                       "--seed", "5", "--workers", "2", "--out", str(out), "--ray", "local", "--json"])
+    rc = sandbox.wait(p, 900)
+    assert rc == 0, p.stdout()[-2000:] + p.stderr()[-3000:]
+    r = last_json(p.stdout())
+    assert r["written"] == 2 and not r["broken"], r
+    assert len(load(out)) == sum(e["length"] for e in episodes_of(out))

@@ -1,0 +1,121 @@
+"""skillbus generate's parts without running episodes: the randomized scene, the rows
+read from a real LCM log file (written here with lcm.EventLog), and the LeRobot dataset
+they make, loaded back with Hugging Face `datasets` (the reader LeRobotDataset uses)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from skillbus.generate.config import ConfigError, episode_seed
+from skillbus.generate.lerobot import DatasetWriter
+from skillbus.generate.randomize import randomized
+from skillbus.generate.record import RecordError, read
+
+SCENE = {"objects": [{"name": "red", "shape": "box", "size": [0.05, 0.05, 0.05], "pose": [0.4, 0.0, 0.425, 0, 0, 0, 1]},
+                     {"name": "green", "shape": "cylinder", "size": [0.03, 0.1], "pose": [0.5, 0.0, 0.45, 0, 0, 0, 1]}],
+         "articulated": [{"name": "cabinet", "pose": [0.1, -0.55, 0, 0, 0, 0.7071068, 0.7071068]}]}
+SPEC = {"objects": {"red": {"x": [0.4, 0.5], "y": [0.0, 0.2], "yaw": [-0.5, 0.5], "size": [0.04, 0.06],
+                            "colors": ["red", "blue"]}},
+        "articulated": {"cabinet": {"x": [-0.02, 0.02]}}}
+
+
+def test_a_seed_gives_one_scene_and_another_seed_another():
+    a, info_a = randomized(SCENE, SPEC, episode_seed(1, 0))
+    b, _ = randomized(SCENE, SPEC, episode_seed(1, 0))
+    c, _ = randomized(SCENE, SPEC, episode_seed(1, 1))
+    assert a == b and a != c
+    red = a["objects"][0]
+    assert 0.4 <= red["pose"][0] <= 0.5 and 0.0 <= red["pose"][1] <= 0.2
+    side = red["size"][0]
+    assert 0.04 <= side <= 0.06 and red["pose"][2] == pytest.approx(0.4 + side / 2)  # its bottom stays on the table
+    assert red["color"] in ("red", "blue") and info_a["objects"]["red"]["color"] == red["color"]
+    assert abs(a["articulated"][0]["pose"][0] - 0.1) <= 0.02
+    assert SCENE["objects"][0]["pose"][0] == 0.4  # the base scene is untouched
+
+
+def test_randomization_mistakes_are_named():
+    with pytest.raises(ConfigError, match="randomize.objects.blue: the scene has no object 'blue'"):
+        randomized(SCENE, {"objects": {"blue": {"x": [0, 1]}}}, 1)
+    with pytest.raises(ConfigError, match="randomize.objects.red.x must be \\[lo, hi\\]"):
+        randomized(SCENE, {"objects": {"red": {"x": [1, 0]}}}, 1)
+    with pytest.raises(ConfigError, match="only boxes can be resized"):
+        randomized(SCENE, {"objects": {"green": {"size": [0.02, 0.03]}}}, 1)
+
+
+def write_log(path, frames, skip=()):
+    import lcm
+    from skillbus.msgs import articulated_joint_t, articulation_state_t, header_t, sim_object_t, sim_state_t
+    log = lcm.EventLog(str(path), "w", overwrite=True)
+    for f in frames:
+        if f in skip:
+            continue
+        s = sim_state_t()
+        s.header = header_t()
+        s.header.frame = f
+        s.joint_names = ["joint1", "joint2", "finger_left_joint", "finger_right_joint"]
+        s.num_joints = 4
+        s.position = [0.01 * f, -0.01 * f, 0.02, 0.02]
+        s.velocity = [0.5, -0.5, 0.0, 0.0]
+        s.effort = [0.0] * 4
+        s.tool_pose = [0.3, 0.0, 0.5, 0, 1, 0, 0]
+        s.finger_width, s.finger_width_target = 0.04, 0.0
+        o = sim_object_t()
+        o.name, o.pose, o.twist = "red", [0.4, 0.0, 0.425 + 0.001 * f, 0, 0, 0, 1], [0.0] * 6
+        s.objects, s.num_objects = [o], 1
+        s.contacts, s.num_contacts = [], 0
+        log.write_event(f * 1000, "SB_SIM_STATE", s.encode())
+        a = articulation_state_t()
+        a.header = header_t()
+        a.header.frame = f
+        j = articulated_joint_t()
+        j.object, j.joint, j.concept, j.kind = "cabinet", "drawer_joint", "Drawer", "prismatic"
+        j.position, j.lower, j.upper = 0.001 * f, 0.0, 0.25
+        j.axis, j.origin, j.handle_pose = [0, 1, 0], [0, 0, 0], [0, 0, 0, 0, 0, 0, 1]
+        a.joints, a.num_joints = [j], 1
+        log.write_event(f * 1000 + 1, "SB_ROBOT_ARTICULATION", a.encode())
+    log.close()
+
+
+def test_rows_come_from_the_frames_and_a_lost_frame_refuses_the_episode(tmp_path):
+    log = tmp_path / "e.lcmlog"
+    write_log(log, range(100, 121))
+    ep = read(log, stride=5, frame_ms=20.0)
+    assert [r["frame"] for r in ep.rows] == [100, 105, 110, 115, 120] and ep.frames == 21
+    assert ep.names["observation.state"] == ["joint1", "joint2", "gripper_width"]
+    r0, r1 = ep.rows[0], ep.rows[1]
+    assert r0["timestamp"] == 0.0 and r1["timestamp"] == pytest.approx(0.1)
+    assert r0["observation.state"] == pytest.approx([1.0, -1.0, 0.04])
+    assert r0["action"] == pytest.approx([1.05, -1.05, 0.0])  # the next row's joints, the commanded width
+    assert r0["observation.articulation"] == pytest.approx([0.1])
+    write_log(log, range(100, 121), skip={107})
+    with pytest.raises(RecordError, match="1 frame\\(s\\) is missing \\(first 107\\)"):
+        read(log, stride=5, frame_ms=20.0)
+
+
+def test_the_dataset_loads_with_hugging_face_datasets_and_appends_in_order(tmp_path):
+    import datasets
+    log = tmp_path / "e.lcmlog"
+    write_log(log, range(0, 50))
+    ep = read(log, stride=5, frame_ms=20.0)
+    root = tmp_path / "ds"
+    w = DatasetWriter(root, fps=10)
+    w.write_episode(ep, "put the cube away", {"seed": 1, "success": True, "session_digest": "ab"})
+    w.write_episode(ep, "put the cube away", {"seed": 2, "success": False, "failure_reason": "slipped"})
+    w2 = DatasetWriter(root, fps=10)  # a later run appends
+    w2.write_episode(ep, "open the drawer", {"seed": 3, "success": True})
+    info = json.loads((root / "meta" / "info.json").read_text())
+    assert info["codebase_version"] == "v2.1" and info["total_episodes"] == 3 and info["total_frames"] == 30
+    assert info["total_tasks"] == 2 and info["features"]["observation.state"]["shape"] == [3]
+    files = sorted(str(p) for p in (root / "data").rglob("*.parquet"))
+    assert [p.rsplit("/", 1)[1] for p in files] == [f"episode_00000{i}.parquet" for i in range(3)]
+    ds = datasets.load_dataset("parquet", data_files=files, split="train", cache_dir=str(tmp_path / "hf"))
+    assert len(ds) == 30 and ds["index"] == list(range(30))
+    assert ds["episode_index"] == [0] * 10 + [1] * 10 + [2] * 10 and ds["task_index"][-1] == 1
+    assert ds["next.success"][:10] == [True] * 10 and ds["next.success"][10:20] == [False] * 10
+    assert ds["next.done"][9] and not ds["next.done"][8]
+    assert len(ds[0]["observation.object_poses"]) == 7
+    episodes = [json.loads(x) for x in (root / "meta" / "episodes.jsonl").read_text().splitlines()]
+    assert [e["seed"] for e in episodes] == [1, 2, 3] and episodes[1]["failure_reason"] == "slipped"
+    assert not list(root.rglob("*.tmp"))
