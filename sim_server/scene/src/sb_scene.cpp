@@ -83,7 +83,8 @@ int main(int argc, char** argv) {
       text = (file == "-" ? std::string("<stdin>") : file) + ": a valid scene ('" + one_line(s.name) + "': robot" +
              (s.robots.size() > 1 ? "s " : " ") + robots + ", " + std::to_string(s.fixtures.size() - obstacles) +
              " fixture(s), " + (obstacles ? std::to_string(obstacles) + " obstacle(s), " : "") +
-             std::to_string(s.objects.size()) + " object(s))\n";
+             std::to_string(s.objects.size()) + " object(s)" +
+             (s.articulated.empty() ? "" : ", " + std::to_string(s.articulated.size()) + " articulated object(s)") + ")\n";
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sb_scene: error: %s\n", one_line(e.what()).c_str());

@@ -31,6 +31,7 @@ class Reader {
   }
   std::string field(const std::string& key) const { return where_.empty() ? key : where_ + "." + key; }
   bool has(const std::string& key) const { return j_.contains(key); }
+  const std::string& file() const { return file_; }
 
   std::string str(const std::string& key, const std::string& def, bool required = false) const {
     if (!has(key)) {
@@ -153,6 +154,42 @@ std::string concept_type(const Reader& r, const std::string& def) {
   return t;
 }
 
+// "initial_joints": {joint: position} (the physics server checks the names and limits
+// against the URDF).
+std::map<std::string, double> initial_joints(const Reader& r) {
+  std::map<std::string, double> out;
+  if (!r.has("initial_joints")) return out;
+  const json& ij = r.sub("initial_joints");
+  if (!ij.is_object()) r.fail_field("initial_joints", "must be an object {joint: position}");
+  for (auto it = ij.begin(); it != ij.end(); ++it) {
+    if (!it.value().is_number() || !std::isfinite(it.value().get<double>()))
+      r.fail_field("initial_joints." + it.key(), "must be a finite number");
+    out[it.key()] = it.value().get<double>();
+  }
+  return out;
+}
+
+// An articulated object's "joints": {joint: {type, damping, friction, handle}}, at least
+// one (the joints the physics reports and the world model knows; the physics checks that
+// each is a 1-DoF prismatic or revolute joint of the URDF).
+void read_joints(const Reader& r, ArticulatedSpec& a) {
+  if (!r.has("joints")) r.fail_field("joints", "is missing");
+  const json& js = r.sub("joints");
+  if (!js.is_object() || js.empty()) r.fail_field("joints", "must be a non-empty object {joint: {...}}");
+  for (auto it = js.begin(); it != js.end(); ++it) {
+    if (it.key().empty()) r.fail_field("joints", "names a joint with an empty name");
+    Reader j(it.value(), r.field("joints." + it.key()), r.file());
+    ArticulatedJointSpec spec;
+    spec.type = concept_type(j, spec.type);
+    if (j.has("damping")) spec.damping = j.num("damping", 0);
+    if (j.has("friction")) spec.friction = j.num("friction", 0);
+    if (spec.damping && *spec.damping < 0) j.fail_field("damping", "must be >= 0");
+    if (spec.friction && *spec.friction < 0) j.fail_field("friction", "must be >= 0");
+    if (j.has("handle")) spec.handle = j.pose("handle");
+    a.joints[it.key()] = spec;
+  }
+}
+
 // The largest image a capture may have: every pixel is a ray cast, and the cloud is
 // published whole in one frame.
 constexpr int kMaxPixels = 1 << 20;
@@ -269,15 +306,7 @@ Scene parse_scene(const std::string& text, const std::string& path) {
     robot.right_finger_joint = r.str("right_finger_joint", "", true);
     robot.arm = r.str("arm", "arm");
     robot.gripper = r.str("gripper", "gripper");
-    if (r.has("initial_joints")) {
-      const json& ij = r.sub("initial_joints");
-      if (!ij.is_object()) r.fail_field("initial_joints", "must be an object {joint: position}");
-      for (auto it = ij.begin(); it != ij.end(); ++it) {
-        if (!it.value().is_number() || !std::isfinite(it.value().get<double>()))
-          r.fail_field("initial_joints." + it.key(), "must be a finite number");
-        robot.initial_joints[it.key()] = it.value().get<double>();
-      }
-    }
+    robot.initial_joints = initial_joints(r);
     return robot;
   };
   if (top.has("robot")) {
@@ -374,6 +403,25 @@ Scene parse_scene(const std::string& text, const std::string& path) {
                          "', which is not a fixture (objects do not start on obstacles)");
     }
   }
+  if (top.has("articulated")) {
+    const json& arr = top.sub("articulated");
+    if (!arr.is_array()) top.fail_field("articulated", "must be an array");
+    for (size_t i = 0; i < arr.size(); ++i) {
+      Reader r(arr[i], "articulated[" + std::to_string(i) + "]", file);
+      ArticulatedSpec a;
+      a.name = r.str("name", "", true);
+      unique_name(r, a.name);
+      a.type = concept_type(r, a.type);
+      a.urdf = resolve(base, r.str("urdf", "", true));
+      check_file(r, "urdf", a.urdf);
+      a.pose = r.pose("pose");
+      a.friction = r.num("friction", 0.8);
+      if (a.friction < 0) r.fail_field("friction", "must be >= 0");
+      a.initial_joints = initial_joints(r);
+      read_joints(r, a);
+      s.articulated.push_back(std::move(a));
+    }
+  }
   if (top.has("cameras")) read_cameras(top, s, file);
   if (top.has("scatter")) scatter(Reader(top.sub("scatter"), "scatter", file), s);
   return s;
@@ -427,6 +475,27 @@ std::string to_json(const Scene& s, int indent) {
     e["pose"] = pose(o.pose);
     if (!o.on.empty()) e["on"] = o.on;
     j["objects"].push_back(e);
+  }
+  if (!s.articulated.empty()) {  // (absent from a scene without: its normalized form stays as it was)
+    j["articulated"] = oj::array();
+    for (const auto& a : s.articulated) {
+      oj initial = oj::object(), joints = oj::object();
+      for (const auto& [name, q] : a.initial_joints) initial[name] = q;
+      for (const auto& [name, spec] : a.joints) {
+        oj e = {{"type", spec.type}};
+        if (spec.damping) e["damping"] = *spec.damping;
+        if (spec.friction) e["friction"] = *spec.friction;
+        if (spec.handle) e["handle"] = pose(*spec.handle);
+        joints[name] = e;
+      }
+      j["articulated"].push_back({{"name", a.name},
+                                  {"type", a.type},
+                                  {"urdf", a.urdf},
+                                  {"pose", pose(a.pose)},
+                                  {"friction", a.friction},
+                                  {"initial_joints", initial},
+                                  {"joints", joints}});
+    }
   }
   if (!s.cameras.empty()) {
     j["cameras"] = oj::array();

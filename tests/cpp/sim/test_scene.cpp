@@ -176,3 +176,97 @@ TEST(Scene, CameraMistakesAreNamedWithTheirField) {
   EXPECT_NE(err(R"([{"name": "c", "seed": 1.5}])").find("cameras[0].seed must be a whole number"), std::string::npos);
   EXPECT_NE(err(R"([{"name": "c", "width": "wide"}])").find("cameras[0].width must be a number"), std::string::npos);
 }
+
+namespace {
+// The test scene's objects "[]" with `articulated` added.
+std::string with_articulated(const std::string& articulated) {
+  std::string s = scene_with("[]");
+  s.insert(s.rfind('}'), R"(, "articulated": )" + articulated);
+  return s;
+}
+const std::string kCabinetUrdf = R"("urdf": "../../sim_server/models/cabinet.urdf")";
+}  // namespace
+
+TEST(Scene, TheCabinetSceneLoadsWithItsArticulatedObject) {
+  const Scene s = load_scene(kDir + "/cabinet.scene.json");
+  ASSERT_EQ(s.articulated.size(), 1u);
+  const ArticulatedSpec& a = s.articulated[0];
+  EXPECT_EQ(a.name, "cabinet");
+  EXPECT_EQ(a.type, "Cabinet");
+  EXPECT_NE(a.urdf.find("sim_server/models/cabinet.urdf"), std::string::npos);
+  EXPECT_TRUE(a.urdf[0] == '/');
+  EXPECT_NEAR(a.pose[5], std::sqrt(0.5), 1e-12);  // turned +90 degrees about z (and normalized)
+  ASSERT_EQ(a.joints.size(), 2u);
+  EXPECT_EQ(a.joints.begin()->first, "door_joint");  // by name
+  const ArticulatedJointSpec& drawer = a.joints.at("drawer_joint");
+  EXPECT_EQ(drawer.type, "Drawer");
+  ASSERT_TRUE(drawer.damping && drawer.friction && drawer.handle);
+  EXPECT_DOUBLE_EQ(*drawer.damping, 4.0);
+  EXPECT_DOUBLE_EQ(*drawer.friction, 0.5);
+  EXPECT_DOUBLE_EQ((*drawer.handle)[2], 0.32);
+  EXPECT_EQ(a.initial_joints.at("drawer_joint"), 0.0);
+  EXPECT_TRUE(s.fixtures.size() == 1 && s.objects.size() == 2 && s.cameras.empty());
+  // Written out and read back: the same.
+  const Scene again = parse_scene(to_json(s), s.path);
+  EXPECT_EQ(to_json(again), to_json(s));
+  ASSERT_EQ(again.articulated.size(), 1u);
+  EXPECT_DOUBLE_EQ(*again.articulated[0].joints.at("door_joint").friction, 0.05);
+  // A scene without articulated objects is written as before: no "articulated" at all.
+  EXPECT_EQ(to_json(load_scene(kDir + "/demo.scene.json")).find("articulated"), std::string::npos);
+}
+
+TEST(Scene, ArticulatedObjectsTakeTheirDefaults) {
+  const Scene s = parse_scene(with_articulated(R"([{"name": "box", )" + kCabinetUrdf + R"(, "joints": {"j": {}}}])"),
+                              kDir + "/test.scene.json");
+  ASSERT_EQ(s.articulated.size(), 1u);
+  const ArticulatedSpec& a = s.articulated[0];
+  EXPECT_EQ(a.type, "ArticulatedObject");
+  EXPECT_DOUBLE_EQ(a.friction, 0.8);
+  EXPECT_EQ(a.pose, (Pose{0, 0, 0, 0, 0, 0, 1}));
+  EXPECT_TRUE(a.initial_joints.empty());
+  const ArticulatedJointSpec& j = a.joints.at("j");
+  EXPECT_EQ(j.type, "ArticulatedPart");
+  EXPECT_FALSE(j.damping || j.friction || j.handle);  // the URDF's dynamics; no handle
+  const std::string normalized = to_json(s);
+  EXPECT_NE(normalized.find(R"("joints":{"j":{"type":"ArticulatedPart"}})"), std::string::npos) << normalized;
+  EXPECT_NE(normalized.find(R"("initial_joints":{})"), std::string::npos) << normalized;
+}
+
+TEST(Scene, ArticulatedMistakesAreNamedWithTheirField) {
+  auto err = [](const std::string& a) { return error_of(with_articulated(a)); };
+  auto entry = [](const std::string& fields) { return R"([{"name": "c", )" + kCabinetUrdf + ", " + fields + "}]"; };
+  auto joint = [&](const std::string& fields) { return entry(R"("joints": {"j": {)" + fields + "}}"); };
+  EXPECT_EQ(err(joint("")), "");
+  EXPECT_NE(err(R"({"name": "c"})").find("articulated must be an array"), std::string::npos);
+  EXPECT_NE(err(R"([{"urdf": "x"}])").find("articulated[0].name is missing"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "table", )" + kCabinetUrdf + R"(, "joints": {"j": {}}}])").find("articulated[0].name 'table' is used twice in the scene"),
+            std::string::npos);
+  EXPECT_NE(err(R"([{"name": "r", )" + kCabinetUrdf + R"(, "joints": {"j": {}}}])").find("articulated[0].name 'r' is used twice"),
+            std::string::npos);  // the robot's name
+  EXPECT_NE(err(R"([{"name": "c", "joints": {"j": {}}}])").find("articulated[0].urdf is missing"), std::string::npos);
+  EXPECT_NE(err(R"([{"name": "c", "urdf": "nope.urdf", "joints": {"j": {}}}])").find("articulated[0].urdf names a file that does not exist"),
+            std::string::npos);
+  EXPECT_NE(err(entry(R"("type": "Big Cabinet", "joints": {"j": {}})")).find("articulated[0].type must be a concept name"),
+            std::string::npos);
+  EXPECT_NE(err(entry(R"("friction": -1, "joints": {"j": {}})")).find("articulated[0].friction must be >= 0"), std::string::npos);
+  EXPECT_NE(err(entry(R"("pose": [0, 0, 0, 0, 0, 0, 0], "joints": {"j": {}})")).find("articulated[0].pose has a zero quaternion"),
+            std::string::npos);
+  EXPECT_NE(err(entry(R"("initial_joints": [1], "joints": {"j": {}})")).find("articulated[0].initial_joints must be an object {joint: position}"),
+            std::string::npos);
+  EXPECT_NE(err(entry(R"("initial_joints": {"j": "open"}, "joints": {"j": {}})")).find("articulated[0].initial_joints.j must be a finite number"),
+            std::string::npos);
+  EXPECT_NE(err(entry(R"("type": "Cabinet")")).find("articulated[0].joints is missing"), std::string::npos);
+  EXPECT_NE(err(entry(R"("joints": {})")).find("articulated[0].joints must be a non-empty object"), std::string::npos);
+  EXPECT_NE(err(entry(R"("joints": ["j"])")).find("articulated[0].joints must be a non-empty object"), std::string::npos);
+  EXPECT_NE(err(entry(R"("joints": {"j": 1})")).find("articulated[0].joints.j must be an object"), std::string::npos);
+  EXPECT_NE(err(joint(R"("type": "a door")")).find("articulated[0].joints.j.type must be a concept name"), std::string::npos);
+  EXPECT_NE(err(joint(R"("damping": -0.1)")).find("articulated[0].joints.j.damping must be >= 0"), std::string::npos);
+  EXPECT_NE(err(joint(R"("friction": -0.1)")).find("articulated[0].joints.j.friction must be >= 0"), std::string::npos);
+  EXPECT_NE(err(joint(R"("damping": "high")")).find("articulated[0].joints.j.damping must be a number"), std::string::npos);
+  EXPECT_NE(err(joint(R"("handle": [0, 0, 0])")).find("articulated[0].joints.j.handle must be an array of 7 numbers"),
+            std::string::npos);
+  EXPECT_NE(err(joint(R"("handle": [0, 0, 0, 0, 0, 0, 0])")).find("articulated[0].joints.j.handle has a zero quaternion"),
+            std::string::npos);
+  // The message names the file too.
+  EXPECT_EQ(err(joint(R"("friction": -0.1)")).rfind(kDir + "/test.scene.json: ", 0), 0u);
+}

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -60,6 +61,27 @@ struct ObjectSpec {
   std::string on;                           // the fixture it starts on (world model containment)
 };
 
+// One joint of an articulated object that the scene names (a drawer's slide, a door's
+// hinge): its world-model concept, the dynamics that override the URDF's, and where the
+// tool grasps its handle.
+struct ArticulatedJointSpec {
+  std::string type = "ArticulatedPart";     // the world model's concept, without "skiros:"
+  std::optional<double> damping, friction;  // override the URDF's <dynamics> when given
+  std::optional<Pose> handle;               // the tool centre point's grasp pose in the joint's child link frame
+};
+
+// An articulated object (a cabinet with a drawer and a door): a URDF whose root link is
+// fixed at `pose` and whose joints move (passive, damped, within their limits).
+struct ArticulatedSpec {
+  std::string name;
+  std::string type = "ArticulatedObject";   // the world model's concept, without "skiros:"
+  std::string urdf;
+  Pose pose{0, 0, 0, 0, 0, 0, 1};
+  double friction = 0.8;                    // of every shape of the URDF
+  std::map<std::string, double> initial_joints;
+  std::map<std::string, ArticulatedJointSpec> joints;  // by joint name (sorted): never empty
+};
+
 // A simulated depth camera (docs/scene.md, "Cameras"). Its frame is the optical frame:
 // z along the view, x to the right of the image, y down it. Fixed in the world (`pose` in
 // the world frame), or mounted on a robot's link (`robot` and `link`; `pose` relative to
@@ -92,6 +114,7 @@ struct Scene {
   std::vector<FixtureSpec> fixtures;
   std::vector<ObjectSpec> objects;
   std::vector<CameraSpec> cameras;
+  std::vector<ArticulatedSpec> articulated;
 };
 
 // The robot whose bus name is `bus_name` ("" for the one robot of a "robot" scene);
