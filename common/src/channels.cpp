@@ -23,7 +23,7 @@ bool robot_scoped(const std::string& name) {
   if (name == "SB_SKILL_MANAGERS") return false;
   for (const char* p : {"SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_"})
     if (starts_with(name, p)) return true;
-  return name == "SB_SIM_STATE" || name == "SB_SIM_GRIPPER_CMD" || name == "SB_SIM_CMD_REPLY";
+  return name == "SB_SIM_STATE" || name == "SB_SIM_GRIPPER_CMD" || name == "SB_SIM_CMD_REPLY" || name == "SB_SIM_ATTACH";
 }
 
 // LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit

@@ -1,10 +1,14 @@
 #include "skillbus/sim/physics.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <dart/collision/CollisionObject.hpp>
 #include <dart/collision/CollisionResult.hpp>
+#include <dart/constraint/ConstraintSolver.hpp>
+#include <dart/constraint/WeldJointConstraint.hpp>
 #include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/DegreeOfFreedom.hpp>
 #include <dart/dynamics/ShapeNode.hpp>
@@ -17,6 +21,7 @@ namespace skillbus::sim {
 
 void Physics::Impl::build() {
   steps_since_build = 0;
+  attachments.clear();  // (their welds go with the old world's constraint solver)
   robots.clear();
   robots.resize(scene.robots.size());
   world = build_world(scene, [&](size_t index, dart::dynamics::Skeleton& robot) {
@@ -149,6 +154,58 @@ std::string Physics::command_arm(size_t robot, const ArmCommand& cmd) {
 std::string Physics::command_gripper(size_t robot, const GripperCommand& cmd) {
   RobotRig& r = impl_->rig(robot);
   return r.fingers.command(cmd, r.opening());
+}
+
+namespace {
+constexpr double kAttachReach = 0.10;  // m: attach takes an object this near the tool centre point
+}
+
+std::string Physics::attach(size_t robot, const std::string& object, bool attach) {
+  Impl& m = *impl_;
+  const RobotRig& r = m.rig(robot);
+  auto& attachments = m.attachments;
+  auto drop = [&](std::vector<Attachment>::iterator it) {
+    m.world.sim->getConstraintSolver()->removeConstraint(it->weld);
+    return attachments.erase(it);
+  };
+  if (!attach && object.empty()) {  // let go of everything this robot holds
+    for (auto it = attachments.begin(); it != attachments.end();) it = it->robot == robot ? drop(it) : it + 1;
+    return "";
+  }
+  const auto& objects = m.world.objects;
+  size_t k = 0;
+  while (k < objects.size() && objects[k]->getName() != object) ++k;
+  if (k == objects.size()) {
+    std::string known;
+    for (const auto& o : objects) known += (known.empty() ? "" : ", ") + o->getName();
+    return "unknown object '" + object + "' (the scene's objects: " + (known.empty() ? "none" : known) + ")";
+  }
+  const auto held = std::find_if(attachments.begin(), attachments.end(), [&](const Attachment& a) { return a.object == k; });
+  if (!attach) {
+    if (held == attachments.end()) return "";  // not attached: nothing to do
+    if (held->robot != robot)
+      return "object '" + object + "' is attached to " + m.robots[held->robot].spec->name + ", not to " + r.spec->name;
+    drop(held);
+    return "";
+  }
+  if (held != attachments.end())
+    return "object '" + object + "' is already attached to " + m.robots[held->robot].spec->name;
+  double tcp[7];
+  r.tool_pose(tcp);
+  dart::dynamics::BodyNode* body = objects[k]->getRootBodyNode();
+  const double distance = (body->getWorldTransform().translation() - Eigen::Vector3d(tcp[0], tcp[1], tcp[2])).norm();
+  if (distance > kAttachReach) {
+    char d[32];
+    std::snprintf(d, sizeof d, "%.2f", distance);
+    if (std::string(d) == "0.10") std::snprintf(d, sizeof d, "%.4f", distance);  // (just beyond: say by how much)
+    return "object '" + object + "' is " + d + " m from the tool centre point of " + r.spec->name +
+           ": attach needs it within 0.10 m";
+  }
+  // The weld holds the object's pose relative to the tool link as it is now.
+  auto weld = std::make_shared<dart::constraint::WeldJointConstraint>(body, r.layout.tool);
+  m.world.sim->getConstraintSolver()->addConstraint(weld);
+  attachments.push_back({robot, k, weld});
+  return "";
 }
 
 void Physics::step_frame() {

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <dart/constraint/SmartPointer.hpp>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,14 @@ struct CameraRig {
   Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();  // world pose, or pose on the link
 };
 
+// An object welded to a robot's tool link (Physics::attach): the weld is in the world's
+// constraint solver until detached or the world is rebuilt.
+struct Attachment {
+  size_t robot = 0;
+  size_t object = 0;  // index in World::objects
+  dart::constraint::ConstraintBasePtr weld;
+};
+
 struct Physics::Impl {
   scene::Scene scene;
   World world;
@@ -54,6 +63,7 @@ struct Physics::Impl {
   std::vector<int64_t> obstacle_contact_steps;
   double physics_seconds = 0;
   std::vector<CameraRig> cameras;  // in scene order
+  std::vector<Attachment> attachments;  // in the order they were made
 
   void build();    // the world and the controllers from the scene (again on reset)
   void step();
@@ -61,8 +71,10 @@ struct Physics::Impl {
   void count_contacts();  // after a step, with several robots or with obstacles
   RobotRig& rig(size_t robot);  // throws std::out_of_range naming the robots there are
   const RobotRig& rig(size_t robot) const;
-  // For the state messages (state.cpp): per object, what it rests on.
+  // For the state messages (state.cpp): per object, what it rests on (from the last
+  // step's contacts, or held by the gripper of the robot it is attached to).
   std::vector<std::string> supports() const;
+  std::vector<std::string> contact_supports() const;
 };
 
 }  // namespace skillbus::sim

@@ -56,6 +56,15 @@ std::vector<ScriptStep> load_script(const std::string& path) {
                                     g.value("force_limit", 20.0)};
         out.push_back(std::move(st));
       }
+      if (s.contains("attach")) {  // {"id": ..., "attach": true|false, "object": NAME}
+        ScriptStep st;
+        st.at_ns = at;
+        st.robot = robot;
+        st.is_attach = true;
+        const auto& a = s["attach"];
+        st.attach = AttachCommand{a.value("id", ""), a.value("attach", true), a.value("object", "")};
+        out.push_back(std::move(st));
+      }
     }
   } catch (const nlohmann::json::exception& e) {
     throw SceneError(path + ": steps[" + std::to_string(i - 1) + "]: " + e.what());

@@ -8,6 +8,7 @@
 
 #include "skillbus/lockstep_frame.hpp"
 #include "skillbus/log.hpp"
+#include "skillbus_msgs/articulation_state_t.hpp"
 #include "skillbus_msgs/robot_arm_cmd_t.hpp"
 #include "skillbus_msgs/robot_arm_state_t.hpp"
 #include "skillbus_msgs/robot_cmd_reply_t.hpp"
@@ -15,6 +16,7 @@
 #include "skillbus_msgs/camera_capture_t.hpp"
 #include "skillbus_msgs/camera_cloud_t.hpp"
 #include "skillbus/files.hpp"
+#include "skillbus_msgs/sim_attach_t.hpp"
 #include "skillbus_msgs/sim_cmd_reply_t.hpp"
 #include "skillbus_msgs/sim_control_t.hpp"
 #include "skillbus_msgs/sim_gripper_cmd_t.hpp"
@@ -33,9 +35,11 @@ std::string robot_arm_state_channel(const std::string& robot) { return robot_cha
 std::string robot_arm_cmd_channel(const std::string& robot) { return robot_channel("SB_ROBOT_ARM_CMD", robot); }
 std::string robot_reply_channel(const std::string& robot) { return robot_channel("SB_ROBOT_CMD_REPLY", robot); }
 std::string robot_objects_channel(const std::string& robot) { return robot_channel("SB_ROBOT_OBJECTS", robot); }
+std::string robot_articulation_channel(const std::string& robot) { return robot_channel("SB_ROBOT_ARTICULATION", robot); }
 std::string state_channel(const std::string& robot) { return robot_channel("SB_SIM_STATE", robot); }
 std::string gripper_channel(const std::string& robot) { return robot_channel("SB_SIM_GRIPPER_CMD", robot); }
 std::string reply_channel(const std::string& robot) { return robot_channel("SB_SIM_CMD_REPLY", robot); }
+std::string attach_channel(const std::string& robot) { return robot_channel("SB_SIM_ATTACH", robot); }
 std::string camera_capture_channel() { return channel("SB_CAMERA_CAPTURE"); }
 std::string camera_cloud_channel() { return channel("SB_CAMERA_CLOUD"); }
 
@@ -92,6 +96,7 @@ std::vector<std::string> SimServer::command_channels() const {
   for (const auto& r : physics_->scene().robots) {
     out.push_back(robot_arm_cmd_channel(r.bus_name));
     out.push_back(gripper_channel(r.bus_name));
+    out.push_back(attach_channel(r.bus_name));
   }
   out.push_back(camera_capture_channel());
   return out;
@@ -103,6 +108,7 @@ void SimServer::on_command(const std::string& ch, const uint8_t* data, size_t si
   for (size_t i = 0; i < robots.size(); ++i) {
     if (ch == robot_arm_cmd_channel(robots[i].bus_name)) return on_arm(i, data, size, ch);
     if (ch == gripper_channel(robots[i].bus_name)) return on_gripper(i, data, size, ch);
+    if (ch == attach_channel(robots[i].bus_name)) return on_attach(i, data, size, ch);
   }
   if (ch == camera_capture_channel()) return on_capture(data, size, ch);
   bad_.record(ch, "a command on a channel of no robot of the scene", size);
@@ -189,7 +195,7 @@ void SimServer::on_arm(size_t robot, const uint8_t* data, size_t size, const std
   reply(robot, m.id, "arm", err);
 }
 
-void SimServer::record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper) {
+void SimServer::record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper, const AttachCommand* attach) {
   if (opt_.record_script.empty()) return;
   nlohmann::json step;
   step["at_s"] = static_cast<double>(sim_time_ns_) * 1e-9;
@@ -199,6 +205,8 @@ void SimServer::record(size_t robot, const ArmCommand* arm, const GripperCommand
     nlohmann::json pts = nlohmann::json::array();
     for (const auto& w : arm->points) pts.push_back({static_cast<double>(w.t_ns) * 1e-9, w.q});
     step["arm"] = {{"id", arm->id}, {"joints", arm->joints}, {"points", pts}};
+  } else if (attach) {
+    step["attach"] = {{"id", attach->id}, {"attach", attach->attach}, {"object", attach->object}};
   } else {
     step["gripper"] = {{"id", gripper->id}, {"width", gripper->width}, {"speed", gripper->speed},
                        {"force_limit", gripper->force_limit}};
@@ -228,6 +236,21 @@ void SimServer::on_gripper(size_t robot, const uint8_t* data, size_t size, const
   reply(robot, m.id, "gripper", err);
 }
 
+// Attach and detach: taken like a finger command (applied where the frame delivers it,
+// answered on the simulator's reply channel).
+void SimServer::on_attach(size_t robot, const uint8_t* data, size_t size, const std::string& ch) {
+  skillbus_msgs::sim_attach_t m;
+  if (!decode_msg(data, size, m)) {
+    bad_.record(ch, "does not decode as sim_attach_t", size);
+    ++rejected_;
+    return;
+  }
+  AttachCommand c{m.id, m.attach != 0, m.object};
+  const std::string err = physics_->attach(robot, c.object, c.attach);
+  if (err.empty()) record(robot, nullptr, nullptr, &c);
+  reply(robot, m.id, "attach", err);
+}
+
 void SimServer::apply_pending() {
   const auto cmds = std::move(pending_commands_);
   pending_commands_.clear();
@@ -243,6 +266,8 @@ void SimServer::play_script() {
       SB_WARN(kLog, "script step at " << s.at_ns * 1e-9 << " s: the scene has no robot '" << s.robot << "'");
     } else if (s.is_arm) {
       reply(robot, s.arm.id, "arm", physics_->command_arm(robot, s.arm));
+    } else if (s.is_attach) {
+      reply(robot, s.attach.id, "attach", physics_->attach(robot, s.attach.object, s.attach.attach));
     } else {
       reply(robot, s.gripper.id, "gripper", physics_->command_gripper(robot, s.gripper));
     }
@@ -250,8 +275,10 @@ void SimServer::play_script() {
 }
 
 // Every frame, for each robot in scene order: the replies to its commands applied since
-// the last frame (arm commands are the robot's, finger commands the simulator's), its arm
-// state and camera, and the simulator's ground truth around it.
+// the last frame (arm commands are the robot's, finger and attach commands the
+// simulator's), its arm state and camera, the articulated objects' joints (only for a
+// scene that has any: other scenes publish exactly what they did before), and the
+// simulator's ground truth around it.
 template <class Publish>
 void SimServer::publish_frame(Publish&& publish) {
   const auto& robots = physics_->scene().robots;
@@ -280,6 +307,11 @@ void SimServer::publish_frame(Publish&& publish) {
     physics_->fill_arm_state(i, arm);
     publish(robot_arm_state_channel(robot), arm);
     publish(robot_objects_channel(robot), objects);
+    if (!physics_->scene().articulated.empty()) {
+      skillbus_msgs::articulation_state_t joints{};
+      physics_->fill_articulation(i, joints);
+      publish(robot_articulation_channel(robot), joints);
+    }
     skillbus_msgs::sim_state_t s{};
     physics_->fill_state(i, s);
     publish(state_channel(robot), s);

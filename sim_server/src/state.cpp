@@ -8,6 +8,8 @@
 #include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/DegreeOfFreedom.hpp>
 #include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/PrismaticJoint.hpp>
+#include <dart/dynamics/RevoluteJoint.hpp>
 #include <dart/dynamics/ShapeNode.hpp>
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/simulation/World.hpp>
@@ -75,8 +77,33 @@ void Physics::fill_arm_state(size_t robot, skillbus_msgs::robot_arm_state_t& out
 // contact points (ties: the first name), which names the world model's Location by its
 // label; an object that touches only other objects rests on what they rest on; "" when
 // it touches nothing it could rest on (falling), or only the floor (no world model label).
-// Before the first step of a (re)built world: the scene's `on` of each object.
+// Before the first step of a (re)built world: the scene's `on` of each object. An object
+// attached to a robot's tool (Physics::attach) is held by that robot's gripper. An
+// articulated object counts as a fixture: its body by its name, a link that one of the
+// scene's joints moves (or a link below it) by the world model's label of that joint's
+// part, "<object>/<joint>" (a drawer holds what lies in it).
 std::vector<std::string> Physics::Impl::supports() const {
+  std::vector<std::string> out = contact_supports();
+  for (const Attachment& a : attachments) out[a.object] = robots[a.robot].spec->gripper;
+  return out;
+}
+
+namespace {
+
+// The world-model label of what an articulated object's body node is: "<object>/<joint>"
+// for the child link of a joint the scene lists (or any link below one), else the
+// object's name.
+std::string articulated_label(const scene::ArticulatedSpec& spec, const BodyNode* bn) {
+  for (const BodyNode* b = bn; b; b = b->getParentBodyNode()) {
+    const auto* j = b->getParentJoint();
+    if (j && spec.joints.count(j->getName())) return spec.name + "/" + j->getName();
+  }
+  return spec.name;
+}
+
+}  // namespace
+
+std::vector<std::string> Physics::Impl::contact_supports() const {
   const auto& objects = world.objects;
   // Each robot's two fingers, and the labels of the grippers.
   std::map<const BodyNode*, std::pair<size_t, int>> fingers;  // finger -> (robot, bit)
@@ -91,6 +118,8 @@ std::vector<std::string> Physics::Impl::supports() const {
   for (size_t k = 0; k < objects.size(); ++k) index[objects[k].get()] = k;
   std::set<std::string> fixtures;
   for (const auto& f : scene.fixtures) fixtures.insert(f.name);
+  std::map<const dart::dynamics::Skeleton*, const scene::ArticulatedSpec*> articulated;
+  for (size_t i = 0; i < world.articulated.size(); ++i) articulated[world.articulated[i].get()] = &scene.articulated[i];
   if (steps_since_build == 0) {  // no step, no contacts yet: what the scene says each starts on
     std::vector<std::string> out;
     for (const auto& o : scene.objects) out.push_back(o.on);
@@ -109,6 +138,8 @@ std::vector<std::string> Physics::Impl::supports() const {
     if (const auto f = fingers.find(other); f != fingers.end()) finger_bits[k][f->second.first] |= f->second.second;
     else if (const auto o = index.find(other->getSkeleton().get()); o != index.end()) touching[k].insert(o->second);
     else if (fixtures.count(other->getSkeleton()->getName())) fixture_points[k][other->getSkeleton()->getName()] += 1;
+    else if (const auto a = articulated.find(other->getSkeleton().get()); a != articulated.end())
+      fixture_points[k][articulated_label(*a->second, other)] += 1;
   };
   for (const auto& c : world.sim->getLastCollisionResult().getContacts()) {
     const BodyNode* a = body(c.collisionObject1);
@@ -149,6 +180,52 @@ void Physics::fill_objects(skillbus_msgs::robot_objects_t& out) const {
     from_iso(objects[k]->getRootBodyNode()->getWorldTransform(), out.objects[k].pose);
     out.objects[k].support = support[k];
   }
+}
+
+void Physics::fill_articulation(size_t robot, skillbus_msgs::articulation_state_t& out) const {
+  using dart::dynamics::PrismaticJoint;
+  using dart::dynamics::RevoluteJoint;
+  const Impl& m = *impl_;
+  m.rig(robot);  // (every robot sees the same joints; a robot the scene has not is an error)
+  out.joints.clear();
+  for (size_t i = 0; i < m.scene.articulated.size(); ++i) {
+    const scene::ArticulatedSpec& spec = m.scene.articulated[i];
+    const dart::dynamics::Skeleton& skel = *m.world.articulated[i];
+    for (const auto& [name, js] : spec.joints) {  // (a std::map: by joint name)
+      const dart::dynamics::Joint* j = skel.getJoint(name);  // (world.cpp checked: 1-DoF, prismatic or revolute)
+      const bool prismatic = j->getType() == PrismaticJoint::getStaticType();
+      skillbus_msgs::articulated_joint_t e{};
+      e.object = spec.name;
+      e.joint = name;
+      e.concept = js.type;
+      e.kind = prismatic ? "prismatic" : "revolute";
+      e.position = j->getPosition(0);
+      e.velocity = j->getVelocity(0);
+      e.lower = j->getPositionLowerLimit(0);
+      e.upper = j->getPositionUpperLimit(0);
+      // DART places the child at parent * T(parent->joint) * motion(q) * T(child->joint)^-1,
+      // so the joint's frame (in which its axis is given) is child * T(child->joint). The
+      // motion along or about the axis leaves the axis the same in the frames before and after it.
+      const BodyNode* child = j->getChildBodyNode();
+      const Eigen::Isometry3d frame = child->getWorldTransform() * j->getTransformFromChildBodyNode();
+      const Eigen::Vector3d local = prismatic ? static_cast<const PrismaticJoint*>(j)->getAxis()
+                                              : static_cast<const RevoluteJoint*>(j)->getAxis();
+      const Eigen::Vector3d axis = (frame.linear() * local).normalized();
+      for (int k = 0; k < 3; ++k) {
+        e.axis[k] = axis[k];
+        e.origin[k] = frame.translation()[k];
+      }
+      e.has_handle = js.handle.has_value();
+      if (js.handle) {
+        from_iso(child->getWorldTransform() * to_iso(*js.handle), e.handle_pose);
+      } else {
+        for (double& v : e.handle_pose) v = 0;
+        e.handle_pose[6] = 1;
+      }
+      out.joints.push_back(std::move(e));
+    }
+  }
+  out.num_joints = static_cast<int32_t>(out.joints.size());
 }
 
 void Physics::fill_state(size_t robot, skillbus_msgs::sim_state_t& out) const {

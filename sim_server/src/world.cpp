@@ -16,6 +16,8 @@
 #include <dart/dynamics/DegreeOfFreedom.hpp>
 #include <dart/dynamics/FreeJoint.hpp>
 #include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/PrismaticJoint.hpp>
+#include <dart/dynamics/RevoluteJoint.hpp>
 #include <dart/dynamics/ShapeNode.hpp>
 #include <dart/dynamics/Skeleton.hpp>
 #include <dart/dynamics/WeldJoint.hpp>
@@ -89,6 +91,37 @@ SkeletonPtr load_urdf(const std::string& path, const std::string& name, const Po
   skel->setName(name);
   skel->getRootJoint()->setTransformFromParentBodyNode(to_iso(pose));
   return skel;
+}
+
+// An articulated object: its URDF fixed by its root link at the scene's pose, its joints
+// passive (no controller) within their limits, with the scene's damping and Coulomb
+// friction where it gives them (else the URDF's <dynamics>).
+SkeletonPtr load_articulated(const scene::Scene& scene, size_t index) {
+  const scene::ArticulatedSpec& a = scene.articulated[index];
+  const std::string field = "articulated[" + std::to_string(index) + "]";
+  SkeletonPtr s = load_urdf(a.urdf, a.name, a.pose);
+  set_friction(s, a.friction);
+  for (size_t j = 0; j < s->getNumJoints(); ++j) s->getJoint(j)->setLimitEnforcement(true);
+  auto one_dof = [&](const std::string& name, const std::string& what) {
+    dynamics::Joint* j = s->getJoint(name);
+    if (!j || j->getNumDofs() != 1 ||
+        (j->getType() != dynamics::PrismaticJoint::getStaticType() && j->getType() != dynamics::RevoluteJoint::getStaticType()))
+      throw SceneError(scene.path + ": " + field + "." + what + " names '" + name +
+                       "', not a 1-DoF prismatic or revolute joint of " + a.urdf);
+    return j;
+  };
+  for (const auto& [name, spec] : a.joints) {
+    dynamics::DegreeOfFreedom* dof = one_dof(name, "joints")->getDof(0);
+    if (spec.damping) dof->setDampingCoefficient(*spec.damping);
+    if (spec.friction) dof->setCoulombFriction(*spec.friction);
+  }
+  for (const auto& [name, q] : a.initial_joints) {
+    dynamics::Joint* j = one_dof(name, "initial_joints");
+    if (q < j->getPositionLowerLimit(0) || q > j->getPositionUpperLimit(0))
+      throw SceneError(scene.path + ": " + field + ".initial_joints." + name + " is outside the joint's limits");
+    j->setPosition(0, q);
+  }
+  return s;
 }
 
 }  // namespace
@@ -185,6 +218,15 @@ World build_world(const scene::Scene& scene,
     set_friction(s, o.friction);
     s->setPositions(dynamics::FreeJoint::convertToPositions(to_iso(o.pose)));
     w.objects.push_back(s);
+    all.push_back(s);
+  }
+  // Articulated objects move: only their root link is fixed (it never meets the floor or
+  // a fixture); their moving links meet the robots and the objects. Self-collision stays
+  // off (a drawer slides inside its body).
+  for (size_t i = 0; i < scene.articulated.size(); ++i) {
+    SkeletonPtr s = load_articulated(scene, i);
+    fixed.insert(s->getRootBodyNode());
+    w.articulated.push_back(s);
     all.push_back(s);
   }
   for (auto& s : all) world->addSkeleton(s);

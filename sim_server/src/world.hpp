@@ -20,11 +20,17 @@ struct World {
   dart::simulation::WorldPtr sim;
   std::vector<dart::dynamics::SkeletonPtr> robots;  // in scene order
   std::vector<dart::dynamics::SkeletonPtr> objects;
-  std::vector<dart::dynamics::SkeletonPtr> all;  // digest order: floor, fixtures, robots, objects
+  std::vector<dart::dynamics::SkeletonPtr> articulated;  // in scene order
+  // Digest order: floor, fixtures, robots, objects, articulated objects (last, so that a
+  // scene without them digests as before).
+  std::vector<dart::dynamics::SkeletonPtr> all;
 };
 
 // Builds the world: the constraint solver and collision detector the scene names, the
-// floor, the fixtures and the robots (URDF), then the objects. `set_up_robot` is called
+// floor, the fixtures and the robots (URDF), then the objects, then the articulated
+// objects (URDF, root link fixed, passive joints; throws scene::SceneError naming the
+// field when a joint the scene names is not a 1-DoF prismatic or revolute joint of the
+// URDF, or an initial position is outside its limits). `set_up_robot` is called
 // with each robot's index in the scene once it is loaded, before the objects are made and
 // anything is added to the world. Throws scene::SceneError when the scene cannot be built.
 World build_world(const scene::Scene& scene,

@@ -23,7 +23,8 @@ TEST(Channels, ARobotsOwnChannelsGoUnderItsName) {
   RobotReset reset;
   for (const char* own : {"SB_ROBOT_ARM_STATE", "SB_ROBOT_ARM_CMD", "SB_SKILL_REQ", "SB_SKILL_PROGRESS",
                           "SB_SKPROC_SKILLS_REQ", "SB_MOTION_REP", "SB_CAN_SYNC", "SB_SIM_STATE",
-                          "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SKILL_MANAGER", "SB_SKILL_HEARTBEAT"}) {
+                          "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SIM_ATTACH", "SB_ROBOT_ARTICULATION",
+                          "SB_SKILL_MANAGER", "SB_SKILL_HEARTBEAT"}) {
     EXPECT_TRUE(robot_scoped(own)) << own;
     EXPECT_EQ(robot_channel(own, "r2"), std::string("r2/") + own);
     EXPECT_EQ(robot_channel(own, ""), own);

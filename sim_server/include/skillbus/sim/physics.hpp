@@ -16,6 +16,7 @@
 #include "skillbus/scene/scene.hpp"
 #include "skillbus/sim/camera.hpp"
 #include "skillbus/sim/commands.hpp"
+#include "skillbus_msgs/articulation_state_t.hpp"
 #include "skillbus_msgs/robot_arm_state_t.hpp"
 #include "skillbus_msgs/robot_objects_t.hpp"
 #include "skillbus_msgs/sim_state_t.hpp"
@@ -40,6 +41,12 @@ class Physics {
   // was wrong. A rejected command changes nothing: the robot holds its targets.
   std::string command_arm(size_t robot, const ArmCommand& cmd);
   std::string command_gripper(size_t robot, const GripperCommand& cmd);
+  // Attach (weld) one of the scene's free objects to a robot's tool link where it is now,
+  // or let it go: "" when done, else why not (nothing changes). Attaching needs the
+  // object within 0.10 m of the tool centre point and not attached already; detaching
+  // `object` "" lets go of every object attached to that robot, and detaching an object
+  // that is not attached is accepted. A reset drops every attachment.
+  std::string attach(size_t robot, const std::string& object, bool attach);
 
   void step_frame();  // frame_ms / step_ms physics steps with the controllers
   // The simulator's ground truth for a robot (SB_SIM_STATE): every joint of that robot,
@@ -51,6 +58,11 @@ class Physics {
   // A perfect camera (SB_ROBOT_OBJECTS): every free object's name, exact pose and what it
   // rests on (a fixture, or the gripper that holds it, by their world-model labels).
   void fill_objects(skillbus_msgs::robot_objects_t& out) const;
+  // The articulated objects' joints (SB_ROBOT_ARTICULATION): every joint the scene's
+  // articulated objects list, in scene order of the objects, then by joint name: position,
+  // velocity, limits, the axis and a point on it (world), and where the tool grasps its
+  // handle now (world). No joints for a scene without articulated objects.
+  void fill_articulation(size_t robot, skillbus_msgs::articulation_state_t& out) const;
   // The scene's depth cameras (scene().cameras, in order). A capture casts a ray per pixel
   // against the world as it is now; `capture_index` picks the noise (the same index gives
   // the same cloud). Throws std::out_of_range for a camera the scene does not have.

@@ -16,8 +16,10 @@ struct ScriptStep {
   int64_t at_ns = 0;
   std::string robot;  // the robot's bus name ("robot" in the step; "" for a one-robot scene)
   bool is_arm = false;
+  bool is_attach = false;  // neither: a gripper step
   ArmCommand arm;
   GripperCommand gripper;
+  AttachCommand attach;
 };
 
 // Throws scene::SceneError naming the file and the step when the script is malformed.

@@ -5,11 +5,12 @@
 // SIM), and the clock: lockstep master with the participants named at launch, or paced
 // to the wall clock.
 //
-// Reads:   SB_ROBOT_ARM_CMD (robot_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t), SB_SIM_REQ,
-//          SB_CAMERA_CAPTURE (camera_capture_t)
+// Reads:   SB_ROBOT_ARM_CMD (robot_arm_cmd_t), SB_SIM_GRIPPER_CMD (sim_gripper_cmd_t),
+//          SB_SIM_ATTACH (sim_attach_t), SB_SIM_REQ, SB_CAMERA_CAPTURE (camera_capture_t)
 // Writes:  SB_ROBOT_ARM_STATE (robot_arm_state_t), SB_ROBOT_OBJECTS (robot_objects_t),
+//          SB_ROBOT_ARTICULATION (articulation_state_t; only for a scene with articulated objects),
 //          SB_ROBOT_CMD_REPLY (robot_cmd_reply_t, arm commands), SB_SIM_STATE (sim_state_t),
-//          SB_SIM_CMD_REPLY (sim_cmd_reply_t, finger commands), SB_SIM_REP,
+//          SB_SIM_CMD_REPLY (sim_cmd_reply_t, finger and attach commands), SB_SIM_REP,
 //          SB_CAMERA_CLOUD (camera_cloud_t: the depth cameras' clouds, on request and at their rate),
 //          SB_LOCKSTEP_CLOCK (as master)
 // With several robots in the scene, each robot's channels (all but SB_SIM_REQ/REP and the
@@ -38,10 +39,12 @@ std::string robot_arm_state_channel(const std::string& robot = "");  // SB_ROBOT
 std::string robot_arm_cmd_channel(const std::string& robot = "");    // SB_ROBOT_ARM_CMD
 std::string robot_reply_channel(const std::string& robot = "");      // SB_ROBOT_CMD_REPLY
 std::string robot_objects_channel(const std::string& robot = "");    // SB_ROBOT_OBJECTS
+std::string robot_articulation_channel(const std::string& robot = "");  // SB_ROBOT_ARTICULATION
 // The simulator's own: its ground truth and the simulated fingers, per robot.
 std::string state_channel(const std::string& robot = "");    // SB_SIM_STATE
 std::string gripper_channel(const std::string& robot = "");  // SB_SIM_GRIPPER_CMD
 std::string reply_channel(const std::string& robot = "");    // SB_SIM_CMD_REPLY
+std::string attach_channel(const std::string& robot = "");   // SB_SIM_ATTACH
 
 struct ServerOptions {
   std::string scene_file;
@@ -87,12 +90,13 @@ class SimServer {
   scene::Scene load(const std::string& path) const;  // the file, with the command-line overrides
   void on_arm(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
   void on_gripper(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
+  void on_attach(size_t robot, const uint8_t* data, size_t size, const std::string& ch);
   void on_capture(const uint8_t* data, size_t size, const std::string& ch);
   template <class Publish>
   void publish_captures(Publish&& publish);
   void on_command(const std::string& ch, const uint8_t* data, size_t size);  // by the channel's robot and kind
   void reply(size_t robot, const std::string& id, const std::string& command, const std::string& error);
-  std::vector<std::string> command_channels() const;  // every robot's arm and finger command channels
+  std::vector<std::string> command_channels() const;  // every robot's arm, finger and attach command channels
   size_t robot_of_script_step(const ScriptStep& s) const;
   template <class Publish>
   void publish_frame(Publish&& publish);
@@ -111,7 +115,7 @@ class SimServer {
   BadInputCounter bad_{"sim_server"};
   struct Reply {
     size_t robot = 0;
-    std::string id, command, error;  // command: "arm" (SB_ROBOT_CMD_REPLY) or "gripper" (SB_SIM_CMD_REPLY)
+    std::string id, command, error;  // command: "arm" (SB_ROBOT_CMD_REPLY), "gripper" or "attach" (SB_SIM_CMD_REPLY)
   };
   std::vector<Reply> pending_replies_;  // published at the next frame's start, in this order
   struct CaptureRequest {
@@ -129,7 +133,7 @@ class SimServer {
   std::vector<std::pair<std::string, Bytes>> pending_commands_;
   void apply_pending();
   std::vector<std::string> recorded_;  // script steps (JSON) of the accepted commands
-  void record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper);
+  void record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper, const AttachCommand* attach = nullptr);
   void write_recording() const;
   size_t script_next_ = 0;
 };
