@@ -78,25 +78,47 @@ std::string turtle_number(double v) {
 std::vector<WorldElement> world_elements(const Scene& scene) {
   std::vector<WorldElement> out;
   auto id = [&](const std::string& type) { return type + "-" + std::to_string(out.size() + 1); };
+  auto add = [&](WorldElement::Kind kind, const std::string& eid, const std::string& type, const std::string& label,
+                 const std::string& parent, const Pose& pose, const ObjectSpec* object = nullptr) -> WorldElement& {
+    WorldElement e;
+    e.kind = kind;
+    e.id = eid;
+    e.type = type;
+    e.label = label;
+    e.parent = parent;
+    e.pose = pose;
+    e.object = object;
+    out.push_back(std::move(e));
+    return out.back();
+  };
   for (const auto& f : scene.fixtures) {
     if (f.obstacle) continue;  // after the robots
     const std::string fid = id(f.type);
-    out.push_back({WorldElement::Fixture, fid, f.type, f.name, "Scene-0", f.pose, nullptr});
+    add(WorldElement::Fixture, fid, f.type, f.name, "Scene-0", f.pose);
     for (const auto& o : scene.objects)
-      if (o.on == f.name)
-        out.push_back({WorldElement::Object, id(o.type), o.type, o.name, fid, relative_pose(f.pose, o.pose), &o});
+      if (o.on == f.name) add(WorldElement::Object, id(o.type), o.type, o.name, fid, relative_pose(f.pose, o.pose), &o);
   }
   for (const auto& o : scene.objects)
-    if (o.on.empty()) out.push_back({WorldElement::Object, id(o.type), o.type, o.name, "Scene-0", o.pose, &o});
+    if (o.on.empty()) add(WorldElement::Object, id(o.type), o.type, o.name, "Scene-0", o.pose, &o);
   const Pose identity{0, 0, 0, 0, 0, 0, 1};
   for (const auto& robot : scene.robots) {  // after everything else: one robot's ids stay as they were
     const std::string rid = id("Robot");
-    out.push_back({WorldElement::Robot, rid, "Robot", robot.name, "Scene-0", robot.pose, nullptr});
-    out.push_back({WorldElement::Gripper, id("Gripper"), "Gripper", robot.gripper, rid, identity, nullptr});
-    out.push_back({WorldElement::Arm, id("Arm"), "Arm", robot.arm, rid, identity, nullptr});
+    add(WorldElement::Robot, rid, "Robot", robot.name, "Scene-0", robot.pose);
+    add(WorldElement::Gripper, id("Gripper"), "Gripper", robot.gripper, rid, identity);
+    add(WorldElement::Arm, id("Arm"), "Arm", robot.arm, rid, identity);
   }
-  for (const auto& f : scene.fixtures)  // last: a scene's obstacles renumber nothing else
-    if (f.obstacle) out.push_back({WorldElement::Fixture, id(f.type), f.type, f.name, "Scene-0", f.pose, nullptr});
+  for (const auto& f : scene.fixtures)  // after the robots: a scene's obstacles renumber nothing else
+    if (f.obstacle) add(WorldElement::Fixture, id(f.type), f.type, f.name, "Scene-0", f.pose);
+  for (const auto& a : scene.articulated) {  // last of all, for the same reason
+    const std::string aid = id(a.type);
+    add(WorldElement::Articulated, aid, a.type, a.name, "Scene-0", a.pose);
+    for (const auto& [joint, spec] : a.joints) {  // (a std::map: by joint name)
+      WorldElement& e = add(WorldElement::ArticulatedPart, id(spec.type), spec.type, a.name + "/" + joint, aid, identity);
+      e.joint = joint;
+      const auto q = a.initial_joints.find(joint);
+      e.joint_position = q == a.initial_joints.end() ? 0.0 : q->second;
+    }
+  }
   return out;
 }
 
@@ -123,6 +145,12 @@ std::string to_turtle(const Scene& scene) {
       continue;
     }
     if (e.kind == WorldElement::Gripper || e.kind == WorldElement::Arm) continue;  // a label only
+    if (e.kind == WorldElement::ArticulatedPart) {  // its joint (no pose: it moves with the joint)
+      t.string("JointName", e.joint);
+      t.number("JointPosition", e.joint_position);
+      for (const auto& c : children[e.id]) t.relation("contain", c);
+      continue;
+    }
     static const char* const kPose[] = {"PositionX", "PositionY", "PositionZ", "OrientationX",
                                         "OrientationY", "OrientationZ", "OrientationW"};
     for (int i = 0; i < 7; ++i) t.number(kPose[i], e.pose[i]);

@@ -4,11 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <map>
 
 #include "skillbus/scene/scene.hpp"
 #include "skillbus/scene/turtle.hpp"
+#include "skillbus/wm/ontology.hpp"
 #include "skillbus/wm/rdf.hpp"
+#include "skillbus/wm/scene.hpp"
+#include "skillbus/wm/store.hpp"
 
 using namespace skillbus::scene;
 namespace wm = skillbus::wm;
@@ -154,4 +159,96 @@ TEST(SceneTurtle, ATypeMustBeAConceptName) {
                            R"([{"name": "c", "shape": "box", "size": [1, 1, 1]}])");
   EXPECT_EQ(s.fixtures[0].type, "Location");  // the defaults of docs/scene.md
   EXPECT_EQ(s.objects[0].type, "Product");
+}
+
+TEST(SceneTurtle, ArticulatedObjectsAndTheirPartsComeLast) {
+  // An obstacle and a cabinet: the robot's ids stay, the obstacle follows the robot, the
+  // cabinet and its parts (by joint name) come after everything.
+  const std::string text = R"({"name": "t",
+    "robot": {"name": "r", "urdf": "../../sim_server/models/arm6.urdf", "tool_link": "link6",
+              "left_finger_joint": "finger_left_joint", "right_finger_joint": "finger_right_joint"},
+    "fixtures": [)" + kTable + R"(],
+    "obstacles": [{"name": "post", "urdf": "../../sim_server/models/post.urdf", "pose": [0.3, 0.5, 0, 0, 0, 0, 1]}],
+    "objects": [)" + cube("a", "table") + R"(],
+    "articulated": [{"name": "cab", "type": "Cabinet", "urdf": "../../sim_server/models/cabinet.urdf",
+                     "pose": [0, -0.55, 0, 0, 0, 0.7071067811865476, 0.7071067811865476],
+                     "initial_joints": {"door_joint": 0.5},
+                     "joints": {"drawer_joint": {"type": "Drawer"}, "door_joint": {"type": "Door", "handle": [0, 0, 0, 0, 0, 0, 1]}}}]})";
+  const Scene s = parse_scene(text, kDir + "/test.scene.json");
+  std::vector<std::string> ids, labels, parents;
+  for (const auto& e : world_elements(s)) {
+    ids.push_back(e.id);
+    labels.push_back(e.label);
+    parents.push_back(e.parent);
+  }
+  EXPECT_EQ(ids, (std::vector<std::string>{"Table-1", "Cube-2", "Robot-3", "Gripper-4", "Arm-5", "Obstacle-6", "Cabinet-7",
+                                           "Door-8", "Drawer-9"}));
+  EXPECT_EQ(labels, (std::vector<std::string>{"table", "a", "r", "gripper", "arm", "post", "cab", "cab/door_joint",
+                                              "cab/drawer_joint"}));
+  EXPECT_EQ(parents[7], "Cabinet-7");
+  EXPECT_EQ(parents[8], "Cabinet-7");
+
+  Graph g = read_back(to_turtle(s));
+  EXPECT_EQ(g["skiros:Scene-0"]["skiros:contain"],
+            (std::vector<std::string>{"skiros:Table-1", "skiros:Robot-3", "skiros:Obstacle-6", "skiros:Cabinet-7"}));
+  EXPECT_EQ(g["skiros:Cabinet-7"]["skiros:contain"], (std::vector<std::string>{"skiros:Door-8", "skiros:Drawer-9"}));
+  EXPECT_EQ(g["skiros:Cabinet-7"]["rdf:type"], (std::vector<std::string>{"skiros:Cabinet", "owl:NamedIndividual"}));
+  EXPECT_EQ(g["skiros:Cabinet-7"]["skiros:PositionY"], std::vector<std::string>{"-0.55"});  // its world pose, as a fixture's
+  EXPECT_EQ(g["skiros:Cabinet-7"]["skiros:OrientationZ"], std::vector<std::string>{"0.707107"});
+  EXPECT_EQ(g["skiros:Door-8"]["rdf:type"], (std::vector<std::string>{"skiros:Door", "owl:NamedIndividual"}));
+  EXPECT_EQ(g["skiros:Door-8"]["rdfs:label"], std::vector<std::string>{"cab/door_joint"});
+  EXPECT_EQ(g["skiros:Door-8"]["skiros:JointName"], std::vector<std::string>{"door_joint"});
+  EXPECT_EQ(g["skiros:Door-8"]["skiros:JointPosition"], std::vector<std::string>{"0.5"});
+  EXPECT_EQ(g["skiros:Drawer-9"]["skiros:JointPosition"], std::vector<std::string>{"0"});  // not given: 0
+  EXPECT_EQ(g["skiros:Drawer-9"].count("skiros:PositionX"), 0u);  // no pose: it moves with the joint
+  EXPECT_EQ(g["skiros:Drawer-9"].count("skiros:contain"), 0u);
+
+  // The committed cabinet scene's ids.
+  std::vector<std::string> cabinet;
+  for (const auto& e : world_elements(load_scene(kDir + "/cabinet.scene.json"))) cabinet.push_back(e.id + " " + e.label);
+  EXPECT_EQ(cabinet, (std::vector<std::string>{"Table-1 table", "Cube-2 red", "Cube-3 green", "Robot-4 arm_robot",
+                                               "Gripper-5 gripper", "Arm-6 arm", "Cabinet-7 cabinet",
+                                               "Door-8 cabinet/door_joint", "Drawer-9 cabinet/drawer_joint"}));
+}
+
+// The world model takes the cabinet scene's Turtle with its ontology: the concepts and
+// data properties are declared, and a part may contain what lies in it.
+TEST(SceneTurtle, TheWorldModelLoadsTheCabinetScene) {
+  std::ifstream f(SKILLBUS_TEST_ONTOLOGY);
+  ASSERT_TRUE(f) << SKILLBUS_TEST_ONTOLOGY;
+  wm::Ontology onto;
+  wm::Prefixes px;
+  onto.load_turtle(std::string(std::istreambuf_iterator<char>(f), {}), px, "skiros.ttl");
+  EXPECT_TRUE(onto.is_subclass("skiros:Cabinet", "skiros:ArticulatedObject"));
+  EXPECT_TRUE(onto.is_subclass("skiros:Cabinet", "skiros:Location"));
+  EXPECT_TRUE(onto.is_subclass("skiros:Drawer", "skiros:ArticulatedPart"));
+  EXPECT_TRUE(onto.is_subclass("skiros:Door", "skiros:Location"));
+  EXPECT_FALSE(onto.is_subclass("skiros:Door", "skiros:Product"));
+  EXPECT_TRUE(onto.may_relate("skiros:Drawer", "skiros:contain", "skiros:Cube"));
+  EXPECT_TRUE(onto.may_relate("skiros:Cabinet", "skiros:contain", "skiros:Drawer"));
+
+  const wm::Scene scene = wm::read_scene(to_turtle(load_scene(kDir + "/cabinet.scene.json")), onto, px, "cabinet.ttl");
+  wm::check_scene_types(scene, onto, "cabinet.ttl");
+  wm::WorldStore store(onto);
+  std::vector<wm::Op> ops;
+  for (const auto& e : scene.elements) ops.push_back(wm::Op{wm::Op::AddElement, e, {}});
+  for (const auto& r : scene.relations) ops.push_back(wm::Op{wm::Op::AddRelation, {}, r});
+  ASSERT_NO_THROW(store.apply(ops));
+  const wm::Element* d = store.get("skiros:Drawer-9");
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->label, "cabinet/drawer_joint");
+  EXPECT_EQ(d->properties.at("skiros:JointPosition")[0], wm::Value(0.0));
+  EXPECT_EQ(d->properties.at("skiros:JointName")[0], wm::Value(std::string("drawer_joint")));
+  // A cube moved from the table into the drawer.
+  EXPECT_NO_THROW(store.apply({wm::Op{wm::Op::RemoveRelation, {}, wm::Relation{"skiros:Table-1", "skiros:contain", "skiros:Cube-2"}},
+                               wm::Op{wm::Op::AddRelation, {}, wm::Relation{"skiros:Drawer-9", "skiros:contain", "skiros:Cube-2"}}}));
+}
+
+// deploy/scenes/cabinet.ttl is generated from cabinet.scene.json (`skillbus scene turtle
+// deploy/scenes/cabinet.scene.json -o deploy/scenes/cabinet.ttl`): regenerate it when the
+// scene changes.
+TEST(SceneTurtle, TheCommittedCabinetTurtleIsUpToDate) {
+  std::ifstream f(kDir + "/cabinet.ttl");
+  ASSERT_TRUE(f);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(f), {}), to_turtle(load_scene(kDir + "/cabinet.scene.json")));
 }

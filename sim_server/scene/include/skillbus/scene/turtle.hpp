@@ -13,7 +13,7 @@ namespace skillbus::scene {
 
 // One element of the world model made from the scene, in the order of the ids.
 struct WorldElement {
-  enum Kind { Fixture, Object, Robot, Gripper, Arm };
+  enum Kind { Fixture, Object, Robot, Gripper, Arm, Articulated, ArticulatedPart };
   Kind kind = Fixture;
   std::string id;      // "Table-1" (without "skiros:")
   std::string type;    // "Table"
@@ -21,12 +21,17 @@ struct WorldElement {
   std::string parent;  // the id of the element that contains it ("Scene-0" for the top level)
   Pose pose{0, 0, 0, 0, 0, 0, 1};  // relative to the parent
   const ObjectSpec* object = nullptr;  // for objects: the object (size and mass)
+  // For an articulated object's part: the joint's name and initial position (m or rad).
+  std::string joint;
+  double joint_position = 0;
 };
 
 // The elements after Scene-0, numbered from 1 in the file's order: each fixture followed by
 // the objects on it, then the objects on no fixture, then the robot, its gripper and its
 // arm (Robot-n, Gripper-n+1, Arm-n+2; the gripper's and arm's parent is the robot, which
-// has them, and their pose is the identity).
+// has them, and their pose is the identity), then the obstacles, then each articulated
+// object followed by its joints' parts in joint-name order (their parent is the object;
+// they have no pose: it changes as the joint moves).
 std::vector<WorldElement> world_elements(const Scene& scene);
 
 // The world model's Turtle scene for `scene`: a comment line, the prefixes, then the
