@@ -39,7 +39,9 @@ class FakeArm:
         self.plans.append((list(target), cartesian))
         if target[0] > self.reach:
             raise RuntimeError(f"no inverse kinematics for x {target[0]:.2f}")
-        return SimpleNamespace(target=list(target))
+        if target[1] < -5:
+            return SimpleNamespace(ok=False, error="outside the workspace", target=list(target))
+        return SimpleNamespace(ok=True, error="", target=list(target))
 
     def execute(self, plan, cid):
         self.sent[cid] = plan.target
@@ -101,7 +103,7 @@ class UnitPickLike(ManipSkill):
 
     def simple_generate_manip_cmds(self):
         q = top_down(0.0)
-        self.manip_list = [([self.cfg["x"], 0, 0.6], q, "open_gripper", {"motion": "free"}),
+        self.manip_list = [([self.cfg["x"], self.cfg.get("y", 0), 0.6], q, "open_gripper", {"motion": "free"}),
                            ([self.cfg["x"], 0, 0.45], q, "close_gripper", {"motion": "linear"}),
                            ([self.cfg["x"], 0, 0.45], q, "attach_obj", {"motion": "none", "object": "red"}),
                            ([self.cfg["x"], 0, 0.6], q, "dummy_forward", {"motion": "linear"})]
@@ -181,6 +183,8 @@ def test_planning_failures_are_retried_until_the_skill_is_not_feasible():
     assert out.state == "failure" and out.code == -5
     assert "not feasible: 3 planning failure(s), the last: no inverse kinematics for x 0.40" in out.message
     assert len(arm.plans) == 3 and ex.done_count == 0
+    out, _, _ = run({"max_plan_failures": 0, "y": -6}, gripper=FakeGripper(), attacher=FakeAttacher())
+    assert out.state == "failure" and "the last: outside the workspace" in out.message  # a plan that is not ok
 
 
 def test_what_the_robot_refuses_and_missing_interfaces_fail_naming_them():

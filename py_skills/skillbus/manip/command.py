@@ -12,7 +12,10 @@ Poses may be numpy arrays or plain sequences. The parameters a command understan
   the pose is then not used) or ``"none"`` (no motion: the action only);
 - ``object``: the object of ``attach_obj``/``detach_obj`` (its scene name);
 - ``frames``: how many frames ``wait`` waits;
-- ``width``: for ``open_gripper``, the opening in m (default fully open).
+- ``width``: for ``open_gripper``, the opening in m (default fully open);
+- ``settle_rad``: how close (rad, every arm joint) the arm must come to the end of the
+  trajectory before the action (default 0.01; a move that drags a door or a drawer may
+  end a little short, held back by the mechanism).
 
 >>> c = ManipCommand.from_entry(([0.4, 0, 0.5], [0, 1, 0, 0], "close_gripper", {}))
 >>> c.action, c.position, c.quaternion

@@ -33,6 +33,10 @@ OPEN_UM, CLOSED_UM = 80_000, 0
 SETTLE_RAD = 0.01
 
 
+class PlanRefused(RuntimeError):
+    pass
+
+
 @dataclass
 class Outcome:
     state: str      # running | success | failure
@@ -143,6 +147,8 @@ class ManipExecutor:
                 p, q = self.controller.to_world(cmd.position, cmd.quaternion)
                 try:
                     plan = arm.plan(list(p) + list(q), cartesian=(motion == "linear"), speed_scale=speed)
+                    if not plan.ok:
+                        raise PlanRefused(plan.error or "the motion service found no plan")
                 except Exception as e:  # the motion service's refusal (no IK, a collision) or its silence
                     self.controller.num_plan_failed += 1
                     self.controller.last_plan_error = str(e)
@@ -153,7 +159,7 @@ class ManipExecutor:
                 arm.execute(plan, cid)
             self.cmd_id = cid
             return Outcome("running", "moving")
-        done, error = arm.finished(self.cmd_id, SETTLE_RAD)
+        done, error = arm.finished(self.cmd_id, float(cmd.params.get("settle_rad", SETTLE_RAD)))
         if error:
             return Outcome("failure", f"{self.skill.key}: the robot refused the motion: {error}", -1)
         return None if done else Outcome("running", "moving")
@@ -168,7 +174,7 @@ class ManipExecutor:
         goal = [float(targets.get(n, q)) for n, q in zip(names, now)]
         span = max(abs(g - q) for g, q in zip(goal, now))
         duration = max(0.2, span / (1.0 * speed))  # rad/s: a slow joint-space move
-        arm.send_joints(cid, names, [traj_point(0.0, now), traj_point(duration, goal)])
+        arm.send_joints(cid, names, [traj_point(duration, goal)])  # (from where the arm is: its reference now)
         return ""
 
     # -- actions -----------------------------------------------------------------------

@@ -27,15 +27,15 @@ class ManipTask(SkillDescription):
         self.addParam("Task", "", ParamTypes.Required, description="a task file (.yaml) with a skills: list")
 
 
-def element_id(wmi, name: str) -> str:
-    """A world-model id for an id or a label; ValueError naming the name."""
+def element_of(wmi, name: str):
+    """The world model's element for an id or a label; ValueError naming the name."""
     if wmi is None:
-        return name
+        raise ValueError(f"{name!r}: this skill process has no world model (--world-model)")
     try:
-        return wmi.get_element(name).id
+        return wmi.get_element(name)
     except Exception:
         pass
-    found = [e.id for e in wmi.get_elements() if e.label == name]
+    found = [e for e in wmi.get_elements() if e.label == name]
     if len(found) != 1:
         raise ValueError(f"{name!r} names {'no' if not found else 'more than one'} element of the world model")
     return found[0]
@@ -59,7 +59,10 @@ class manip_task(SkillBase):
             specify = {}
             for pname in list(cls.elements) + list(cls.optional_elements):
                 if pname in entry:
-                    specify[pname] = element_id(self.wmi, str(entry.pop(pname)))
+                    try:
+                        specify[pname] = element_of(self.wmi, str(entry.pop(pname)))
+                    except ValueError as e:
+                        raise ValueError(f"{path}: skills[{i}] ({key}): {pname}: {e}") from None
                 elif pname in cls.elements:
                     raise ValueError(f"{path}: skills[{i}] ({key}) needs {pname}")
             if entry:

@@ -56,10 +56,10 @@ class Controller:
         frame), else its reason."""
         wp, wq = self.to_world(p, q_wxyz)
         try:
-            self.arm.plan(list(wp) + list(wq), cartesian=False)
+            plan = self.arm.plan(list(wp) + list(wq), cartesian=False)
         except Exception as e:
             return str(e)
-        return ""
+        return "" if plan.ok else (plan.error or "no plan")
 
     def joint_positions(self) -> dict[str, float]:
         return dict(zip(self.arm.joint_names(), self.arm.joints()))

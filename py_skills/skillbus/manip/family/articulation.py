@@ -22,6 +22,9 @@ from skillbus.manip.registry import register_skill
 from skillbus.manip.skill import ManipSkill
 
 LINEAR = {"motion": "linear"}
+# The handle's path drags the mechanism: the arm may end a step held back by its damping
+# and friction, a little short of the trajectory's end.
+DRAG = {"motion": "linear", "settle_rad": 0.05}
 
 
 class _Articulate(ManipSkill):
@@ -45,13 +48,13 @@ class _Articulate(ManipSkill):
         if j.kind == "prismatic":
             n = max(1, math.ceil(abs(self.want) / float(self.cfg["step_m"])))
             for k in range(1, n + 1):
-                cmds.append((hp + j.axis * self.want * k / n, hq, "dummy_forward", LINEAR))
+                cmds.append((hp + j.axis * self.want * k / n, hq, "dummy_forward", DRAG))
             end_p, end_q = hp + j.axis * self.want, hq
         else:
             n = max(1, math.ceil(abs(self.want) / float(self.cfg["step_rad"])))
             for k in range(1, n + 1):
                 p, q = rotate_about(hp, j.axis, j.origin, self.want * k / n, hq)
-                cmds.append((p, q, "dummy_forward", LINEAR))
+                cmds.append((p, q, "dummy_forward", DRAG))
             end_p, end_q = rotate_about(hp, j.axis, j.origin, self.want, hq)
         cmds += [(end_p, end_q, "open_gripper", {"motion": "none"}), (end_p + up, end_q, "dummy_forward", LINEAR)]
         self.manip_list = cmds
