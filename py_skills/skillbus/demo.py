@@ -218,7 +218,7 @@ def session_over(conf: Path) -> bool:
     states = launch.status(conf)
     if states:
         return states.get("sim") in ("EXITED", "FATAL", "STOPPED")
-    if not (conf.parent / "supervisor.sock").exists() or not (launch.supervisord_pid(conf) or 0):
+    if not paths.socket_path(conf.parent, "supervisor.sock").exists() or not (launch.supervisord_pid(conf) or 0):
         raise DemoError(f"the supervisord of this run ({conf}) no longer answers: its socket or process is gone "
                         "(was the run folder cleared, or supervisord killed?)")
     return False

@@ -8,6 +8,31 @@ from pathlib import Path
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
+# A unix socket's path must fit sockaddr_un (108 bytes with its NUL).
+SOCKET_PATH_MAX = 100
+
+
+def socket_path(folder: str | Path, name: str) -> Path:
+    """Where a unix socket named `name` for `folder` goes: in the folder when the path
+    fits a unix socket's address, else a short path in the temporary folder made from
+    the folder's name (the same for every process that asks). A run folder deep in a
+    tree (a test's, an episode's) would otherwise make the CAN hub or supervisord fail
+    with "AF_UNIX path too long".
+
+    >>> str(socket_path("/tmp/run", "gripper0.sock"))
+    '/tmp/run/gripper0.sock'
+    >>> p = socket_path("/tmp/" + "d" * 120, "gripper0.sock"); len(str(p)) <= SOCKET_PATH_MAX
+    True
+    """
+    import hashlib
+    import tempfile
+    path = Path(folder) / name
+    if len(os.fsencode(str(path))) <= SOCKET_PATH_MAX:
+        return path
+    tag = hashlib.sha256(os.fsencode(str(Path(folder).resolve()))).hexdigest()[:16]
+    return Path(tempfile.gettempdir()) / f"skillbus-{tag}-{name}"
+
+
 def build_dir() -> Path:
     return Path(os.environ.get("SKILLBUS_BUILD_DIR", REPO_ROOT / "build"))
 

@@ -77,7 +77,7 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     run_dir = Path(run_dir).resolve()
     scene = Path(scene or paths.demo_scene()).resolve()
     ttl = scene.with_suffix("").with_suffix(".ttl") if scene.name.endswith(".scene.json") else scene.with_suffix(".ttl")
-    can = str(run_dir / "gripper0.sock")
+    can = str(paths.socket_path(run_dir, "gripper0.sock"))
     py = [sys.executable, "-m", "skillbus.cli"]
     sim = [str(paths.binary("sim_server")), "--scene", str(scene), "--frame-ms", str(frame_ms)]
     if lockstep:
@@ -150,14 +150,14 @@ def robots_programs(run_dir: Path, robots: int = 2, lockstep: bool = True, stop_
             sim += ["--end-when-asked-by", ",".join(f"{r}_skill_mgr" for r in names)]
     else:
         sim += ["--wall-clock"]
-    progs = [Program(f"can_hub_{r}", [*py, "can-hub", "--channel", str(run_dir / f"{r}_gripper.sock")]) for r in names]
+    progs = [Program(f"can_hub_{r}", [*py, "can-hub", "--channel", str(paths.socket_path(run_dir, f"{r}_gripper.sock"))]) for r in names]
     progs.append(Program("sim", sim))
     progs += [Program(f"motion_{r}", [str(paths.binary("motion_server")), "--scene", str(scene), "--robot", r])
               for r in names]
     progs.append(Program("wm", [str(paths.binary("wm_server")), *clock, "--data", str(run_dir / "wm"),
                                 "--scene", str(ttl)], participant=True))
     for r in names:
-        can = str(run_dir / f"{r}_gripper.sock")
+        can = str(paths.socket_path(run_dir, f"{r}_gripper.sock"))
         table, bin_ = TWO_ARMS_REGIONS[r]
         task = (f"ClearTable Gripper={ids[f'{r}_gripper']} Arm={ids[f'{r}_arm']} Table={ids[table]} "
                 f"Bin={ids[bin_]}")

@@ -64,7 +64,8 @@ def main(args) -> int:
         bar.close()
     if args.json:
         print(json.dumps({"out": str(out), "written": summary.written, "successes": summary.successes,
-                          "broken": summary.broken, "retried": summary.retried, "wall_s": summary.wall_s,
+                          "broken": summary.broken, "retried": summary.retried,
+                          "retries": summary.retries, "wall_s": summary.wall_s,
                           "failures": dict(summary.failures),
                           "episodes": {str(k): v for k, v in summary.results.items()}}))
     else:

@@ -40,6 +40,21 @@ def _mark(box: Any, log: Path, name: str) -> None:
         raise EpisodeError(f"lcm-logger did not record ({name}): {p.stderr()[-500:]}")
 
 
+def compact_task(skills: list[dict]) -> str:
+    """The task as one line of YAML (flow style) in double quotes, a word of the manager's
+    ``--start`` (space-separated KEY=VALUE words; double quotes keep spaces). A path to
+    a file in the episode's folder instead would make the episode's messages, so its
+    session digest, depend on where it ran.
+
+    >>> compact_task([{"name": "open", "Object": "my drawer", "distance": 0.15}])
+    '"{skills: [{name: open, Object: my drawer, distance: 0.15}]}"'
+    """
+    text = yaml.safe_dump({"skills": skills}, default_flow_style=True, sort_keys=False, width=1 << 30).strip()
+    if '"' in text or "\n" in text:
+        raise EpisodeError(f"the task cannot be handed to the skill manager as one line: {text[:200]}")
+    return f'"{text}"'
+
+
 def run_episode(cfg: GenerateConfig, seed: int, request: int, work: Path, attempt: int = 0) -> dict[str, Any]:
     """Runs episode `request` of the run with seed `seed`; its result (rows, labels,
     digests). Raises EpisodeError when it could not be run whole."""
@@ -59,16 +74,18 @@ def run_episode(cfg: GenerateConfig, seed: int, request: int, work: Path, attemp
     for label in (cfg.arm, cfg.gripper):
         if label not in ids:
             raise EpisodeError(f"the scene has no element labelled {label!r} (arm/gripper in the config)")
-    task_file = folder / "task.yaml"
-    task_file.write_text(yaml.safe_dump({"skills": cfg.skills}, sort_keys=False))
-    task = f"ManipTask Task={task_file} Arm={ids[cfg.arm]} Gripper={ids[cfg.gripper]}"
+    (folder / "task.yaml").write_text(yaml.safe_dump({"skills": cfg.skills}, sort_keys=False))  # (to read)
+    task = f"ManipTask Task={compact_task(cfg.skills)} Arm={ids[cfg.arm]} Gripper={ids[cfg.gripper]}"
     frames = int(round(cfg.max_sim_s * 1000 / cfg.frame_ms))
     progs = programs(folder, scene=scene, task=task, manip=True, frame_ms=cfg.frame_ms,
                      extra_sim=("--frames", str(frames)))
     log = folder / "episode.lcmlog"
     t0 = time.monotonic()
     with Sandbox(log_dir=folder / "logs") as box:
-        box.start("logger", [str(paths.lcm_logger()), "-f", str(log)])
+        # A large receive buffer: the logger must not drop a frame while two episodes' systems
+        # keep both cores busy (the kernel's default lost one now and then).
+        sep = "&" if "?" in box.url else "?"
+        box.start("logger", [str(paths.lcm_logger()), "-l", f"{box.url}{sep}recv_buf_size=4194304", "-f", str(log)])
         _mark(box, log, "mark-start")  # the logger records before the first frame
         procs = start(box, progs, folder)
         rc = box.wait(procs["sim"], cfg.max_sim_s + WALL_SLACK_S)
@@ -82,7 +99,7 @@ def run_episode(cfg: GenerateConfig, seed: int, request: int, work: Path, attemp
         mgr = last_json(procs["skill_mgr"].stdout()) or {}
         if rc != 0 or not sim.get("session_digest"):
             raise EpisodeError(f"the physics server ended with {rc}: {procs['sim'].stderr()[-800:]}")
-        dead = [n for n in ("skill_mgr", "skills", "wm", "gripper") if (procs[n].returncode() or 0) < 0]
+        dead = [n for n in ("skill_mgr", "skills", "wm", "gripper") if (procs[n].returncode or 0) < 0]
         if dead:
             raise EpisodeError(f"killed during the episode: {', '.join(dead)}")
     wall = time.monotonic() - t0

@@ -37,41 +37,54 @@ class Episode:
     frames: int = 0
 
 
-STATES = {0: "Idle", 1: "Running", 2: "Success", 3: "Failure"}
 
 
 def read(log: Path, stride: int, frame_ms: float) -> Episode:
     import lcm
 
-    from skillbus.msgs import articulation_state_t, decode, sim_state_t, skill_progress_t
+    from skillbus.auth import strip
+    from skillbus.msgs import articulation_state_t, decode, sim_state_t, skill_progress_t, skill_state_t
+    ended = {skill_state_t.SUCCESS: "Success", skill_state_t.FAILURE: "Failure"}
     states: dict[int, Any] = {}
     arts: dict[int, Any] = {}
     nodes: dict[int, dict[str, Any]] = {}  # node id -> segment
-    for ev in lcm.EventLog(str(log), "r"):
+    ticks: dict[int, list[int]] = {}  # task -> the ticks its progress was published at
+    try:
+        events = list(lcm.EventLog(str(log), "r"))
+    except (OSError, IOError, ValueError) as e:
+        raise RecordError(f"{log}: not a readable LCM log: {e}") from None
+    for ev in events:
         ch = ev.channel
+        data = strip(ev.data)  # (the bus's signature, if the run signed its messages)
         if ch == "SB_SIM_STATE":
-            s = decode(sim_state_t, ev.data)
+            s = decode(sim_state_t, data)
             if s is not None:
                 states.setdefault(s.header.frame, s)
         elif ch == "SB_ROBOT_ARTICULATION":
-            a = decode(articulation_state_t, ev.data)
+            a = decode(articulation_state_t, data)
             if a is not None:
                 arts.setdefault(a.header.frame, a)
         elif ch == "SB_SKILL_PROGRESS":
-            p = decode(skill_progress_t, ev.data)
+            p = decode(skill_progress_t, data)
             if p is None:
                 continue
+            ticks.setdefault(p.task, []).append(p.tick)
             for n in p.nodes:
                 if not n.type.startswith("Manip") or n.type == "ManipTask":
                     continue
                 seg = nodes.setdefault(n.id, {"skill": n.type, "label": n.label, "start_frame": None,
                                               "end_frame": None, "state": "Idle", "message": ""})
-                if n.state == 1 and seg["start_frame"] is None:
+                if n.state == skill_state_t.RUNNING and seg["start_frame"] is None:
                     seg["start_frame"] = p.header.frame
-                if n.state in (2, 3):
+                if n.state in ended:
                     if seg["end_frame"] is None:
                         seg["end_frame"] = p.header.frame
-                    seg["state"], seg["message"] = STATES[n.state], n.message
+                    seg["state"], seg["message"] = ended[n.state], n.message
+    for task, seen in ticks.items():  # the manager publishes a task's progress at every tick of it
+        gaps = sorted(set(range(min(seen), max(seen) + 1)) - set(seen))
+        if gaps:
+            raise RecordError(f"{log}: the skill progress of task {task} at {len(gaps)} tick(s) is missing (first "
+                              f"{gaps[0]}): the recording lost messages")
     if not states:
         raise RecordError(f"{log}: no physics state in the log")
     first, last = min(states), max(states)

@@ -38,6 +38,7 @@ class Summary:
     broken: list[dict[str, Any]] = field(default_factory=list)
     failures: Counter = field(default_factory=Counter)
     retried: int = 0
+    retries: list[dict[str, Any]] = field(default_factory=list)  # why each retry was needed
     wall_s: float = 0.0
     results: dict[int, dict[str, Any]] = field(default_factory=dict)  # request -> the written episode's meta
 
@@ -52,6 +53,8 @@ class Summary:
             out.append(f"  failed {n}x: {reason}")
         for b in self.broken:
             out.append(f"  broken: episode {b['request']}: {b['error']}")
+        for r in self.retries:
+            out.append(f"  retried: episode {r['request']} (attempt {r['attempt']}): {r['error']}")
         return out
 
 
@@ -105,6 +108,7 @@ def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: 
         """True when the episode is settled (a result, or broken for good)."""
         if "error" in r:
             if attempts[request] < cfg.retries:
+                summary.retries.append({"request": request, "attempt": attempts[request], "error": r["error"]})
                 attempts[request] += 1
                 summary.retried += 1
                 return False

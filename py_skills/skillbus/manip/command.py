@@ -13,6 +13,9 @@ Poses may be numpy arrays or plain sequences. The parameters a command understan
 - ``object``: the object of ``attach_obj``/``detach_obj`` (its scene name);
 - ``frames``: how many frames ``wait`` waits;
 - ``width``: for ``open_gripper``, the opening in m (default fully open);
+- ``fallback``: ``"free"`` lets a ``linear`` move whose plan was refused be planned in
+  joint space on the next try (short steps of a handle's path, where a straight line may
+  need a wrist flip half way);
 - ``settle_rad``: how close (rad, every arm joint) the arm must come to the end of the
   trajectory before the action (default 0.01; a move that drags a door or a drawer may
   end a little short, held back by the mechanism).

@@ -34,7 +34,7 @@ def load(text_or_path: str) -> dict:
     if not text_or_path or not text_or_path.strip():
         return {}
     text = text_or_path
-    looks_like_path = "\n" not in text and ":" not in text and text.strip().endswith((".yaml", ".yml"))
+    looks_like_path = "\n" not in text and not text.lstrip().startswith("{") and text.strip().endswith((".yaml", ".yml"))
     if looks_like_path:
         if not os.path.isfile(text):
             raise ConfigError(f"configuration file {text} does not exist")
@@ -59,9 +59,11 @@ def merge(defaults: dict, text_or_path: str, params: dict) -> dict:
 
 
 def load_task(path: str) -> list[dict]:
-    """The ``skills:`` list of a task file: each a mapping with a ``name``. ConfigError
-    names the entry that is wrong."""
-    data = load(path if path.endswith((".yaml", ".yml")) else path)
+    """The ``skills:`` list of a task file (or of YAML text: ``skillbus generate`` hands a
+    task over as compact JSON, so that nothing of an episode's folder enters its
+    messages): each a mapping with a ``name``. ConfigError names the entry that is
+    wrong."""
+    data = load(path)
     skills = data.get("skills")
     if not isinstance(skills, list) or not skills:
         raise ConfigError(f"{path}: 'skills' must be a non-empty list")

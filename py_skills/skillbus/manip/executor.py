@@ -61,6 +61,7 @@ class ManipExecutor:
         self.action_sent = False
         self.action_ref: Any = None
         self.waited = 0
+        self.refused = 0  # plans of the head command refused
         self.head_started = self.now()
         self.controller.head_finished = False
         self.controller.num_last_cmd = 0
@@ -145,12 +146,16 @@ class ManipExecutor:
                     return Outcome("failure", f"{self.skill.key}: {err}", -1)
             else:
                 p, q = self.controller.to_world(cmd.position, cmd.quaternion)
+                # A straight line the planner refused (a wrist flip on the way) may be allowed
+                # to become a joint-space move on the next try: short steps, nearly straight.
+                linear = motion == "linear" and not (self.refused and cmd.params.get("fallback") == "free")
                 try:
-                    plan = arm.plan(list(p) + list(q), cartesian=(motion == "linear"), speed_scale=speed)
+                    plan = arm.plan(list(p) + list(q), cartesian=linear, speed_scale=speed)
                     if not plan.ok:
                         raise PlanRefused(plan.error or "the motion service found no plan")
                 except Exception as e:  # the motion service's refusal (no IK, a collision) or its silence
                     self.controller.num_plan_failed += 1
+                    self.refused += 1
                     self.controller.last_plan_error = str(e)
                     if not self.skill.is_feasible():
                         return Outcome("failure", f"{self.skill.key}: not feasible: {self.controller.num_plan_failed} "

@@ -24,7 +24,8 @@ class ManipTask(SkillDescription):
     def createDescription(self):
         self.addParam("Arm", Element("skiros:Arm"), ParamTypes.Required)
         self.addParam("Gripper", Element("skiros:Gripper"), ParamTypes.Optional)
-        self.addParam("Task", "", ParamTypes.Required, description="a task file (.yaml) with a skills: list")
+        self.addParam("Task", "", ParamTypes.Required,
+                      description="a task file (.yaml) with a skills: list, or that YAML itself")
 
 
 def element_of(wmi, name: str):

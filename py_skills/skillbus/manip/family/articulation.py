@@ -24,7 +24,7 @@ from skillbus.manip.skill import ManipSkill
 LINEAR = {"motion": "linear"}
 # The handle's path drags the mechanism: the arm may end a step held back by its damping
 # and friction, a little short of the trajectory's end.
-DRAG = {"motion": "linear", "settle_rad": 0.05}
+DRAG = {"motion": "linear", "settle_rad": 0.05, "fallback": "free"}
 
 
 class _Articulate(ManipSkill):
