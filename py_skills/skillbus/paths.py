@@ -14,15 +14,15 @@ SOCKET_PATH_MAX = 100
 
 def socket_path(folder: str | Path, name: str) -> Path:
     """Where a unix socket named `name` for `folder` goes: in the folder when the path
-    fits a unix socket's address, else a short path in the temporary folder made from
-    the folder's name (the same for every process that asks). A run folder deep in a
+    fits a unix socket's address, else in a short folder in the temporary folder made
+    from the folder's name (the same for every process that asks), under its own name. A run folder deep in a
     tree (a test's, an episode's) would otherwise make the CAN hub or supervisord fail
     with "AF_UNIX path too long".
 
     >>> str(socket_path("/tmp/run", "gripper0.sock"))
     '/tmp/run/gripper0.sock'
-    >>> p = socket_path("/tmp/" + "d" * 120, "gripper0.sock"); len(str(p)) <= SOCKET_PATH_MAX
-    True
+    >>> p = socket_path("/tmp/" + "d" * 120, "gripper0.sock"); len(str(p)) <= SOCKET_PATH_MAX, p.name
+    (True, 'gripper0.sock')
     """
     import hashlib
     import tempfile
@@ -30,7 +30,11 @@ def socket_path(folder: str | Path, name: str) -> Path:
     if len(os.fsencode(str(path))) <= SOCKET_PATH_MAX:
         return path
     tag = hashlib.sha256(os.fsencode(str(Path(folder).resolve()))).hexdigest()[:16]
-    return Path(tempfile.gettempdir()) / f"skillbus-{tag}-{name}"
+    # A folder of its own keeps the socket's name: the CAN channel is named by it on the
+    # bus, so a run's messages (and its session digest) do not depend on where it ran.
+    short = Path(tempfile.gettempdir()) / f"skillbus-{tag}"
+    short.mkdir(mode=0o700, exist_ok=True)
+    return short / name
 
 
 def build_dir() -> Path:
