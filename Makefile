@@ -86,6 +86,7 @@ bench: build
 	$(PY) bench/planning_bench.py
 	$(PY) bench/dds_transport.py
 	$(PY) bench/console_overhead.py
+	$(PY) bench/generate_scaling.py
 	$(BUILD)/bench/perception_bench
 	$(BUILD)/bench/motion_bench
 

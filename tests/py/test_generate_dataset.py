@@ -44,7 +44,29 @@ def test_randomization_mistakes_are_named():
         randomized(SCENE, {"objects": {"green": {"size": [0.02, 0.03]}}}, 1)
 
 
-def write_log(path, frames, skip=()):
+def cloud(frame: int, capture: int, z: float):
+    """One capture of a 4 x 3 depth camera in one part, every pixel `z` m away but the first
+    (no return)."""
+    import numpy as np
+    from skillbus.msgs import camera_cloud_t, header_t
+    m = camera_cloud_t()
+    m.header = header_t()
+    m.header.frame = frame
+    m.camera, m.request_id, m.capture, m.error = "overhead", "", capture, ""
+    m.width, m.height = 4, 3
+    m.intrinsics, m.range, m.pose = [4.0, 4.0, 1.5, 1.0], [0.05, 3.0], [0, 0, 1, 1, 0, 0, 0]
+    m.part, m.num_parts, m.row_start, m.num_rows = 0, 1, 0, 3
+    pts = np.zeros((3, 4, 3), dtype="<f4")
+    pts[:, :, 2] = z
+    pts[0, 0, :] = np.nan
+    m.points = pts.tobytes()
+    m.num_bytes = len(m.points)
+    m.robot_mask = bytes(2)
+    m.num_mask_bytes = 2
+    return m
+
+
+def write_log(path, frames, skip=(), clouds=()):
     import lcm
     from skillbus.msgs import articulated_joint_t, articulation_state_t, header_t, sim_object_t, sim_state_t
     log = lcm.EventLog(str(path), "w", overwrite=True)
@@ -75,6 +97,9 @@ def write_log(path, frames, skip=()):
         j.axis, j.origin, j.handle_pose = [0, 1, 0], [0, 0, 0], [0, 0, 0, 0, 0, 0, 1]
         a.joints, a.num_joints = [j], 1
         log.write_event(f * 1000 + 1, "SB_ROBOT_ARTICULATION", a.encode())
+        for c in clouds:
+            if c.header.frame == f:
+                log.write_event(f * 1000 + 2, "SB_CAMERA_CLOUD", c.encode())
     log.close()
 
 
@@ -119,3 +144,31 @@ def test_the_dataset_loads_with_hugging_face_datasets_and_appends_in_order(tmp_p
     episodes = [json.loads(x) for x in (root / "meta" / "episodes.jsonl").read_text().splitlines()]
     assert [e["seed"] for e in episodes] == [1, 2, 3] and episodes[1]["failure_reason"] == "slipped"
     assert not list(root.rglob("*.tmp"))
+
+
+def test_a_depth_camera_is_recorded_as_its_latest_whole_capture(tmp_path):
+    log = tmp_path / "e.lcmlog"
+    write_log(log, range(0, 30), clouds=[cloud(3, 0, 1.2), cloud(13, 1, 0.8)])
+    ep = read(log, stride=5, frame_ms=20.0)
+    assert ep.shapes == {"observation.depth.overhead": [3, 4]}
+    depth = [r["observation.depth.overhead"] for r in ep.rows]  # rows at frames 0 5 10 15 20 25
+    assert depth[0] == [0.0] * 12  # before the first capture
+    assert depth[1] == pytest.approx([0.0] + [1.2] * 11) and depth[2] == depth[1]  # no return: 0
+    assert depth[3] == pytest.approx([0.0] + [0.8] * 11)
+    root = tmp_path / "ds"
+    DatasetWriter(root, fps=10).write_episode(ep, "look", {"success": True})
+    info = json.loads((root / "meta" / "info.json").read_text())
+    assert info["features"]["observation.depth.overhead"]["shape"] == [3, 4]
+    import datasets
+    ds = datasets.load_dataset("parquet", data_files=[str(p) for p in (root / "data").rglob("*.parquet")],
+                               split="train", cache_dir=str(tmp_path / "hf"))
+    assert ds[3]["observation.depth.overhead"][1] == pytest.approx(0.8)
+    # a capture that lost a part refuses the episode
+    part = cloud(13, 1, 0.8)
+    part.num_parts, part.num_rows = 2, 2
+    part.points = part.points[: 2 * 4 * 12]
+    part.num_bytes = len(part.points)
+    part.robot_mask, part.num_mask_bytes = bytes(1), 1
+    write_log(log, range(0, 30), clouds=[cloud(3, 0, 1.2), part])
+    with pytest.raises(RecordError, match="camera overhead: 1 capture\\(s\\) lost parts"):
+        read(log, stride=5, frame_ms=20.0)

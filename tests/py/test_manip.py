@@ -30,6 +30,7 @@ class FakeArm:
         self.sent: dict[str, list] = {}
         self.checks: dict[str, int] = {}
         self.refuse_next = ""
+        self.refuse_linear = 0
 
     @property
     def state(self):
@@ -37,6 +38,9 @@ class FakeArm:
 
     def plan(self, target, cartesian=False, speed_scale=0.5):
         self.plans.append((list(target), cartesian))
+        if cartesian and self.refuse_linear > 0:
+            self.refuse_linear -= 1
+            return SimpleNamespace(ok=False, error="a joint jumps", target=list(target))
         if target[0] > self.reach:
             raise RuntimeError(f"no inverse kinematics for x {target[0]:.2f}")
         if target[1] < -5:
@@ -104,7 +108,8 @@ class UnitPickLike(ManipSkill):
     def simple_generate_manip_cmds(self):
         q = top_down(0.0)
         self.manip_list = [([self.cfg["x"], self.cfg.get("y", 0), 0.6], q, "open_gripper", {"motion": "free"}),
-                           ([self.cfg["x"], 0, 0.45], q, "close_gripper", {"motion": "linear"}),
+                           ([self.cfg["x"], 0, 0.45], q, "close_gripper",
+                            {"motion": "linear", **({"fallback": "free"} if self.cfg.get("fallback") else {})}),
                            ([self.cfg["x"], 0, 0.45], q, "attach_obj", {"motion": "none", "object": "red"}),
                            ([self.cfg["x"], 0, 0.6], q, "dummy_forward", {"motion": "linear"})]
 
@@ -183,6 +188,10 @@ def test_planning_failures_are_retried_until_the_skill_is_not_feasible():
     assert out.state == "failure" and out.code == -5
     assert "not feasible: 3 planning failure(s), the last: no inverse kinematics for x 0.40" in out.message
     assert len(arm.plans) == 3 and ex.done_count == 0
+    arm = FakeArm()
+    arm.refuse_linear = 1
+    out, _, _ = run({"fallback": "free"}, arm=arm, gripper=FakeGripper(), attacher=FakeAttacher())
+    assert out.state == "success" and [linear for _, linear in arm.plans] == [False, True, False, True]
     out, _, _ = run({"max_plan_failures": 0, "y": -6}, gripper=FakeGripper(), attacher=FakeAttacher())
     assert out.state == "failure" and "the last: outside the workspace" in out.message  # a plan that is not ok
 

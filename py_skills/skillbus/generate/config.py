@@ -6,6 +6,8 @@
     fps: 10                                  # recorded rows per second of sim time
     max_sim_s: 240                           # an episode that has not ended by then fails
     retries: 1                               # a broken episode (a process killed, frames lost) is run again
+    cameras:                                 # depth cameras added to the scene, recorded at their rate
+      - {name: overhead, pose: [0.25, -0.2, 1.3, 1, 0, 0, 0], width: 80, height: 60, rate_hz: 5}
     randomize:                               # skillbus.generate.randomize
       objects:
         red: {x: [0.40, 0.50], y: [0.05, 0.20], yaw: [-0.6, 0.6], size: [0.045, 0.055],
@@ -40,6 +42,7 @@ class GenerateConfig:
     retries: int = 1
     frame_ms: float = 20.0
     randomize: dict = field(default_factory=dict)
+    cameras: list = field(default_factory=list)  # depth cameras added to the scene (recorded)
     arm: str = "arm"          # labels of the robot's Arm and Gripper elements
     gripper: str = "gripper"
 
@@ -81,13 +84,16 @@ def load(path: str | Path) -> GenerateConfig:
     randomize = data.get("randomize") or {}
     if not isinstance(randomize, dict):
         raise ConfigError(f"{where}: randomize must be a mapping")
+    cameras = data.get("cameras") or []
+    if not isinstance(cameras, list) or not all(isinstance(c, dict) and c.get("name") for c in cameras):
+        raise ConfigError(f"{where}: cameras must be a list of scene cameras, each with a name (docs/scene.md)")
     retries = data.get("retries", 1)
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
         raise ConfigError(f"{where}: retries must be a whole number >= 0, not {retries!r}")
     return GenerateConfig(path=path, scene=scene, skills=skills,
                           instruction=str(data.get("instruction") or f"task of {path.stem}"),
                           fps=_number(data, "fps", 10.0, 0.1, where), max_sim_s=_number(data, "max_sim_s", 240.0, 1, where),
-                          retries=retries, frame_ms=_number(data, "frame_ms", 20.0, 1, where), randomize=randomize,
+                          retries=retries, cameras=cameras, frame_ms=_number(data, "frame_ms", 20.0, 1, where), randomize=randomize,
                           arm=str(data.get("arm", "arm")), gripper=str(data.get("gripper", "gripper")))
 
 

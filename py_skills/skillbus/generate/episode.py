@@ -2,9 +2,9 @@
 its randomized scene and world-model scene written into its folder, the whole system
 started under lockstep (physics, world model, skill manager, motion service, CANopen
 gripper, the skill process with the manipulation library) with the task (ManipTask of
-the config's skills) started at the manager's first tick, and lcm-logger recording every
-message. The session ends a few frames after the task (or at ``max_sim_s``); the rows
-come from the log (skillbus.generate.record).
+the config's skills) started at the manager's first tick, and a recorder of every
+message (skillbus.generate.recorder). The session ends a few frames after the task (or
+at ``max_sim_s``); the rows come from the log (skillbus.generate.record).
 
 Run alone (``skillbus generate CONFIG --episode K --seed S``) an episode gives the same
 digests as in a batch: its scene, its task and the lockstep depend on its seed alone.
@@ -21,7 +21,6 @@ from typing import Any
 
 import yaml
 
-from skillbus import paths
 from skillbus.generate.config import GenerateConfig, episode_seed
 from skillbus.generate.randomize import randomized
 
@@ -67,7 +66,9 @@ def run_episode(cfg: GenerateConfig, seed: int, request: int, work: Path, attemp
     if folder.exists():
         shutil.rmtree(folder)
     folder.mkdir(parents=True)
-    doc, chosen = randomized(scenes.load(cfg.scene), cfg.randomize, eseed)
+    base = scenes.load(cfg.scene)
+    base["cameras"] = list(base.get("cameras", [])) + list(cfg.cameras)
+    doc, chosen = randomized(base, cfg.randomize, eseed)
     scene = scenes.save(doc, folder / "episode.scene.json", cfg.scene)
     (folder / "episode.ttl").write_text(scenes.to_turtle(scenes.load(scene)))
     ids = scenes.element_ids(scene)
@@ -82,10 +83,9 @@ def run_episode(cfg: GenerateConfig, seed: int, request: int, work: Path, attemp
     log = folder / "episode.lcmlog"
     t0 = time.monotonic()
     with Sandbox(log_dir=folder / "logs") as box:
-        # A large receive buffer: the logger must not drop a frame while two episodes' systems
-        # keep both cores busy (the kernel's default lost one now and then).
-        sep = "&" if "?" in box.url else "?"
-        box.start("logger", [str(paths.lcm_logger()), "-l", f"{box.url}{sep}recv_buf_size=4194304", "-f", str(log)])
+        # skillbus's recorder, not lcm-logger: lcm-logger's 30-message queue overflowed now
+        # and then while two episodes kept both cores busy (skillbus.generate.recorder).
+        box.start("logger", [sys.executable, "-m", "skillbus.generate.recorder", str(log)])
         _mark(box, log, "mark-start")  # the logger records before the first frame
         procs = start(box, progs, folder)
         rc = box.wait(procs["sim"], cfg.max_sim_s + WALL_SLACK_S)

@@ -28,6 +28,7 @@ import pyarrow.parquet as pq
 
 CHUNK = 1000
 DATA_PATH = "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"
+DEPTH = "observation.depth."
 VECTORS = ("observation.state", "observation.velocity", "observation.tool_pose", "observation.object_poses",
            "observation.articulation", "action")
 
@@ -45,6 +46,7 @@ class DatasetWriter:
         self.episodes: list[dict[str, Any]] = []
         self.tasks: dict[str, int] = {}
         self.names: dict[str, list[str]] | None = None
+        self.shapes: dict[str, list[int]] = {}  # the depth images' [height, width]
         self.total_frames = 0
         for line in self._lines("episodes.jsonl"):  # an earlier run's episodes stay (generate appends)
             self.episodes.append(line)
@@ -53,7 +55,9 @@ class DatasetWriter:
             self.tasks[line["task"]] = line["task_index"]
         info = self.root / "meta" / "info.json"
         if info.exists():
-            self.names = {k: v["names"] for k, v in json.loads(info.read_text())["features"].items() if k in VECTORS}
+            feats = json.loads(info.read_text())["features"]
+            self.names = {k: v["names"] for k, v in feats.items() if k in VECTORS or k.startswith(DEPTH)}
+            self.shapes = {k: v["shape"] for k, v in feats.items() if k.startswith(DEPTH)}
 
     def _lines(self, name: str) -> list[dict[str, Any]]:
         p = self.root / "meta" / name
@@ -67,12 +71,14 @@ class DatasetWriter:
         if self.names is not None and self.names != episode.names:
             raise ValueError("this episode's features differ from the dataset's (another scene or robot?)")
         self.names = episode.names
+        self.shapes = dict(episode.shapes)
         index = len(self.episodes)
         task_index = self.tasks.setdefault(task, len(self.tasks))
         rows = episode.rows
         n = len(rows)
         success = bool(meta.get("success"))
-        cols: dict[str, Any] = {k: pa.array([r[k] for r in rows], type=pa.list_(pa.float32())) for k in VECTORS}
+        cols: dict[str, Any] = {k: pa.array([r[k] for r in rows], type=pa.list_(pa.float32()))
+                                for k in VECTORS + tuple(sorted(self.shapes))}
         cols.update({
             "timestamp": pa.array([r["timestamp"] for r in rows], type=pa.float32()),
             "frame_index": pa.array(range(n), type=pa.int64()),
@@ -101,6 +107,9 @@ class DatasetWriter:
         names = self.names or {k: [] for k in VECTORS}
         features: dict[str, Any] = {k: {"dtype": "float32", "shape": [len(names[k])], "names": names[k]}
                                     for k in VECTORS}
+        features.update({k: {"dtype": "float32", "shape": shape, "names": ["height", "width"],
+                             "info": "depth, m along the camera's view (0: no return), row-major"}
+                         for k, shape in sorted(self.shapes.items())})
         features.update({k: {"dtype": t, "shape": [1], "names": None} for k, t in (
             ("timestamp", "float32"), ("frame_index", "int64"), ("episode_index", "int64"), ("index", "int64"),
             ("task_index", "int64"), ("next.done", "bool"), ("next.success", "bool"))})
@@ -117,6 +126,11 @@ class DatasetWriter:
 
 def stats(rows: list[dict[str, Any]]) -> dict[str, Any]:
     out: dict[str, Any] = {}
+    for k in sorted(k for k in (rows[0] if rows else {}) if k.startswith(DEPTH)):  # one channel: over all pixels
+        import numpy as np
+        a = np.asarray([r[k] for r in rows], dtype=np.float64)
+        out[k] = {"min": [float(a.min())], "max": [float(a.max())], "mean": [float(a.mean())], "std": [float(a.std())],
+                  "count": [len(rows)]}
     for k in VECTORS:
         cols = list(zip(*[r[k] for r in rows])) if rows and rows[0][k] else []
         if not cols:

@@ -35,6 +35,7 @@ class Episode:
     names: dict[str, list[str]]          # per feature, the names of its values
     segments: list[dict[str, Any]] = field(default_factory=list)
     frames: int = 0
+    shapes: dict[str, list[int]] = field(default_factory=dict)  # image features: [height, width]
 
 
 
@@ -43,12 +44,17 @@ def read(log: Path, stride: int, frame_ms: float) -> Episode:
     import lcm
 
     from skillbus.auth import strip
-    from skillbus.msgs import articulation_state_t, decode, sim_state_t, skill_progress_t, skill_state_t
+    from skillbus.msgs import (articulation_state_t, camera_cloud_t, decode, sim_state_t, skill_progress_t,
+                               skill_state_t)
+    from skillbus.perception.cloud import CloudAssembler, CloudError
     ended = {skill_state_t.SUCCESS: "Success", skill_state_t.FAILURE: "Failure"}
     states: dict[int, Any] = {}
     arts: dict[int, Any] = {}
     nodes: dict[int, dict[str, Any]] = {}  # node id -> segment
     ticks: dict[int, list[int]] = {}  # task -> the ticks its progress was published at
+    assembler = CloudAssembler(keep=64)
+    depth: dict[str, list[tuple[int, Any]]] = {}  # camera -> (frame, depth image) per whole capture
+    captures: dict[str, list[int]] = {}  # camera -> capture numbers seen (parts of any)
     try:
         events = list(lcm.EventLog(str(log), "r"))
     except (OSError, IOError, ValueError) as e:
@@ -60,6 +66,19 @@ def read(log: Path, stride: int, frame_ms: float) -> Episode:
             s = decode(sim_state_t, data)
             if s is not None:
                 states.setdefault(s.header.frame, s)
+        elif ch == "SB_CAMERA_CLOUD":
+            m = decode(camera_cloud_t, data)
+            if m is None or m.error or m.request_id:
+                continue  # (a request's answer: not the camera's own rate)
+            captures.setdefault(m.camera, []).append(m.capture)
+            try:
+                c = assembler.add(m, frame=m.header.frame)
+            except CloudError as e:
+                raise RecordError(f"{log}: camera {m.camera}: {e}") from None
+            if c is not None:
+                import numpy as np
+                z = np.nan_to_num(c.points[:, :, 2], nan=0.0).astype(np.float32)  # m along the view; 0: no return
+                depth.setdefault(c.camera, []).append((c.frame, z))
         elif ch == "SB_ROBOT_ARTICULATION":
             a = decode(articulation_state_t, data)
             if a is not None:
@@ -85,6 +104,11 @@ def read(log: Path, stride: int, frame_ms: float) -> Episode:
         if gaps:
             raise RecordError(f"{log}: the skill progress of task {task} at {len(gaps)} tick(s) is missing (first "
                               f"{gaps[0]}): the recording lost messages")
+    for cam, seen in captures.items():
+        whole = len(depth.get(cam, []))
+        if whole != len(set(seen)):
+            raise RecordError(f"{log}: camera {cam}: {len(set(seen)) - whole} capture(s) lost parts: the recording "
+                              "lost messages")
     if not states:
         raise RecordError(f"{log}: no physics state in the log")
     first, last = min(states), max(states)
@@ -106,6 +130,11 @@ def read(log: Path, stride: int, frame_ms: float) -> Episode:
         "observation.articulation": joints,
         "action": arm_names + ["gripper_width"],
     }
+    shapes: dict[str, list[int]] = {}
+    for cam, images in sorted(depth.items()):
+        h, w = images[0][1].shape
+        names[f"observation.depth.{cam}"] = ["height", "width"]
+        shapes[f"observation.depth.{cam}"] = [h, w]
     picked = list(range(first, last + 1, stride))
     rows = []
     for k, f in enumerate(picked):
@@ -114,7 +143,13 @@ def read(log: Path, stride: int, frame_ms: float) -> Episode:
         a = arts.get(f)
         if joints and (a is None or len(a.joints) != len(joints)):
             raise RecordError(f"{log}: the articulated objects' reading of frame {f} is missing")
+        row_depth = {}
+        for cam, images in sorted(depth.items()):
+            seen = [img for fr, img in images if fr <= f]  # the latest whole capture by this frame
+            img = seen[-1] if seen else images[0][1] * 0
+            row_depth[f"observation.depth.{cam}"] = img.reshape(-1).tolist()
         rows.append({
+            **row_depth,
             "frame": f,
             "timestamp": (f - first) * frame_ms / 1000.0,
             "observation.state": [s.position[i] for i in arm_idx] + [s.finger_width],
@@ -125,4 +160,4 @@ def read(log: Path, stride: int, frame_ms: float) -> Episode:
             "action": [nxt.position[i] for i in arm_idx] + [s.finger_width_target],
         })
     segments = sorted((v for v in nodes.values() if v["start_frame"] is not None), key=lambda v: v["start_frame"])
-    return Episode(rows, names, segments, frames=last - first + 1)
+    return Episode(rows, names, segments, frames=last - first + 1, shapes=shapes)

@@ -58,10 +58,31 @@ class Summary:
         return out
 
 
+EXIT_MARK = "skillbus-worker-exit"
+
+
 def worker_argv(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: Path, out: Path) -> list[str]:
+    # sh, the namespace's first process, says how the worker ended (unshare cannot pass a
+    # SIGKILL on: it reports its own failure to raise it); when sh exits the kernel ends
+    # the namespace and whatever of the episode is left in it.
     return ["unshare", "-rmpn", "--fork", "--mount-proc", "--kill-child", "--",
+            "sh", "-c", f'"$@"; s=$?; echo "{EXIT_MARK} $s" >&2; exit $s', "sh",
             sys.executable, "-m", "skillbus.generate.worker", str(cfg.path), str(seed), str(request), str(attempt),
             str(work), str(out)]
+
+
+def how_it_ended(returncode: int, log: str) -> str:
+    """How a worker ended, from its exit status as its namespace's first process saw it.
+
+    >>> how_it_ended(1, "...\\nskillbus-worker-exit 137\\n"), how_it_ended(1, "no mark")
+    ('killed by signal 9', 'exit 1')
+    """
+    import re
+    m = re.findall(EXIT_MARK + r" (\d+)", log)
+    code = int(m[-1]) if m else returncode
+    if code < 0:
+        return f"killed by signal {-code}"
+    return f"killed by signal {code - 128}" if code > 128 else f"exit {code}"
 
 
 def run_local(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: Path) -> dict[str, Any]:
@@ -70,8 +91,9 @@ def run_local(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: 
     with open(log, "wb") as f:
         p = subprocess.run(worker_argv(cfg, seed, request, attempt, work, out), stdout=f, stderr=subprocess.STDOUT)
     if not out.exists():
-        how = f"killed by signal {-p.returncode}" if p.returncode < 0 else f"exit {p.returncode}"
-        tail = log.read_text(errors="replace")[-400:].strip()
+        text = log.read_text(errors="replace")
+        how = how_it_ended(p.returncode, text)
+        tail = "\n".join(x for x in text.splitlines() if EXIT_MARK not in x)[-400:].strip()
         return {"error": f"the worker ended without a result ({how})" + (f": {tail}" if tail else "")}
     r = pickle.loads(out.read_bytes())
     out.unlink()

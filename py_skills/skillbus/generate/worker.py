@@ -1,8 +1,9 @@
 """One episode in a worker process: ``python -m skillbus.generate.worker CONFIG SEED
-REQUEST ATTEMPT WORK OUT``. The runner starts it under ``unshare --pid --fork
---kill-child`` as the first process of a PID namespace of its own, so a worker that is
-killed takes every process of its episode with it (the kernel ends a PID namespace with
-its first process): nothing of a killed episode lingers or writes. Its result goes to
+REQUEST ATTEMPT WORK OUT``. The runner starts it in a PID namespace of its own
+(``unshare --pid --fork --kill-child``; its first process a shell that reports how the
+worker ended), so a worker that is killed takes every process of its episode with it
+(the kernel ends a PID namespace with its first process): nothing of a killed episode
+lingers or writes. Its result goes to
 OUT (a pickle, renamed into place whole); an episode that could not be run writes
 ``{"error": ...}``."""
 
