@@ -171,3 +171,27 @@ def test_motion_skills_reach_what_they_say(cabinet):
     assert math.atan2(t3[1], t3[0]) == pytest.approx(0.3, abs=0.02)  # the arm turned to joint1 = 0.3 rad
     run_skill(cabinet, "ManipWait", "-p", "frames=20")
     assert math.dist(physics(cabinet)["tool"][:3], t3[:3]) < 0.002
+
+
+def test_a_manipulation_skill_stopped_mid_drag_holds_the_arm(cabinet):
+    """Ctrl-C to `skillbus run` stops the task (SkiROS2's preemption): the skill says at
+    which command it stopped, and the arm holds where it is."""
+    import signal
+    import time
+    box, ids = cabinet["sandbox"], cabinet["ids"]
+    p = box.start("run-open", [sys.executable, "-m", "skillbus.cli", "run", "ManipOpen", *cabinet["base"], "-p",
+                               f"Object={ids['cabinet/drawer_joint']}", "-p", "distance=0.15", "--timeout", "150"])
+    end = time.monotonic() + 60
+    while time.monotonic() < end and physics(cabinet)["joints"]["cabinet/drawer_joint"]["position"] < 0.03:
+        time.sleep(0.05)
+    p.popen.send_signal(signal.SIGINT)
+    assert box.wait(p, 30) == 130, p.stdout() + p.stderr()
+    out = p.stdout() + p.stderr()
+    assert "preempted: open at command" in out, out
+    a = physics(cabinet)
+    time.sleep(1.0)
+    b = physics(cabinet)
+    assert b["frame"] > a["frame"] + 10  # the session went on
+    assert math.dist(a["tool"][:3], b["tool"][:3]) < 0.003, (a["tool"], b["tool"])  # the arm holds
+    drawer = b["joints"]["cabinet/drawer_joint"]["position"]
+    assert 0.03 <= drawer < 0.14, drawer  # stopped part of the way

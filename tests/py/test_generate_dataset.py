@@ -172,3 +172,21 @@ def test_a_depth_camera_is_recorded_as_its_latest_whole_capture(tmp_path):
     write_log(log, range(0, 30), clouds=[cloud(3, 0, 1.2), part])
     with pytest.raises(RecordError, match="camera overhead: 1 capture\\(s\\) lost parts"):
         read(log, stride=5, frame_ms=20.0)
+
+
+def test_one_articulated_object_is_kept_per_episode():
+    scene = {"objects": [], "articulated": [{"name": "cabinet", "pose": [0, -0.55, 0, 0, 0, 0, 1]},
+                                            {"name": "cupboard", "pose": [0, 0.55, 0, 0, 0, 0, 1]},
+                                            {"name": "fridge", "pose": [1, 0, 0, 0, 0, 0, 1]}]}
+    spec = {"choose_articulated": ["cabinet", "cupboard"], "articulated": {"cupboard": {"x": [0.1, 0.1]}}}
+    kept = set()
+    for seed in range(20):
+        doc, info = randomized(scene, spec, episode_seed(4, seed))
+        names = [a["name"] for a in doc["articulated"]]
+        assert len(names) == 2 and "fridge" in names  # one of the two, and what is not in the choice
+        kept.add(info["articulated_chosen"])
+        if info["articulated_chosen"] == "cupboard":
+            assert doc["articulated"][0]["pose"][0] == pytest.approx(0.1)
+    assert kept == {"cabinet", "cupboard"}
+    with pytest.raises(ConfigError, match="no articulated object 'shed'"):
+        randomized(scene, {"choose_articulated": ["shed"]}, 1)
