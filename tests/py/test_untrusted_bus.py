@@ -105,11 +105,48 @@ def test_detections_with_a_bad_pose_or_no_name_are_counted_and_the_last_good_one
     cam = Camera(open_bus("memq://"))
     with pytest.raises(CameraError):
         cam.objects()
-    cam._on_objects(objects([0.1, 0.2, 0.0] + UNIT).encode())
+    cam._on(objects([0.1, 0.2, 0.0] + UNIT).encode())
     seen = cam.objects()
-    cam._on_objects(objects([0.0, 0.5, 0.1] + UNIT, pose, names=names).encode())
+    cam._on(objects([0.0, 0.5, 0.1] + UNIT, pose, names=names).encode())
     assert cam.objects() == seen and len(seen) == 1
     assert cam.bad == 1 and cam.rejects.summary() == {kind_of("SB_ROBOT_OBJECTS", field): 1}
+
+
+# -- the articulated objects' reading (SB_ROBOT_ARTICULATION) ----------------------------------------
+
+def articulation(**bad):
+    from skillbus.msgs import articulated_joint_t, articulation_state_t
+    j = articulated_joint_t()
+    j.object, j.joint, j.concept, j.kind = "cabinet", "drawer_joint", "Drawer", "prismatic"
+    j.position, j.velocity, j.lower, j.upper = 0.1, 0.0, 0.0, 0.25
+    j.axis, j.origin, j.has_handle, j.handle_pose = [0.0, 1.0, 0.0], [0.1, -0.4, 0.0], True, [0.1, -0.3, 0.3] + UNIT
+    for k, v in bad.items():
+        setattr(j, k, v)
+    m = articulation_state_t()
+    m.joints, m.num_joints = [j], 1
+    return m
+
+
+@pytest.mark.parametrize("bad,field", [
+    ({"position": math.nan}, "joints[0].position"),
+    ({"kind": "telescopic"}, "joints[0].kind"),
+    ({"upper": -1.0}, "joints[0].upper"),
+    ({"axis": [0.0, 2.0, 0.0]}, "joints[0].axis[1]"),
+    ({"handle_pose": [0.1, -0.3, 0.3, 0.0, 0.0, 0.0, 0.0]}, "joints[0].handle_pose.rotation"),
+    ({"joint": ""}, "joints[0].joint"),
+])
+def test_an_articulation_reading_with_bad_values_is_counted_and_the_last_good_one_stays(bad, field):
+    from skillbus.robot.articulation import Articulation, ArticulationError
+    a = Articulation(open_bus("memq://"))
+    with pytest.raises(ArticulationError):
+        a.joints()
+    a._on(articulation().encode())
+    assert a.joints()[0].position == 0.1
+    a._on(articulation(**bad).encode())
+    assert a.joints()[0].position == 0.1 and a.bad == 1
+    assert a.rejects.summary() == {kind_of("SB_ROBOT_ARTICULATION", field): 1}
+    a._on(b"\x00" * 7)  # not a message at all
+    assert a.joints()[0].position == 0.1 and a.bad == 2  # (decoded when asked)
 
 
 # -- the world model's change stream (SB_WM_CHANGES) and transaction results --------------------------

@@ -15,8 +15,9 @@ from __future__ import annotations
 from typing import Any
 
 from skillbus.bus import Bus, channel
-from skillbus.msgs import articulated_joint_t, articulation_state_t, decode
-from skillbus.validate import BadValue, Rejects, finite, finite_all, integer, one_of, pose, text
+from skillbus.msgs import articulated_joint_t, articulation_state_t
+from skillbus.robot.latest import LatestReading
+from skillbus.validate import finite, finite_all, integer, one_of, pose, text
 
 REACH_M = 100.0
 
@@ -47,36 +48,10 @@ def check_articulation(m: articulation_state_t) -> None:
             pose(j.handle_pose, f"joints[{i}].handle_pose", REACH_M)
 
 
-class Articulation:
+class Articulation(LatestReading[articulation_state_t]):
     def __init__(self, bus: Bus, participant: Any = None) -> None:
-        self._seen: articulation_state_t | None = None
-        self._raw: bytes | None = None
-        self.bad = 0
-        self.rejects = Rejects("articulation")
-        if participant is not None:
-            participant.subscribe(articulation_channel(), lambda m: self._on(m.data))
-        else:
-            bus.subscribe(articulation_channel(), lambda ch, d: self._on(d))
-
-    def _on(self, data: bytes) -> None:
-        self._raw = data
-
-    @property
-    def latest(self) -> articulation_state_t | None:
-        if self._raw is not None:
-            m = decode(articulation_state_t, self._raw)
-            self._raw = None
-            if m is None:
-                self.bad += 1
-                return self._seen
-            try:
-                check_articulation(m)
-            except BadValue as e:
-                self.bad += 1
-                self.rejects.record(articulation_channel(), e)
-                return self._seen
-            self._seen = m
-        return self._seen
+        super().__init__(bus, participant, articulation_channel(), articulation_state_t, check_articulation,
+                         "articulation")
 
     def joints(self) -> list[articulated_joint_t]:
         m = self.latest

@@ -14,46 +14,19 @@ from __future__ import annotations
 from typing import Any
 
 from skillbus.bus import Bus
-from skillbus.msgs import decode, robot_object_t, robot_objects_t
+from skillbus.msgs import robot_object_t, robot_objects_t
+from skillbus.robot.latest import LatestReading
 from skillbus.robot.messages import check_objects, objects_channel
-from skillbus.validate import BadValue, Rejects
 
 
 class CameraError(RuntimeError):
     pass
 
 
-class Camera:
+class Camera(LatestReading[robot_objects_t]):
     def __init__(self, bus: Bus, participant: Any = None) -> None:
-        self._seen: robot_objects_t | None = None
-        self._raw: bytes | None = None
-        self.bad = 0  # messages not used: not decodable, or values not sane (by kind: rejects)
-        self.rejects = Rejects("camera")
-        if participant is not None:
-            participant.subscribe(objects_channel(), lambda m: self._on_objects(m.data))
-        else:
-            bus.subscribe(objects_channel(), lambda ch, d: self._on_objects(d))
-
-    def _on_objects(self, data: bytes) -> None:
-        self._raw = data
-
-    @property
-    def latest(self) -> robot_objects_t | None:
-        """The latest detections, or None before the first."""
-        if self._raw is not None:
-            m = decode(robot_objects_t, self._raw)
-            self._raw = None
-            if m is None:
-                self.bad += 1
-                return self._seen
-            try:
-                check_objects(m)  # before Locate writes a pose into the world (the last good view stays)
-            except BadValue as e:
-                self.bad += 1
-                self.rejects.record(objects_channel(), e)
-                return self._seen
-            self._seen = m
-        return self._seen
+        # (checked before Locate writes a pose into the world; the last good view stays)
+        super().__init__(bus, participant, objects_channel(), robot_objects_t, check_objects, "camera")
 
     def objects(self) -> list[robot_object_t]:
         """Every object in the latest detections (name, pose: x y z qx qy qz qw, world)."""
