@@ -168,3 +168,29 @@ def test_episodes_as_ray_tasks(sandbox, tmp_path):
     r = last_json(p.stdout())
     assert r["written"] == 2 and not r["broken"], r
     assert len(load(out)) == sum(e["length"] for e in episodes_of(out))
+
+
+def test_ctrl_c_ends_generate_with_whole_episodes_only(tmp_path):
+    out = tmp_path / "interrupted"
+    p = subprocess.Popen([sys.executable, "-m", "skillbus.cli", "generate", str(SHORT), "--episodes", "8", "--seed", "9",
+                          "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, start_new_session=True)
+    try:
+        end = time.monotonic() + 120
+        while time.monotonic() < end and not (out / "meta" / "episodes.jsonl").exists():
+            time.sleep(0.1)
+        assert (out / "meta" / "episodes.jsonl").exists(), "no episode was written within 120 s"
+        os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C reaches the whole group
+        stdout, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+    assert p.returncode == 130, stdout + err[-3000:]
+    assert "interrupted: " in err and "episode(s) written" in err, err[-2000:]
+    eps = episodes_of(out)
+    assert 1 <= len(eps) < 8 and [e["episode_index"] for e in eps] == list(range(len(eps)))
+    assert len(load(out)) == sum(e["length"] for e in eps)  # every file whole, each in the meta
+    assert len(list((out / "data").rglob("*.parquet"))) == len(eps) and not list(out.rglob("*.tmp"))
+    assert not (out / "work").exists()
+    time.sleep(1.0)
+    assert processes_of(out) == [], "processes of the interrupted run are still running"

@@ -62,6 +62,10 @@ def main(args) -> int:
         return 2
     finally:
         bar.close()
+    if summary.interrupted:
+        print(f"interrupted: {summary.written} episode(s) written to {out}, each whole (the rest not run or cut "
+              f"short, none of it written)", file=sys.stderr)
+        return 130
     if args.json:
         print(json.dumps({"out": str(out), "written": summary.written, "successes": summary.successes,
                           "broken": summary.broken, "retried": summary.retried,

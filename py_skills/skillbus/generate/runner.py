@@ -39,6 +39,7 @@ class Summary:
     failures: Counter = field(default_factory=Counter)
     retried: int = 0
     retries: list[dict[str, Any]] = field(default_factory=list)  # why each retry was needed
+    interrupted: bool = False
     wall_s: float = 0.0
     results: dict[int, dict[str, Any]] = field(default_factory=dict)  # request -> the written episode's meta
 
@@ -160,7 +161,8 @@ def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: 
     if ray:
         _run_with_ray(cfg, seed, requests, attempts, workers, ray, settle, flush)
     else:
-        with cf.ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        pool = cf.ThreadPoolExecutor(max_workers=max(1, workers))
+        try:
             pending = {pool.submit(run_local, cfg, seed, r, 0, work): r for r in requests}
             while pending:
                 done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
@@ -173,6 +175,16 @@ def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: 
                     if not settle(request, r):
                         pending[pool.submit(run_local, cfg, seed, request, attempts[request], work)] = request
                 flush()
+        except KeyboardInterrupt:
+            # Ctrl-C reached the workers too (one process group): they end their episodes'
+            # systems; nothing more starts, and what is written stays whole.
+            pool.shutdown(wait=True, cancel_futures=True)
+            summary.interrupted = True
+            summary.wall_s = time.monotonic() - t0
+            if not keep_work:
+                shutil.rmtree(work, ignore_errors=True)
+            return summary
+        pool.shutdown(wait=True)
     flush()
     summary.wall_s = time.monotonic() - t0
     if not keep_work:
