@@ -14,6 +14,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from conftest import last_json
 from skillbus import paths
 
@@ -170,10 +172,11 @@ def test_episodes_as_ray_tasks(sandbox, tmp_path):
     assert len(load(out)) == sum(e["length"] for e in episodes_of(out))
 
 
-def test_ctrl_c_ends_generate_with_whole_episodes_only(tmp_path):
+@pytest.mark.parametrize("how", [[], ["--ray", "local"]], ids=["threads", "ray"])
+def test_ctrl_c_ends_generate_with_whole_episodes_only(tmp_path, how):
     out = tmp_path / "interrupted"
     p = subprocess.Popen([sys.executable, "-m", "skillbus.cli", "generate", str(SHORT), "--episodes", "8", "--seed", "9",
-                          "--workers", "2", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          "--workers", "2", "--out", str(out), *how], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, start_new_session=True)
     try:
         end = time.monotonic() + 120
@@ -191,6 +194,7 @@ def test_ctrl_c_ends_generate_with_whole_episodes_only(tmp_path):
     assert 1 <= len(eps) < 8 and [e["episode_index"] for e in eps] == list(range(len(eps)))
     assert len(load(out)) == sum(e["length"] for e in eps)  # every file whole, each in the meta
     assert len(list((out / "data").rglob("*.parquet"))) == len(eps) and not list(out.rglob("*.tmp"))
+    assert f"interrupted: {len(eps)} episode(s) written" in err, err[-2000:]  # the count told is the count kept
     assert not (out / "work").exists()
     time.sleep(1.0)
     assert processes_of(out) == [], "processes of the interrupted run are still running"

@@ -146,6 +146,51 @@ def test_the_dataset_loads_with_hugging_face_datasets_and_appends_in_order(tmp_p
     assert not list(root.rglob("*.tmp"))
 
 
+def test_ctrl_c_while_an_episode_is_written_comes_after_the_episode_is_whole(tmp_path, monkeypatch):
+    import os
+    import signal
+    import pyarrow.parquet
+    log = tmp_path / "e.lcmlog"
+    write_log(log, range(0, 50))
+    ep = read(log, stride=5, frame_ms=20.0)
+    root = tmp_path / "ds"
+    w = DatasetWriter(root, fps=10)
+    real_write = pyarrow.parquet.write_table
+
+    def write_then_ctrl_c(table, where, **kw):
+        real_write(table, where, **kw)
+        os.kill(os.getpid(), signal.SIGINT)  # between the file's write and its rename
+
+    monkeypatch.setattr(pyarrow.parquet, "write_table", write_then_ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        w.write_episode(ep, "put the cube away", {"seed": 1, "success": True})
+    assert [p.name for p in (root / "data").rglob("*")] == ["chunk-000", "episode_000000.parquet"]
+    assert len((root / "meta" / "episodes.jsonl").read_text().splitlines()) == 1
+    assert len((root / "meta" / "episodes_stats.jsonl").read_text().splitlines()) == 1
+    assert json.loads((root / "meta" / "info.json").read_text())["total_episodes"] == 1
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # given back
+
+
+def test_what_a_writer_killed_mid_episode_left_is_removed_on_open(tmp_path):
+    log = tmp_path / "e.lcmlog"
+    write_log(log, range(0, 50))
+    ep = read(log, stride=5, frame_ms=20.0)
+    root = tmp_path / "ds"
+    w = DatasetWriter(root, fps=10)
+    w.write_episode(ep, "put the cube away", {"seed": 1, "success": True})
+    chunk = root / "data" / "chunk-000"
+    # kill -9 between the rename and the meta lines, and another one mid-file:
+    (chunk / "episode_000001.parquet").write_bytes((chunk / "episode_000000.parquet").read_bytes())
+    (chunk / "episode_000002.parquet.tmp").write_bytes(b"PAR1 cut")
+    stats = root / "meta" / "episodes_stats.jsonl"
+    stats.write_text(stats.read_text() + json.dumps({"episode_index": 1, "stats": {}}) + "\n")
+    w2 = DatasetWriter(root, fps=10)
+    assert sorted(p.name for p in chunk.iterdir()) == ["episode_000000.parquet"]
+    assert [json.loads(x)["episode_index"] for x in stats.read_text().splitlines()] == [0]
+    assert w2.write_episode(ep, "put the cube away", {"seed": 2, "success": True}) == 1
+    assert sorted(p.name for p in chunk.iterdir()) == ["episode_000000.parquet", "episode_000001.parquet"]
+
+
 def test_a_depth_camera_is_recorded_as_its_latest_whole_capture(tmp_path):
     log = tmp_path / "e.lcmlog"
     write_log(log, range(0, 30), clouds=[cloud(3, 0, 1.2), cloud(13, 1, 0.8)])

@@ -26,6 +26,8 @@ from typing import Any
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from skillbus.generate.uninterrupted import uninterrupted
+
 CHUNK = 1000
 DATA_PATH = "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"
 DEPTH = "observation.depth."
@@ -37,6 +39,10 @@ def _atomic_write(path: Path, text: str) -> None:
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
+
+
+def _episode_index(path: Path) -> int:
+    return int(path.stem.rsplit("_", 1)[1])
 
 
 class DatasetWriter:
@@ -58,6 +64,24 @@ class DatasetWriter:
             feats = json.loads(info.read_text())["features"]
             self.names = {k: v["names"] for k, v in feats.items() if k in VECTORS or k.startswith(DEPTH)}
             self.shapes = {k: v["shape"] for k, v in feats.items() if k.startswith(DEPTH)}
+        self._tidy()
+
+    def _tidy(self) -> None:
+        """Removes what a writer killed mid-episode (kill -9, power loss) left: temporary
+        files, an episode file whose line never reached episodes.jsonl, and stats lines
+        beyond the episodes. The episodes in episodes.jsonl are the dataset."""
+        n = len(self.episodes)
+        for tmp in self.root.rglob("*.tmp"):
+            tmp.unlink()
+        for f in (self.root / "data").glob("chunk-*/episode_*.parquet"):
+            if _episode_index(f) >= n:
+                f.unlink()
+        stats_lines = self._lines("episodes_stats.jsonl")
+        if len(stats_lines) > n:
+            _atomic_write(self.root / "meta" / "episodes_stats.jsonl",
+                          "".join(json.dumps(x) + "\n" for x in stats_lines if x["episode_index"] < n))
+        if n and self.names is not None:
+            self.write_meta()  # its totals from episodes.jsonl again
 
     def _lines(self, name: str) -> list[dict[str, Any]]:
         p = self.root / "meta" / name
@@ -67,18 +91,22 @@ class DatasetWriter:
 
     def write_episode(self, episode: Any, task: str, meta: dict[str, Any]) -> int:
         """Writes one episode (skillbus.generate.record.Episode) labelled with `meta`;
-        returns its episode_index."""
+        returns its episode_index. Ctrl-C during the write is held until the episode is
+        whole, then raised."""
+        with uninterrupted():
+            return self._write_episode(episode, task, meta)
+
+    def _write_episode(self, episode: Any, task: str, meta: dict[str, Any]) -> int:
         if self.names is not None and self.names != episode.names:
             raise ValueError("this episode's features differ from the dataset's (another scene or robot?)")
-        self.names = episode.names
-        self.shapes = dict(episode.shapes)
         index = len(self.episodes)
-        task_index = self.tasks.setdefault(task, len(self.tasks))
+        task_index = self.tasks.get(task, len(self.tasks))
+        shapes = dict(episode.shapes)
         rows = episode.rows
         n = len(rows)
         success = bool(meta.get("success"))
         cols: dict[str, Any] = {k: pa.array([r[k] for r in rows], type=pa.list_(pa.float32()))
-                                for k in VECTORS + tuple(sorted(self.shapes))}
+                                for k in VECTORS + tuple(sorted(shapes))}
         cols.update({
             "timestamp": pa.array([r["timestamp"] for r in rows], type=pa.float32()),
             "frame_index": pa.array(range(n), type=pa.int64()),
@@ -91,8 +119,13 @@ class DatasetWriter:
         path = self.root / DATA_PATH.format(episode_chunk=index // CHUNK, episode_index=index)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp")
-        pq.write_table(pa.table(cols), tmp)
-        os.replace(tmp, path)  # whole, or not at all
+        try:
+            pq.write_table(pa.table(cols), tmp)
+            os.replace(tmp, path)  # whole, or not at all
+        finally:
+            tmp.unlink(missing_ok=True)
+        # Only now, with the file in place, does the writer's state change.
+        self.names, self.shapes, self.tasks[task] = episode.names, shapes, task_index
         line = {"episode_index": index, "tasks": [task], "length": n, **meta}
         self.episodes.append(line)
         self.total_frames += n

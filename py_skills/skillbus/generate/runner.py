@@ -28,6 +28,7 @@ from typing import Any, Callable
 
 from skillbus.generate.config import GenerateConfig, as_dict
 from skillbus.generate.lerobot import DatasetWriter
+from skillbus.generate.uninterrupted import uninterrupted
 
 
 @dataclass
@@ -149,47 +150,50 @@ def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: 
             meta = {k: r[k] for k in ("request", "seed", "attempt", "success", "failure_reason", "task_result",
                                       "state_digest", "session_digest", "sim_s", "randomized", "segments")}
             meta["config"] = as_dict(cfg)["config"]
-            writer.write_episode(r["episode"], cfg.instruction, meta)
-            summary.written += 1
-            summary.successes += bool(r["success"])
-            if not r["success"]:
-                summary.failures[r["failure_reason"]] += 1
-            summary.results[r["request"]] = meta
+            with uninterrupted():  # written and counted, or neither
+                writer.write_episode(r["episode"], cfg.instruction, meta)
+                summary.written += 1
+                summary.successes += bool(r["success"])
+                if not r["success"]:
+                    summary.failures[r["failure_reason"]] += 1
+                summary.results[r["request"]] = meta
             if progress:
                 progress(summary.written + len(summary.broken), episodes)
 
-    if ray:
-        _run_with_ray(cfg, seed, requests, attempts, workers, ray, settle, flush)
-    else:
-        pool = cf.ThreadPoolExecutor(max_workers=max(1, workers))
-        try:
-            pending = {pool.submit(run_local, cfg, seed, r, 0, work): r for r in requests}
-            while pending:
-                done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
-                for fut in done:
-                    request = pending.pop(fut)
-                    try:
-                        r = fut.result()
-                    except Exception as e:  # (run_local itself failing: no worker could be started)
-                        r = {"error": f"{type(e).__name__}: {e}"}
-                    if not settle(request, r):
-                        pending[pool.submit(run_local, cfg, seed, request, attempts[request], work)] = request
-                flush()
-        except KeyboardInterrupt:
-            # Ctrl-C reached the workers too (one process group): they end their episodes'
-            # systems; nothing more starts, and what is written stays whole.
-            pool.shutdown(wait=True, cancel_futures=True)
-            summary.interrupted = True
-            summary.wall_s = time.monotonic() - t0
-            if not keep_work:
-                shutil.rmtree(work, ignore_errors=True)
-            return summary
-        pool.shutdown(wait=True)
-    flush()
+    try:
+        if ray:
+            _run_with_ray(cfg, seed, requests, attempts, workers, ray, settle, flush)
+        else:
+            _run_with_threads(cfg, seed, requests, attempts, workers, work, settle, flush)
+        flush()
+    except KeyboardInterrupt:
+        # Ctrl-C reached the workers too (one process group): they end their episodes'
+        # systems; nothing more starts, and what is written stays whole (the writer holds
+        # the signal until the episode it is writing is complete).
+        summary.interrupted = True
     summary.wall_s = time.monotonic() - t0
     if not keep_work:
         shutil.rmtree(work, ignore_errors=True)
     return summary
+
+
+def _run_with_threads(cfg, seed, requests, attempts, workers, work, settle, flush) -> None:
+    pool = cf.ThreadPoolExecutor(max_workers=max(1, workers))
+    try:
+        pending = {pool.submit(run_local, cfg, seed, r, 0, work): r for r in requests}
+        while pending:
+            done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for fut in done:
+                request = pending.pop(fut)
+                try:
+                    r = fut.result()
+                except Exception as e:  # (run_local itself failing: no worker could be started)
+                    r = {"error": f"{type(e).__name__}: {e}"}
+                if not settle(request, r):
+                    pending[pool.submit(run_local, cfg, seed, request, attempts[request], work)] = request
+            flush()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)  # on Ctrl-C: nothing queued starts
 
 
 def _run_with_ray(cfg, seed, requests, attempts, workers, address, settle, flush) -> None:
@@ -201,17 +205,22 @@ def _run_with_ray(cfg, seed, requests, attempts, workers, address, settle, flush
             ray.init(address=address, log_to_driver=False)
     task = ray.remote(max_retries=0, num_cpus=1)(run_ray_task)
     pending = {task.remote(str(cfg.path), seed, r, 0): r for r in requests}
-    while pending:
-        done, _ = ray.wait(list(pending), num_returns=1)
-        for ref in done:
-            request = pending.pop(ref)
-            try:
-                r = ray.get(ref)
-            except Exception as e:  # a Ray worker that died mid-episode
-                r = {"error": f"the Ray worker failed: {type(e).__name__}: {e}"}
-            if not settle(request, r):
-                pending[task.remote(str(cfg.path), seed, request, attempts[request])] = request
-        flush()
+    try:
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                request = pending.pop(ref)
+                try:
+                    r = ray.get(ref)
+                except Exception as e:  # a Ray worker that died mid-episode
+                    r = {"error": f"the Ray worker failed: {type(e).__name__}: {e}"}
+                if not settle(request, r):
+                    pending[task.remote(str(cfg.path), seed, request, attempts[request])] = request
+            flush()
+    except KeyboardInterrupt:
+        for ref in pending:  # a forced cancel kills the Ray worker, and with it the episode's namespaces
+            ray.cancel(ref, force=True)
+        raise
 
 
 def default_workers() -> int:
