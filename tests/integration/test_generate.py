@@ -172,29 +172,66 @@ def test_episodes_as_ray_tasks(sandbox, tmp_path):
     assert len(load(out)) == sum(e["length"] for e in episodes_of(out))
 
 
-@pytest.mark.parametrize("how", [[], ["--ray", "local"]], ids=["threads", "ray"])
-def test_ctrl_c_ends_generate_with_whole_episodes_only(tmp_path, how):
-    out = tmp_path / "interrupted"
+def generate_until_one_episode_then(out: Path, extra: list[str], send) -> tuple[subprocess.Popen, str, str]:
+    """Starts generate (8 episodes), waits for its first episode, calls send(process)."""
     p = subprocess.Popen([sys.executable, "-m", "skillbus.cli", "generate", str(SHORT), "--episodes", "8", "--seed", "9",
-                          "--workers", "2", "--out", str(out), *how], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          "--workers", "2", "--out", str(out), *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, start_new_session=True)
     try:
         end = time.monotonic() + 120
         while time.monotonic() < end and not (out / "meta" / "episodes.jsonl").exists():
             time.sleep(0.1)
         assert (out / "meta" / "episodes.jsonl").exists(), "no episode was written within 120 s"
-        os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C reaches the whole group
+        send(p)
         stdout, err = p.communicate(timeout=120)
     finally:
         if p.poll() is None:
             os.killpg(p.pid, signal.SIGKILL)
+    return p, stdout, err
+
+
+def no_process_of(out: Path, within_s: float = 10.0) -> bool:
+    end = time.monotonic() + within_s
+    while processes_of(out) and time.monotonic() < end:
+        time.sleep(0.2)
+    return processes_of(out) == []
+
+
+def ctrl_c(p: subprocess.Popen) -> None:
+    os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C reaches the whole group
+
+
+def sigterm(p: subprocess.Popen) -> None:
+    p.terminate()  # to generate alone, as `kill PID` or a supervisor's stop
+
+
+@pytest.mark.parametrize("extra,send", [([], ctrl_c), ([], sigterm), (["--ray", "local"], ctrl_c)],
+                         ids=["ctrl-c", "sigterm", "ray-ctrl-c"])
+def test_ctrl_c_ends_generate_with_whole_episodes_only(tmp_path, extra, send):
+    out = tmp_path / "interrupted"
+    p, stdout, err = generate_until_one_episode_then(out, extra, send)
     assert p.returncode == 130, stdout + err[-3000:]
-    assert "interrupted: " in err and "episode(s) written" in err, err[-2000:]
     eps = episodes_of(out)
     assert 1 <= len(eps) < 8 and [e["episode_index"] for e in eps] == list(range(len(eps)))
     assert len(load(out)) == sum(e["length"] for e in eps)  # every file whole, each in the meta
     assert len(list((out / "data").rglob("*.parquet"))) == len(eps) and not list(out.rglob("*.tmp"))
     assert f"interrupted: {len(eps)} episode(s) written" in err, err[-2000:]  # the count told is the count kept
     assert not (out / "work").exists()
-    time.sleep(1.0)
-    assert processes_of(out) == [], "processes of the interrupted run are still running"
+    assert no_process_of(out), "processes of the interrupted run are still running"
+
+
+def test_generate_killed_leaves_no_episode_running_and_the_next_run_goes_on(tmp_path):
+    out = tmp_path / "killed"
+    p, _, _ = generate_until_one_episode_then(out, [], lambda p: p.kill())  # generate alone, kill -9
+    assert p.returncode == -signal.SIGKILL
+    # At once (an episode takes ~5 s: within 2 s, none could have simply run to its end).
+    assert no_process_of(out, within_s=2.0), "the episodes of a killed generate are still running"
+    kept = len(episodes_of(out))
+    again = subprocess.run([sys.executable, "-m", "skillbus.cli", "generate", str(SHORT), "--episodes", "1",
+                            "--seed", "9", "--first", "8", "--workers", "1", "--out", str(out), "--json"],
+                           capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stdout[-2000:] + again.stderr[-3000:]
+    eps = episodes_of(out)
+    assert [e["episode_index"] for e in eps] == list(range(kept + 1)) and eps[-1]["request"] == 8
+    assert len(list((out / "data").rglob("*.parquet"))) == kept + 1 and not list(out.rglob("*.tmp"))
+    assert len(load(out)) == sum(e["length"] for e in eps)

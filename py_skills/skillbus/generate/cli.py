@@ -27,7 +27,12 @@ def add_parser(sub) -> None:
     g.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
+def _sigterm_as_ctrl_c(_signum, _frame) -> None:
+    raise KeyboardInterrupt("SIGTERM")
+
+
 def main(args) -> int:
+    import signal
     from skillbus import paths
     from skillbus.generate import config as gconfig
     from skillbus.generate import runner
@@ -53,6 +58,7 @@ def main(args) -> int:
                                             "session_digest", "sim_s", "wall_s")}))
         return 0
     workers = args.workers or runner.default_workers()
+    signal.signal(signal.SIGTERM, _sigterm_as_ctrl_c)  # `kill PID`, a supervisor's stop: as Ctrl-C
     bar = _bar(args.episodes)
     try:
         summary = runner.generate(cfg, out, args.episodes, args.seed, workers=workers, first=args.first, ray=args.ray,

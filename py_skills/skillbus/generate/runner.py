@@ -20,6 +20,7 @@ import pickle
 import shutil
 import subprocess
 import sys
+import threading
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -67,7 +68,10 @@ def worker_argv(cfg: GenerateConfig, seed: int, request: int, attempt: int, work
     # sh, the namespace's first process, says how the worker ended (unshare cannot pass a
     # SIGKILL on: it reports its own failure to raise it); when sh exits the kernel ends
     # the namespace and whatever of the episode is left in it.
-    return ["unshare", "-rmpn", "--fork", "--mount-proc", "--kill-child", "--",
+    # setpriv: should generate itself be killed (kill -9), the kernel kills unshare, and
+    # --kill-child then the episode's namespace; no episode outlives its run.
+    return ["setpriv", "--pdeathsig", "KILL", "--",
+            "unshare", "-rmpn", "--fork", "--mount-proc", "--kill-child", "--",
             "sh", "-c", f'"$@"; s=$?; echo "{EXIT_MARK} $s" >&2; exit $s', "sh",
             sys.executable, "-m", "skillbus.generate.worker", str(cfg.path), str(seed), str(request), str(attempt),
             str(work), str(out)]
@@ -87,11 +91,31 @@ def how_it_ended(returncode: int, log: str) -> str:
     return f"killed by signal {code - 128}" if code > 128 else f"exit {code}"
 
 
+_live: set[subprocess.Popen] = set()  # the workers running now
+_live_lock = threading.Lock()
+
+
+def stop_workers() -> None:
+    """Ends every running worker and its episode's namespace (SIGTERM to unshare, whose
+    --kill-child then kills the namespace): for a SIGTERM that reached generate alone."""
+    with _live_lock:
+        for p in _live:
+            if p.poll() is None:
+                p.terminate()
+
+
 def run_local(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: Path) -> dict[str, Any]:
     out = work / f"result-{request:06d}-{attempt}.pkl"
     log = work / f"worker-{request:06d}-{attempt}.log"
     with open(log, "wb") as f:
-        p = subprocess.run(worker_argv(cfg, seed, request, attempt, work, out), stdout=f, stderr=subprocess.STDOUT)
+        p = subprocess.Popen(worker_argv(cfg, seed, request, attempt, work, out), stdout=f, stderr=subprocess.STDOUT)
+        with _live_lock:
+            _live.add(p)
+        try:
+            p.wait()
+        finally:
+            with _live_lock:
+                _live.discard(p)
     if not out.exists():
         text = log.read_text(errors="replace")
         how = how_it_ended(p.returncode, text)
@@ -192,6 +216,9 @@ def _run_with_threads(cfg, seed, requests, attempts, workers, work, settle, flus
                 if not settle(request, r):
                     pending[pool.submit(run_local, cfg, seed, request, attempts[request], work)] = request
             flush()
+    except KeyboardInterrupt:
+        stop_workers()  # Ctrl-C reached them already; a SIGTERM sent to generate alone did not
+        raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)  # on Ctrl-C: nothing queued starts
 
