@@ -160,7 +160,8 @@ def replay_log(page: Page, shots: Path, args) -> dict:
     held = '[data-testid=replay-world] .item[data-element^="skiros:Cube"][data-parent^="skiros:Gripper"]'
     for frame in range(first, last + 1, max(1, (last - first) // 60)):
         timeline.fill(str(frame))
-        page.wait_for_selector(f'[data-testid=replay-frame-number][data-frame="{frame}"]')
+        # (data-asked: a frame the logger dropped is answered with the nearest before it)
+        page.wait_for_selector(f'[data-testid=replay-frame-number][data-asked="{frame}"]')
         if page.locator(held).count():
             break
     else:

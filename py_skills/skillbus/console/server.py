@@ -198,7 +198,9 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
             view = frame_view(r.scene, sim, r.arm_cmd_at(f), f) if sim is not None else None
         except ValueError:
             view = None  # (a recorded state that cannot be drawn)
-        return {"frame": f, "sim_time_s": r.sim_time_ns[f] * 1e-9, "tasks": r.tasks_at(f),
+        # `asked` beside `frame`: a frame the log lacks (its logger dropped it) is shown as
+        # the nearest recorded one before it, and the page says so.
+        return {"frame": f, "asked": frame, "sim_time_s": r.sim_time_ns[f] * 1e-9, "tasks": r.tasks_at(f),
                 "world": r.world_at(f).tree(),
                 "sim": view}
 

@@ -392,8 +392,10 @@ async function replayFrame(frame) {
 }
 
 function renderReplay(r) {
-  $("#replay-frame").replaceChildren(el("b", {"data-testid": "replay-frame-number", "data-frame": r.frame},
-                                        `frame ${r.frame}`), ` · ${r.sim_time_s.toFixed(2)} s`);
+  $("#replay-frame").replaceChildren(el("b", {"data-testid": "replay-frame-number", "data-frame": r.frame,
+                                              "data-asked": r.asked}, `frame ${r.frame}`),
+                                     ` · ${r.sim_time_s.toFixed(2)} s`,
+                                     r.asked !== r.frame ? ` (frame ${r.asked} is not in the log: the nearest before it)` : "");
   const item = (n, depth, parent) => [el("div", {class: "item", "data-element": n.id, "data-parent": parent,
       style: `padding-left:${depth * 1.2 + .5}em`}, n.id, el("small", {}, n.label || "")),
     ...n.children.flatMap(c => item(c, depth + 1, n.id))];
