@@ -119,13 +119,17 @@ def test_rows_come_from_the_frames_and_a_lost_frame_refuses_the_episode(tmp_path
         read(log, stride=5, frame_ms=20.0)
 
 
-def test_the_dataset_loads_with_hugging_face_datasets_and_appends_in_order(tmp_path):
-    import datasets
+def an_episode_and_a_writer(tmp_path):
+    """An episode of 10 rows (50 frames, every 5th) and a writer of a new dataset folder."""
     log = tmp_path / "e.lcmlog"
     write_log(log, range(0, 50))
-    ep = read(log, stride=5, frame_ms=20.0)
     root = tmp_path / "ds"
-    w = DatasetWriter(root, fps=10)
+    return read(log, stride=5, frame_ms=20.0), root, DatasetWriter(root, fps=10)
+
+
+def test_the_dataset_loads_with_hugging_face_datasets_and_appends_in_order(tmp_path):
+    import datasets
+    ep, root, w = an_episode_and_a_writer(tmp_path)
     w.write_episode(ep, "put the cube away", {"seed": 1, "success": True, "session_digest": "ab"})
     w.write_episode(ep, "put the cube away", {"seed": 2, "success": False, "failure_reason": "slipped"})
     w2 = DatasetWriter(root, fps=10)  # a later run appends
@@ -150,11 +154,7 @@ def test_ctrl_c_while_an_episode_is_written_comes_after_the_episode_is_whole(tmp
     import os
     import signal
     import pyarrow.parquet
-    log = tmp_path / "e.lcmlog"
-    write_log(log, range(0, 50))
-    ep = read(log, stride=5, frame_ms=20.0)
-    root = tmp_path / "ds"
-    w = DatasetWriter(root, fps=10)
+    ep, root, w = an_episode_and_a_writer(tmp_path)
     real_write = pyarrow.parquet.write_table
 
     def write_then_ctrl_c(table, where, **kw):
@@ -172,11 +172,7 @@ def test_ctrl_c_while_an_episode_is_written_comes_after_the_episode_is_whole(tmp
 
 
 def test_what_a_writer_killed_mid_episode_left_is_removed_on_open(tmp_path):
-    log = tmp_path / "e.lcmlog"
-    write_log(log, range(0, 50))
-    ep = read(log, stride=5, frame_ms=20.0)
-    root = tmp_path / "ds"
-    w = DatasetWriter(root, fps=10)
+    ep, root, w = an_episode_and_a_writer(tmp_path)
     w.write_episode(ep, "put the cube away", {"seed": 1, "success": True})
     chunk = root / "data" / "chunk-000"
     # kill -9 between the rename and the meta lines, and another one mid-file:

@@ -5,7 +5,10 @@ line in episodes.jsonl, its stats line, info.json). A KeyboardInterrupt between 
 them would leave a file without its meta line or a stray ``.tmp``. The signal is held
 until the block ends and then raised as KeyboardInterrupt, so the dataset is always
 whole episodes only. Only the main thread receives signals in Python; elsewhere the
-block just runs. Blocks nest: the outermost one holds the signal, so a caller can make
+block just runs. (Blocking the signals with pthread_sigmask, as skillbus.launch does
+while it shuts down, is not enough here: generate's worker threads do not block them, the
+kernel hands the signal to one of them, and Python still raises it in the main thread.)
+Blocks nest: the outermost one holds the signal, so a caller can make
 "write the episode and count it" one step.
 """
 
