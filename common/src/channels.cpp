@@ -58,11 +58,31 @@ std::string current_robot() {
   return env ? env : "";
 }
 
+std::string channel_too_long(const std::string& name) {
+  if (name.size() <= kMaxChannel) return "";
+  return "channel name '" + name + "' is " + std::to_string(name.size()) + " bytes: LCM ends channel names at " +
+         std::to_string(kMaxChannel);
+}
+
+void refuse_long_channel(const std::string& name) {
+  if (name.size() > kMaxChannel) throw BusError(channel_too_long(name));
+}
+
 std::string robot_channel(const std::string& name, const std::string& robot) {
-  const char* ns = std::getenv("SKILLBUS_NAMESPACE");
-  std::string out = ns ? ns : "";
-  if (!robot.empty() && robot_scoped(name)) out += robot + "/";
-  return out + name;
+  const char* ns_env = std::getenv("SKILLBUS_NAMESPACE");
+  const std::string ns = ns_env ? ns_env : "";
+  const std::string mine = !robot.empty() && robot_scoped(name) ? robot : "";
+  const std::string out = ns + (mine.empty() ? "" : mine + "/") + name;
+  const std::string why = channel_too_long(out);
+  if (!why.empty()) {
+    // Said where the name is made: later, on LCM, it subscribes and never hears a message.
+    std::string parts;
+    if (!ns.empty()) parts += "$SKILLBUS_NAMESPACE '" + ns + "' takes " + std::to_string(ns.size()) + ", ";
+    if (!mine.empty()) parts += "robot " + mine + " takes " + std::to_string(mine.size() + 1) + ", ";
+    parts += name + " takes " + std::to_string(name.size());
+    throw std::invalid_argument(why + " (" + parts + "): shorten the name it is made of");
+  }
+  return out;
 }
 
 std::string channel(const std::string& name) { return robot_channel(name, current_robot()); }

@@ -146,6 +146,7 @@ dds_entity_t DdsBus::topic(const std::string& channel) {
     throw BusError("DDS topic '" + channel + "': a channel name, not a pattern (DDS has no LCM-style regular-"
                    "expression subscriptions: subscribe to each channel)");
   }
+  refuse_long_channel(channel);  // (DDS would carry it; LCM, the other transport, would not)
   const dds_entity_t t = dds_create_topic(participant_, &skillbus_Envelope_desc, channel.c_str(), q, nullptr);
   dds_delete_qos(q);
   if (t < 0) throw BusError("DDS topic '" + channel + "': " + dds_error(t));

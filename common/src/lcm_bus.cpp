@@ -88,6 +88,7 @@ lcm_t* LcmBus::lane(int i) {
 }
 
 void LcmBus::publish(const std::string& channel, const void* data, size_t size) {
+  refuse_long_channel(channel);
   lcm_t* l = lane(lcm_lane_of(channel));
   errno = 0;
   if (lcm_publish(l, channel.c_str(), data, static_cast<unsigned int>(size)) == 0) return;
@@ -141,6 +142,7 @@ void LcmBus::deliver(Sub& s, const std::string& channel, const uint8_t* data, si
 }
 
 int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_capacity) {
+  refuse_long_channel(channel);  // (LCM would take the subscription and never deliver)
   auto sub = std::make_unique<Sub>();
   sub->handler = std::move(handler);
   sub->lane = lane_urls_[1].empty() ? 0 : lcm_lane_of(channel);

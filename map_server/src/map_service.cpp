@@ -46,8 +46,10 @@ MapService::MapService(Bus& bus, ServiceOptions options)
     check_finite(q, true, false);
     for (const auto& p : q.points) {
       const Cell c = map_.state({p[0], p[1], p[2]});
-      r.states.push_back(c == Cell::Free ? map_reply_t::FREE : c == Cell::Occupied ? map_reply_t::OCCUPIED
-                                                                                     : map_reply_t::UNKNOWN);
+      int32_t state = map_reply_t::UNKNOWN;  // (the generated constants are of distinct unnamed enums)
+      if (c == Cell::Free) state = map_reply_t::FREE;
+      if (c == Cell::Occupied) state = map_reply_t::OCCUPIED;
+      r.states.push_back(state);
     }
     r.num_states = static_cast<int32_t>(r.states.size());
   });

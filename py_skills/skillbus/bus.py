@@ -81,6 +81,15 @@ def guarded(handler: Handler) -> Handler:
     return call
 
 
+def refuse_long_channel(channel: str) -> None:
+    """BusError when `channel` is longer than LCM carries: every backend refuses it, so a
+    name that works on one transport works on the other (skillbus.channels.too_long)."""
+    if len(channel) > channels.MAX_CHANNEL // 4:  # (no name this short can be 64 bytes)
+        why = channels.too_long(channel)
+        if why:
+            raise BusError(why)
+
+
 def resolve_url(url: str | None = None) -> str:
     return url or os.environ.get("SKILLBUS_BUS_URL") or DEFAULT_URL
 
@@ -296,6 +305,7 @@ class LcmBus(Bus):
         return self._url
 
     def publish(self, channel: str, data: bytes) -> None:
+        refuse_long_channel(channel)
         try:
             self._lane(lane_of(channel)).publish(channel, data)
         except OSError as e:
@@ -310,6 +320,7 @@ class LcmBus(Bus):
 
     def subscribe(self, channel: str, handler: Handler,
                   queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int:
+        refuse_long_channel(channel)
         lane = lane_of(channel) if self._lane_urls[1] else 0
         sid = self._next_id
         if self._direct:

@@ -23,6 +23,7 @@ _SCOPED_PREFIXES = ("SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CA
 _SCOPED = frozenset({"SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SIM_ATTACH"})
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 MAX_ROBOT_NAME = 24  # LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit
+MAX_CHANNEL = 63  # LCM_MAX_CHANNEL_NAME_LENGTH: DDS allows more, but one name must work on both
 
 _robot: str | None = None  # set_robot(); None: $SKILLBUS_ROBOT
 
@@ -52,10 +53,30 @@ def current_robot() -> str:
     return _robot if _robot is not None else os.environ.get("SKILLBUS_ROBOT", "")
 
 
+def too_long(name: str) -> str:
+    """Why `name` cannot be a channel ("" when it can): LCM ends channel names at 63
+    bytes, and a longer one fails only later, and far from its cause (it subscribes and
+    never hears a message; its publish is refused)."""
+    size = len(name.encode())
+    if size <= MAX_CHANNEL:
+        return ""
+    return f"channel name '{name}' is {size} bytes: LCM ends channel names at {MAX_CHANNEL}"
+
+
 def robot_channel(name: str, robot: str) -> str:
-    """`name` for an explicit robot ("" for none)."""
+    """`name` for an explicit robot ("" for none). Raises ValueError for a name longer
+    than a channel may be, saying which part made it long."""
     prefix = os.environ.get("SKILLBUS_NAMESPACE", "")
-    return prefix + (f"{robot}/" if robot and robot_scoped(name) else "") + name
+    mine = robot if robot and robot_scoped(name) else ""
+    out = prefix + (f"{mine}/" if mine else "") + name
+    why = too_long(out)
+    if why:
+        parts = [f"$SKILLBUS_NAMESPACE '{prefix}' takes {len(prefix.encode())}"] if prefix else []
+        if mine:
+            parts.append(f"robot {mine} takes {len(mine.encode()) + 1}")
+        parts.append(f"{name} takes {len(name.encode())}")
+        raise ValueError(f"{why} ({', '.join(parts)}): shorten the name it is made of")
+    return out
 
 
 def channel(name: str) -> str:

@@ -30,7 +30,7 @@ import re
 import struct
 import time
 from dataclasses import dataclass
-from skillbus.bus import Bus, BusError, Handler, guarded
+from skillbus.bus import Bus, BusError, Handler, guarded, refuse_long_channel
 
 log = logging.getLogger("bus")
 
@@ -225,6 +225,7 @@ class DdsBus(Bus):
             if _PATTERN.search(channel):
                 raise self._error(f"DDS topic '{channel}': a channel name, not a pattern (DDS has no LCM-style "
                                   f"regular-expression subscriptions: subscribe to each channel)")
+            refuse_long_channel(channel)  # (DDS would carry it; LCM, the other transport, would not)
             from cyclonedds.topic import Topic
             try:
                 t = self._topics[channel] = Topic(self._dp, channel, self._envelope, qos=self._qos(channel))

@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include <sstream>
+#include <stdexcept>
 
 #include "liveness.hpp"
 #include "skill_params.hpp"
@@ -96,6 +97,12 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     };
     if (!name_ok(reg.process, 64) || !name_ok(reg.rpc_area, 64))
       throw RpcBadRequest("register: a process name and RPC area are 1 to 64 letters, digits, '_', '-' or '.'");
+    try {  // the manager calls the process there: a name that cannot be a channel is refused now
+      rpc_request_channel(reg.rpc_area);
+      rpc_reply_channel(reg.rpc_area);
+    } catch (const std::invalid_argument& e) {
+      throw RpcBadRequest("register: process " + reg.process + ": " + e.what());
+    }
     const auto known = registry_.processes();
     if (std::find(known.begin(), known.end(), reg.process) == known.end() && known.size() >= kMaxProcesses)
       throw RpcError("register: " + std::to_string(kMaxProcesses) + " skill processes are registered already");

@@ -43,6 +43,7 @@ void replay(const wm_change_t& ch, std::map<std::string, wm::Element>& elements,
         break;
       case wm::Op::AddRelation: relations.insert(op.relation); break;
       case wm::Op::RemoveRelation: relations.erase(op.relation); break;
+      case wm::Op::ExpectElement: break;  // a check the server made: it changes nothing
     }
   }
 }

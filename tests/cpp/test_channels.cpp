@@ -64,3 +64,35 @@ TEST(Channels, RobotNamesThatCannotNameAChannelAreRefused) {
   }
   EXPECT_EQ(current_robot(), "");  // a refused name changed nothing
 }
+
+// LCM ends channel names at 63 bytes: a longer one registers, subscribes and then never
+// carries a message, so it fails where it is made, saying which part is long.
+TEST(Channels, ANameLongerThanLcmAllowsIsRefusedWhereItIsMade) {
+  RobotReset reset;
+  const std::string longest(49, 'P');  // SB_SKPROC_ + 49 + _REQ = 63 bytes
+  EXPECT_EQ(channel("SB_SKPROC_" + longest + "_REQ").size(), 63u);
+  try {
+    channel("SB_SKPROC_" + longest + "Q_REQ");
+    ADD_FAILURE() << "a 64-byte channel name was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("64 bytes"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("63"), std::string::npos) << e.what();
+  }
+  set_robot("r2");
+  try {
+    channel("SB_SKPROC_" + longest + "_REQ");
+    ADD_FAILURE() << "a 66-byte channel name was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("robot r2"), std::string::npos) << e.what();
+  }
+  set_robot("");
+  ::setenv("SKILLBUS_NAMESPACE", std::string(60, 'N').c_str(), 1);
+  EXPECT_THROW(channel("SB_WM_REQ"), std::invalid_argument);
+}
+
+TEST(Channels, EveryBusRefusesAChannelLcmCannotCarry) {
+  auto bus = open_bus("memq://");
+  const std::string too_long(64, 'C');
+  EXPECT_THROW(bus->subscribe(too_long, [](const std::string&, const uint8_t*, size_t) {}), BusError);
+  EXPECT_THROW(bus->publish(too_long, "x", 1), BusError);
+}

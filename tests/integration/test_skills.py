@@ -146,3 +146,38 @@ def test_several_tasks_run_at_once(sandbox):
     ids = sorted(int(o.split("task ")[1].split(":")[0]) for o in outs)
     assert ids == [1, 2]  # two tasks, each with its own id and its own result
     assert all("Wait Success: waited" in o for o in outs)
+
+
+REGISTER_LONG_AREA = """
+import sys
+from skillbus.bus import open_bus
+from skillbus.msgs import skill_register_t
+from skillbus.rpc import RpcClient, RpcError
+reg = skill_register_t()
+reg.process, reg.rpc_area = sys.argv[1], sys.argv[2]
+try:
+    RpcClient(open_bus(), "SKILL", "probe").call("register", reg, skill_register_t, timeout=10)
+    print("registered")
+except RpcError as e:
+    print("refused:", e)
+"""
+
+
+def test_a_process_name_too_long_for_its_channel_is_refused_at_start_and_at_register(sandbox):
+    # LCM ends channel names at 63 bytes: SB_SKPROC_<NAME>_REQ of a 50-letter name is 64.
+    # Before, such a process registered, then every tick failed to publish.
+    mgr = sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    name = "p" * 50
+    proc = sandbox.start("long", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", name,
+                                  "--library", "flow_skills"], env={"PYTHONPATH": str(LIBS)})
+    rc = sandbox.wait(proc, 30)
+    assert rc == 2, proc.stdout() + proc.stderr()
+    assert f"channel name 'SB_SKPROC_{name.upper()}_REQ' is 64 bytes: LCM ends channel names at 63" in proc.stderr()
+    assert "Traceback" not in proc.stderr()
+    # A process written with another SDK reaches the manager: it refuses, naming why.
+    for area, want in (("SKPROC_" + "P" * 50, "refused: register: process x: channel name 'SB_SKPROC_"),
+                       ("SKPROC_" + "P" * 49, "registered")):
+        probe = sandbox.start(f"probe-{len(area)}", [sys.executable, "-c", REGISTER_LONG_AREA, "x", area])
+        assert sandbox.wait(probe, 30) == 0, probe.stderr()
+        assert probe.stdout().startswith(want), probe.stdout()
+    assert mgr.returncode is None  # (the manager goes on)

@@ -55,3 +55,30 @@ def test_rpc_areas_follow_the_robot():
     set_robot("r2")
     assert request_channel("SKILL") == "r2/SB_SKILL_REQ" and reply_channel("SKPROC_SKILLS") == "r2/SB_SKPROC_SKILLS_REP"
     assert request_channel("WM") == "SB_WM_REQ" and request_channel("SIM") == "SB_SIM_REQ"
+
+
+def test_a_channel_name_longer_than_lcm_allows_is_refused_naming_its_parts(monkeypatch):
+    # LCM ends channel names at 63 bytes: a longer one registers, subscribes and then
+    # never carries a message, so it must fail where it is made, saying which part is long.
+    from skillbus.rpc import request_channel
+    name = "P" * 49  # SB_SKPROC_ + 49 + _REQ = 63 bytes: the longest that fits
+    assert len(request_channel("SKPROC_" + name)) == 63
+    with pytest.raises(ValueError, match=r"64 bytes.*LCM.*63"):
+        request_channel("SKPROC_" + name + "Q")
+    set_robot("r2")  # the robot's name and its / count
+    with pytest.raises(ValueError, match=r"'r2/SB_SKPROC_P+_REQ' is 66 bytes.*robot r2"):
+        request_channel("SKPROC_" + name)
+    assert robot_channel("SB_WM_REQ", "r2") == "SB_WM_REQ"  # (shared: not under the robot)
+    set_robot("")
+    monkeypatch.setenv("SKILLBUS_NAMESPACE", "N" * 60)
+    with pytest.raises(ValueError, match=r"SKILLBUS_NAMESPACE"):
+        channel("SB_WM_REQ")
+
+
+def test_every_bus_refuses_to_subscribe_to_a_channel_lcm_cannot_carry():
+    from skillbus.bus import BusError, open_bus
+    bus = open_bus("memq://")
+    with pytest.raises(BusError, match="64 bytes"):
+        bus.subscribe("C" * 64, lambda ch, data: None)
+    with pytest.raises(BusError, match="64 bytes"):
+        bus.publish("C" * 64, b"x")

@@ -67,9 +67,18 @@ std::unique_ptr<Bus> open_bus(const std::string& url = "");
 // system apart on one bus).
 //   channel("SB_WM_REQ")          -> "<ns>SB_WM_REQ"
 //   channel("SB_ROBOT_ARM_STATE") -> "<ns>r2/SB_ROBOT_ARM_STATE" in a process of robot r2
+// Both throw std::invalid_argument for a name longer than kMaxChannel, naming the part
+// that made it long (a skill process's name, the robot's, $SKILLBUS_NAMESPACE).
 std::string channel(const std::string& name);
 // The same for an explicit robot ("" for none): the physics server serves every robot.
 std::string robot_channel(const std::string& name, const std::string& robot);
+// LCM ends channel names at 63 bytes (LCM_MAX_CHANNEL_NAME_LENGTH). DDS carries longer
+// ones, but one name must work on both, and every backend refuses a longer name with a
+// BusError: on LCM it would subscribe and never hear a message.
+constexpr size_t kMaxChannel = 63;
+// Why `name` cannot be a channel, "" when it can; the backends' check, throwing BusError.
+std::string channel_too_long(const std::string& name);
+void refuse_long_channel(const std::string& name);
 bool robot_scoped(const std::string& name);
 // The process's robot: set_robot() (a program's --robot), else $SKILLBUS_ROBOT, else "".
 std::string current_robot();

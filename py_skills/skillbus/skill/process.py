@@ -15,6 +15,7 @@ import inspect
 import json
 import logging
 import os
+import re
 import struct
 import sys
 import threading
@@ -25,7 +26,7 @@ from typing import Any
 from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t, skill_value_t
 from skillbus.skill.tick_wire import TickReply
-from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, request_channel
+from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, reply_channel, request_channel
 from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
@@ -381,6 +382,24 @@ def apply_config(args) -> None:
     args.config_interfaces = dict(conf.get("interfaces", {}))
 
 
+_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
+
+
+def name_problem(name: str) -> str:
+    """Why `name` cannot name a skill process ("" when it can): the skill manager's rule
+    (1 to 64 letters, digits, _, - or .) and its RPC channels, which must fit LCM's 63
+    bytes with the robot's name in front. Said at start: else the process would register
+    and then fail every tick, or be refused by the manager after loading its libraries."""
+    if not _NAME.fullmatch(name):
+        return "a skill process name is 1 to 64 letters, digits, '_', '-' or '.'"
+    try:
+        request_channel("SKPROC_" + name.upper())
+        reply_channel("SKPROC_" + name.upper())
+    except ValueError as e:
+        return str(e)
+    return ""
+
+
 def main(args) -> int:
     sys.path.insert(0, os.getcwd())  # libraries next to where the user runs it
     try:
@@ -390,6 +409,10 @@ def main(args) -> int:
         return 2
     if not args.name or not args.library:
         print("error: skills-process needs --name and at least one --library (or both in --config)", file=sys.stderr)
+        return 2
+    why = name_problem(args.name)
+    if why:
+        print(f"error: --name {args.name!r}: {why}", file=sys.stderr)
         return 2
     if getattr(args, "standalone", False) and args.lockstep:
         print("error: --standalone serves without a manager on the wall clock; not with --lockstep", file=sys.stderr)
