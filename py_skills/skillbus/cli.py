@@ -45,6 +45,11 @@ def build_parser() -> argparse.ArgumentParser:
     sd.add_argument("--run-dir", default="runs/launch")
     sp = sub.add_parser("spy", help="lcm-spy with every skillbus message type decodable")
     sp.add_argument("--url", default=None)
+    rc = sub.add_parser("record", help="record every message of the bus (LCM or DDS) into an LCM log file, "
+                                       "losing none under load (lcm-logger drops when its queue of 30 fills)")
+    rc.add_argument("file", help="the LCM log to write")
+    rc.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
+    rc.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
     dr = sub.add_parser("dds-record", help="record every skillbus channel of a DDS domain into an LCM log file")
     dr.add_argument("file", help="the LCM log to write")
     dr.add_argument("--url", default=None, help="the DDS bus (default: $SKILLBUS_BUS_URL)")
@@ -204,6 +209,17 @@ def dispatch(args: argparse.Namespace) -> int:
     if args.command == "console":
         from skillbus.console import cli as console_cli
         return console_cli.main(args)
+    if args.command == "record":
+        from skillbus.bus import resolve_url
+        args.url = resolve_url(args.url)
+        if args.url.startswith("dds://"):
+            from skillbus import dds_record
+            return dds_record.main(args)
+        if not args.url.startswith("udpm://"):
+            print(f"error: record reads udpm:// and dds:// buses; the bus is {args.url}", file=sys.stderr)
+            return 2
+        from skillbus import udpm_record
+        return udpm_record.main(args)
     if args.command == "dds-record":
         from skillbus import dds_record
         return dds_record.main(args)

@@ -96,7 +96,7 @@ def main(args) -> int:
     from skillbus.bus import resolve_url
     url = resolve_url(args.url)
     if not url.startswith("dds://"):
-        print(f"error: dds-record records a DDS domain; the bus is {url} (for LCM use lcm-logger)", file=sys.stderr)
+        print(f"error: dds-record records a DDS domain; the bus is {url} (skillbus record records either)", file=sys.stderr)
         return 2
     stop = []
     for sig in (signal.SIGINT, signal.SIGTERM):

@@ -266,11 +266,9 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     robot_names = [""] if robots == 1 else list(TWO_ARMS_REGIONS)
     participants = [p.name for p in progs if p.participant]
     managers = [p.name for p in progs if p.name.endswith("skill_mgr")]
-    # The run's LCM log: lcm-logger on LCM; on DDS skillbus dds-record, which writes the same format.
-    if bus == "lcm":
-        progs.append(Program("logger", [str(paths.lcm_logger()), "-f", str(run_dir / "demo.lcmlog")]))
-    else:
-        progs.append(Program("logger", [sys.executable, "-m", "skillbus.cli", "dds-record", str(run_dir / "demo.lcmlog")]))
+    # The run's LCM log, by skillbus record on either transport: lcm-logger drops messages
+    # when its queue of 30 fills (a busy machine), and a replay then lacks them.
+    progs.append(Program("logger", [sys.executable, "-m", "skillbus.cli", "record", str(run_dir / "demo.lcmlog")]))
     url = bus_url(bus)
     os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
     conf = launch.write_config(run_dir, progs, lockstep=True, bus_url=url)
@@ -366,7 +364,7 @@ def print_summary(r: dict[str, Any]) -> None:
         print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (skillbus replay; skillbus spy)")
     else:
         print(f"  bus               Cyclone DDS, {r.get('url', '')}")
-        print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (recorded by skillbus dds-record; "
+        print(f"  LCM log           {Path(r['run_dir']) / 'demo.lcmlog'} (recorded by skillbus record; "
               f"skillbus replay plays it on LCM)")
     print(f"  logs              {Path(r['run_dir']) / 'logs'}")
 

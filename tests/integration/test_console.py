@@ -36,15 +36,12 @@ SHOTS = Path(os.environ.get("SKILLBUS_TEST_ARTIFACTS", paths.REPO_ROOT / "build"
 @pytest.fixture
 def system(sandbox, tmp_path):
     """The pick-and-place system under lockstep, without a task: tasks come from the page
-    or the CLI. lcm-logger (on DDS, skillbus dds-record) records it from the start (for
-    the replay)."""
+    or the CLI. skillbus record records it from the start (for the replay)."""
     if not CHROMIUM.exists():
         pytest.fail(f"{CHROMIUM} is missing: `make test` installs Debian's chromium (deploy/setup.sh)")
     (tmp_path / "run").mkdir()
     log = tmp_path / "run" / "run.lcmlog"
-    recorder = ([sys.executable, "-m", "skillbus.cli", "dds-record", str(log)] if sandbox.transport == "dds" else
-                [str(paths.lcm_logger()), "-f", str(log)])  # (the same log format from either transport)
-    procs = {"logger": sandbox.start("logger", recorder)}
+    procs = {"logger": sandbox.start("logger", [sys.executable, "-m", "skillbus.cli", "record", str(log)])}
     procs.update(start(sandbox, programs(tmp_path / "run", task=None), tmp_path / "run"))
     procs["skills"].wait_for("registered", 60)
     return procs
@@ -104,7 +101,7 @@ def test_clear_table_started_from_the_form_runs_to_success_and_its_recording_rep
     same_tree(seen["rows"], final)  # no state of any node lost on the way
     assert seen["canvas"] == 1 and re.match(r"frame \d+ ", seen["live3d"]), seen  # the live 3D view draws
 
-    # The run, recorded by lcm-logger, on the Replay page: scrubbed to a frame where a
+    # The run, recorded by skillbus record, on the Replay page: scrubbed to a frame where a
     # cube is in the gripper, in the world model and in the physics (finger contacts).
     system["logger"].popen.send_signal(signal.SIGINT)  # (it closes its log)
     assert sandbox.wait(system["logger"], 10) is not None

@@ -86,6 +86,31 @@ def test_wrong_requests_are_refused_naming_what_is_wrong(sandbox, tmp_path):
     (again,) = ask(sandbox, url, ["GET", "/api/world/element/skiros:Cube-2", None])
     assert again[1]["read"] == token and again[1]["label"] == "red", again
     assert proc.returncode is None
+    # A log that lacks a frame (its recorder dropped it): asked for that frame, the console
+    # answers the nearest one before it and says which was asked; the page shows both.
+    gap = clocks_log(tmp_path / "gap.lcmlog", [f for f in range(10) if f != 4])
+    opened, at4, at5, at99 = ask(sandbox, url, ["POST", "/api/replay/open", {"path": str(gap)}],
+                                 ["GET", "/api/replay/frame/4", None], ["GET", "/api/replay/frame/5", None],
+                                 ["GET", "/api/replay/frame/99", None])
+    assert opened[0] == 200 and opened[1]["frames"] == 9 and opened[1]["last"] == 9, opened
+    assert (at4[1]["frame"], at4[1]["asked"], round(at4[1]["sim_time_s"], 6)) == (3, 4, 0.06), at4
+    assert (at5[1]["frame"], at5[1]["asked"]) == (5, 5), at5
+    assert (at99[1]["frame"], at99[1]["asked"]) == (9, 99), at99
+
+
+def clocks_log(path: Path, frames: list[int]) -> Path:
+    """An LCM log of a lockstep session's clocks only (20 ms frames), for `frames`."""
+    from skillbus.dds_record import LogWriter
+    from skillbus.msgs import header_t, lockstep_clock_t
+    out = LogWriter(path)
+    for f in frames:
+        c = lockstep_clock_t()
+        c.header = header_t()
+        c.header.frame, c.header.sim_time_ns, c.header.sender = f, f * 20_000_000, "sim"
+        c.frame_period_ns, c.participants, c.num_participants = 20_000_000, ["gripper"], 1
+        out.write("SB_LOCKSTEP_CLOCK", c.encode())
+    out.close()
+    return path
 
 
 def test_without_the_token_the_api_and_the_live_feed_are_refused(sandbox):

@@ -7,8 +7,8 @@ each robot's channels under its name, one skill manager per robot, one world mod
 * `skillbus demo --robots 2`: two arms, each with its gripper on its own CAN bus and its
   own manager, clear six cubes at once in lockstep: exit 0, every cube in a bin in the
   world model and in the physics, the arms never touch, and the same digests on LCM and
-  on Cyclone DDS (one digest across runs); the run's log (on DDS recorded by skillbus
-  dds-record) shows both tasks running at the same time."""
+  on Cyclone DDS (one digest across runs); the run's log (recorded by skillbus record)
+  shows both tasks running at the same time."""
 
 import sys
 
@@ -118,8 +118,8 @@ def test_two_arms_clear_six_cubes_at_once_the_same_on_lcm_and_dds(box, tmp_path)
             assert w["in"] == f"bin{region}", (bus, name, w)
             p = sim["objects"][name]
             assert abs(p[1] - (0.6 if region == "1" else -1.0)) < 0.15 and p[2] < 0.25, (bus, name, p)
-    # Both arms worked at once: in the log of each run (lcm-logger's; on DDS skillbus
-    # dds-record's), each manager's task runs from the first second to its end, and each
+    # Both arms worked at once: in the log of each run (skillbus record's, on either
+    # transport), each manager's task runs from the first second to its end, and each
     # ran for most of the other's time; both logs show the same.
     spans = {bus: task_spans(tmp_path / bus / "demo.lcmlog") for bus in runs}
     assert spans["lcm"] == spans["dds"], spans

@@ -143,6 +143,12 @@ class ReplayLog:
                 self._snapshot_pages.setdefault((r.client_id, r.request_id), {})[r.chunk] = \
                     bytes(r.payload) + struct.pack("<i", r.chunks)
             return stopped_at
+        if base in ("SB_LOCKSTEP_ACK", "SB_LOCKSTEP_JOIN"):
+            # The protocol's own acks and joins: an ack is stamped too, but no participant
+            # publishes it in a frame, so no session digest counts it (a recorder of both
+            # lanes, or of DDS, has them; an ack's seq 0 would hide the sender's own first
+            # message of the frame).
+            return stopped_at
         stamp = peek_stamp(data)
         if stamp is None:
             return stopped_at

@@ -3,7 +3,7 @@ its randomized scene and world-model scene written into its folder, the whole sy
 started under lockstep (physics, world model, skill manager, motion service, CANopen
 gripper, the skill process with the manipulation library) with the task (ManipTask of
 the config's skills) started at the manager's first tick, and a recorder of every
-message (skillbus.generate.recorder). The session ends a few frames after the task (or
+message (skillbus.udpm_record). The session ends a few frames after the task (or
 at ``max_sim_s``); the rows come from the log (skillbus.generate.record).
 
 Run alone (``skillbus generate CONFIG --episode K --seed S``) an episode gives the same
@@ -84,8 +84,8 @@ def run_episode(cfg: GenerateConfig, seed: int, request: int, work: Path, attemp
     t0 = time.monotonic()
     with Sandbox(log_dir=folder / "logs") as box:
         # skillbus's recorder, not lcm-logger: lcm-logger's 30-message queue overflowed now
-        # and then while two episodes kept both cores busy (skillbus.generate.recorder).
-        box.start("logger", [sys.executable, "-m", "skillbus.generate.recorder", str(log)])
+        # and then while two episodes kept both cores busy (skillbus.udpm_record).
+        box.start("logger", [sys.executable, "-m", "skillbus.cli", "record", str(log)])
         _mark(box, log, "mark-start")  # the logger records before the first frame
         procs = start(box, progs, folder)
         rc = box.wait(procs["sim"], cfg.max_sim_s + WALL_SLACK_S)

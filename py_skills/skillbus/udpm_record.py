@@ -1,0 +1,74 @@
+"""``skillbus record FILE`` on an LCM bus: every message of udpm:// (both lanes) into an
+LCM event log, as lcm-logger writes one, without losing any under load.
+
+lcm-logger receives on LCM's thread and queues what it has not yet handled, 30 messages
+per subscription; a lockstep run at full speed publishes thousands a second, and when
+the logger's process waited for a core for a few milliseconds (a busy 2-core machine)
+the queue overflowed: a frame's state went missing now and then, and a replay of the run
+said its log lacked messages. This recorder reads the sockets itself (skillbus.udpm) with
+a 4 MB kernel receive buffer each (thousands of messages: seconds of a run) and writes
+every message as it comes (skillbus.dds_record.LogWriter, the format of lcm-logger: read
+by skillbus replay, the console, lcm-logplayer; flushed every 100 ms, so
+skillbus.monitor.mark_log sees its marker). On dds:// ``skillbus record`` is
+skillbus.dds_record.
+"""
+
+from __future__ import annotations
+
+import select
+import signal
+import sys
+import time
+
+from skillbus.bus import lane1_url, udpm_address
+from skillbus.dds_record import LogWriter
+from skillbus.udpm import UdpmReceiver
+
+RECEIVE_BUFFER = 4 * 1024 * 1024
+
+
+class UdpmRecorder:
+    """Records every message of the udpm:// bus `url` (and its second lane) into `path`."""
+
+    def __init__(self, url: str, path: str) -> None:
+        lanes = [url] + ([lane1_url(url)] if lane1_url(url) else [])
+        self.receivers = []
+        for lane in lanes:
+            group, port, _ = udpm_address(lane)
+            self.receivers.append(UdpmReceiver(group, port, RECEIVE_BUFFER))
+        self.log = LogWriter(path)
+
+    def spin(self, timeout: float = 0.05) -> None:
+        """Writes what arrived, waiting at most `timeout` for it."""
+        ready, _, _ = select.select(self.receivers, [], [], timeout)
+        for r in ready:
+            while True:
+                got = r.read()
+                if got is False:  # (nothing more now; None: a fragment, or a datagram that does not parse)
+                    break
+                if got is not None:
+                    self.log.write(got[0], got[1])
+        self.log.flush_if_due()
+
+    def close(self) -> None:
+        self.log.close()
+        for r in self.receivers:
+            r.close()
+
+
+def main(args) -> int:
+    """`args`: file, url (udpm://), seconds (None: until SIGINT or SIGTERM)."""
+    stop: list[int] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda s, f: stop.append(s))
+    rec = UdpmRecorder(args.url, args.file)
+    print("recording", file=sys.stderr, flush=True)
+    deadline = time.monotonic() + args.seconds if args.seconds else None
+    try:
+        while not stop and (deadline is None or time.monotonic() < deadline):
+            rec.spin()
+    finally:
+        events = rec.log.events
+        rec.close()
+    print(f'{{"events": {events}}}', flush=True)
+    return 0
