@@ -13,11 +13,12 @@ import time
 
 import lcm
 
-from skillbus.bus import open_bus, receive_buffer_url, resolve_url
+from skillbus.bus import check_multicast_interface, open_bus, receive_buffer_url, resolve_url
 
 
 class RawLcm:
     def __init__(self) -> None:
+        check_multicast_interface(resolve_url())  # (as open_bus: on this host only)
         self.lc = lcm.LCM(receive_buffer_url(resolve_url()))
 
     def publish(self, ch: str, data: bytes) -> None:

@@ -262,6 +262,7 @@ class LcmBus(Bus):
     """
 
     def __init__(self, url: str) -> None:
+        check_multicast_interface(url)  # (here, not only in open_raw_bus: before any socket joins a group)
         self._url = url
         lane1 = lane1_url(url)
         self._lane_urls = [receive_buffer_url(url), receive_buffer_url(lane1) if lane1 else ""]

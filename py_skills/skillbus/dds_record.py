@@ -59,8 +59,12 @@ class DdsRecorder:
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
         from skillbus.dds import DdsBus
-        self.bus = DdsBus(url)  # (no key: the bytes are recorded as they came, authenticators and all)
-        self.log = LogWriter(path)
+        self.log = LogWriter(path)  # (first: a file it cannot write stops it before it joins the domain)
+        try:
+            self.bus = DdsBus(url)  # (no key: the bytes are recorded as they came, authenticators and all)
+        except BaseException:
+            self.log.close()
+            raise
         self.channels: set[str] = set()
         self._publications = BuiltinDataReader(self.bus._dp, BuiltinTopicDcpsPublication)
         self._next_discovery = 0.0
@@ -93,7 +97,7 @@ class DdsRecorder:
 
 
 def main(args) -> int:
-    from skillbus.bus import resolve_url
+    from skillbus.bus import BusError, resolve_url
     url = resolve_url(args.url)
     if not url.startswith("dds://"):
         print(f"error: dds-record records a DDS domain; the bus is {url} (skillbus record records either)", file=sys.stderr)
@@ -101,7 +105,14 @@ def main(args) -> int:
     stop = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda s, f: stop.append(s))
-    rec = DdsRecorder(url, args.file)
+    try:
+        rec = DdsRecorder(url, args.file)
+    except OSError as e:
+        print(f"error: cannot write {args.file}: {e.strerror}", file=sys.stderr)
+        return 2
+    except BusError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     deadline = time.monotonic() + args.seconds if args.seconds else None
     try:
         while not stop and (deadline is None or time.monotonic() < deadline):

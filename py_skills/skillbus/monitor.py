@@ -85,6 +85,10 @@ def lcm_tool(name: str) -> str:
 
 
 def spy_command(url: str | None = None) -> tuple[list[str], dict[str, str]]:
+    """lcm-spy's command line; BusError where the bus would be joined on a network card
+    (LCM's tools have no guard of their own: skillbus checks for them, as open_bus does)."""
+    from skillbus.bus import check_multicast_interface
+    check_multicast_interface(resolve_url(url))
     jar = paths.types_jar()
     if not jar.exists():
         raise FileNotFoundError(f"{jar} is missing: run `make build` (it generates the types jar)")
@@ -114,9 +118,10 @@ def run_foreground(argv: list[str], env: dict[str, str] | None = None) -> int:
 
 
 def main_spy(args) -> int:
+    from skillbus.bus import BusError
     try:
         argv, env = spy_command(args.url)
-    except FileNotFoundError as e:
+    except (FileNotFoundError, BusError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return run_foreground(argv, env=env)
@@ -126,6 +131,12 @@ def main_replay(args) -> int:
     log = Path(args.log)
     if not log.is_file():
         print(f"error: {log}: no such log file", file=sys.stderr)
+        return 2
+    from skillbus.bus import BusError, check_multicast_interface
+    try:
+        check_multicast_interface(resolve_url(args.url))  # (lcm-logplayer has no guard of its own)
+    except BusError as e:
+        print(f"error: {e}", file=sys.stderr)
         return 2
     argv = [lcm_tool("lcm-logplayer"), "--lcm-url", resolve_url(args.url), "--speed", str(args.speed)]
     if args.channels:

@@ -20,7 +20,7 @@ import signal
 import sys
 import time
 
-from skillbus.bus import lane1_url, udpm_address
+from skillbus.bus import BusError, check_multicast_interface, lane1_url, udpm_address
 from skillbus.dds_record import LogWriter
 from skillbus.udpm import UdpmReceiver
 
@@ -31,12 +31,18 @@ class UdpmRecorder:
     """Records every message of the udpm:// bus `url` (and its second lane) into `path`."""
 
     def __init__(self, url: str, path: str) -> None:
+        check_multicast_interface(url)  # it joins the group: on this host only, unless told otherwise
+        self.log = LogWriter(path)  # (before joining: a file it cannot write stops it first)
         lanes = [url] + ([lane1_url(url)] if lane1_url(url) else [])
         self.receivers = []
-        for lane in lanes:
-            group, port, _ = udpm_address(lane)
-            self.receivers.append(UdpmReceiver(group, port, RECEIVE_BUFFER))
-        self.log = LogWriter(path)
+        try:
+            for lane in lanes:
+                group, port, _ = udpm_address(lane)
+                self.receivers.append(UdpmReceiver(group, port, RECEIVE_BUFFER))
+        except OSError as e:
+            self.close()
+            raise BusError(f"cannot receive on {url}: {e.strerror} (for udpm:// the host needs a multicast route, "
+                           f"e.g. `ip route add 224.0.0.0/4 dev lo`)") from None
 
     def spin(self, timeout: float = 0.05) -> None:
         """Writes what arrived, waiting at most `timeout` for it."""
@@ -61,7 +67,14 @@ def main(args) -> int:
     stop: list[int] = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda s, f: stop.append(s))
-    rec = UdpmRecorder(args.url, args.file)
+    try:
+        rec = UdpmRecorder(args.url, args.file)
+    except BusError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"error: cannot write {args.file}: {e.strerror}", file=sys.stderr)
+        return 2
     print("recording", file=sys.stderr, flush=True)
     deadline = time.monotonic() + args.seconds if args.seconds else None
     try:

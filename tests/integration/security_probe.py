@@ -89,7 +89,11 @@ def probe(bus, who: str) -> dict[str, str]:
 
 
 def outsider() -> None:
-    from skillbus.bus import LcmBus  # (an outsider's own LCM: no guard keeps it on its host)
+    # An outsider's own LCM on the other "host": it joins the group on its network card,
+    # as a program that is not skillbus would (skillbus's own guard is told so).
+    import os
+    from skillbus.bus import LcmBus, route_interface
+    os.environ["SKILLBUS_NETWORK"] = route_interface(int.from_bytes(bytes([239, 255, 76, 67]), "big"))
     print(json.dumps(probe(LcmBus(resolve_url(None)), "veth")), flush=True)
 
 

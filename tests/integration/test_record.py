@@ -83,3 +83,14 @@ def test_record_names_a_bus_it_cannot_record(tmp_path):
                         "--url", "memq://"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "record reads udpm:// and dds:// buses; the bus is memq://" in r.stderr
     assert r.stdout == ""
+
+
+def test_record_names_a_file_it_cannot_write(tmp_path):
+    from skillbus.netns import Sandbox
+    with Sandbox(log_dir=tmp_path / "logs") as box:
+        for url in ("udpm://239.255.76.67:7667?ttl=0", "dds://7"):
+            p = box.start(f"rec-{url[:3]}", [sys.executable, "-m", "skillbus.cli", "record",
+                                              str(tmp_path / "no" / "x.lcmlog"), "--url", url])
+            assert box.wait(p, 60) == 2, p.stderr()
+            assert f"cannot write {tmp_path / 'no' / 'x.lcmlog'}: No such file" in p.stderr(), p.stderr()
+            assert "Traceback" not in p.stderr()

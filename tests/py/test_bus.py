@@ -123,3 +123,40 @@ def test_a_send_the_network_refuses_is_a_lost_message_not_a_crash(caplog):
     bus._lanes[0] = Refusing(e.EMSGSIZE)
     with pytest.raises(BusError, match="SB_X"):
         bus.publish("SB_X", b"x" * 10)
+
+
+def test_nothing_joins_a_multicast_group_on_a_network_card_unless_told(monkeypatch, tmp_path):
+    # The guard of open_bus, also where a udpm:// socket is made without it: an LcmBus made
+    # directly, and the recorder (which joined the group on eth0 from a shell on the host).
+    from skillbus import bus as bus_module
+    from skillbus import udpm, udpm_record
+    monkeypatch.setattr(bus_module, "route_interface", lambda address, table="": "eth9")
+    monkeypatch.delenv("SKILLBUS_NETWORK", raising=False)
+
+    def no_socket(*a, **k):
+        raise AssertionError("a socket joined the group before the check")
+    monkeypatch.setattr(udpm, "UdpmReceiver", no_socket)
+    monkeypatch.setattr(udpm_record, "UdpmReceiver", no_socket)
+    monkeypatch.setattr(bus_module, "UdpmReceiver", no_socket)
+    url = "udpm://239.255.76.67:7667?ttl=0"
+    with pytest.raises(BusError, match="network interface eth9"):
+        bus_module.LcmBus(url)
+    with pytest.raises(BusError, match="network interface eth9"):
+        udpm_record.UdpmRecorder(url, str(tmp_path / "x.lcmlog"))
+    assert not (tmp_path / "x.lcmlog").exists()
+
+
+def test_lcm_tools_are_not_started_on_a_bus_a_network_card_would_carry(monkeypatch, tmp_path, capsys):
+    # skillbus spy and skillbus replay start LCM's own tools, which have no guard: skillbus
+    # checks for them, as open_bus does, and names why.
+    import argparse
+    from skillbus import bus as bus_module, monitor
+    monkeypatch.setattr(bus_module, "route_interface", lambda address, table="": "eth9")
+    monkeypatch.delenv("SKILLBUS_NETWORK", raising=False)
+    monkeypatch.setattr(monitor, "run_foreground", lambda *a, **k: pytest.fail(f"started {a[0][0]}"))
+    (log := tmp_path / "run.lcmlog").write_bytes(b"")
+    url = "udpm://239.255.76.67:7667?ttl=0"
+    assert monitor.main_spy(argparse.Namespace(url=url)) == 2
+    assert monitor.main_replay(argparse.Namespace(url=url, log=str(log), speed=1.0, channels=None)) == 2
+    err = capsys.readouterr().err
+    assert err.count("would be joined on the network interface eth9") == 2, err
