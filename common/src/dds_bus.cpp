@@ -140,13 +140,13 @@ dds_qos_t* DdsBus::qos(const std::string& channel) const {
 dds_entity_t DdsBus::topic(const std::string& channel) {
   auto it = topics_.find(channel);
   if (it != topics_.end()) return it->second;
+  refuse_long_channel(channel);  // (DDS would carry it; LCM, the other transport, would not)
   dds_qos_t* q = qos(channel);
   if (channel.find_first_of(".*+?[](){}|^$\\") != std::string::npos) {
     dds_delete_qos(q);
     throw BusError("DDS topic '" + channel + "': a channel name, not a pattern (DDS has no LCM-style regular-"
                    "expression subscriptions: subscribe to each channel)");
   }
-  refuse_long_channel(channel);  // (DDS would carry it; LCM, the other transport, would not)
   const dds_entity_t t = dds_create_topic(participant_, &skillbus_Envelope_desc, channel.c_str(), q, nullptr);
   dds_delete_qos(q);
   if (t < 0) throw BusError("DDS topic '" + channel + "': " + dds_error(t));

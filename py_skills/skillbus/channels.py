@@ -53,11 +53,17 @@ def current_robot() -> str:
     return _robot if _robot is not None else os.environ.get("SKILLBUS_ROBOT", "")
 
 
+def _bytes(s: str) -> int:
+    """Its length in bytes, as LCM and the C++ side count (an environment's undecodable
+    bytes as they were)."""
+    return len(s.encode("utf-8", "surrogateescape"))
+
+
 def too_long(name: str) -> str:
     """Why `name` cannot be a channel ("" when it can): LCM ends channel names at 63
     bytes, and a longer one fails only later, and far from its cause (it subscribes and
     never hears a message; its publish is refused)."""
-    size = len(name.encode())
+    size = _bytes(name)
     if size <= MAX_CHANNEL:
         return ""
     return f"channel name '{name}' is {size} bytes: LCM ends channel names at {MAX_CHANNEL}"
@@ -71,10 +77,10 @@ def robot_channel(name: str, robot: str) -> str:
     out = prefix + (f"{mine}/" if mine else "") + name
     why = too_long(out)
     if why:
-        parts = [f"$SKILLBUS_NAMESPACE '{prefix}' takes {len(prefix.encode())}"] if prefix else []
+        parts = [f"$SKILLBUS_NAMESPACE '{prefix}' takes {_bytes(prefix)}"] if prefix else []
         if mine:
-            parts.append(f"robot {mine} takes {len(mine.encode()) + 1}")
-        parts.append(f"{name} takes {len(name.encode())}")
+            parts.append(f"robot {mine} takes {_bytes(mine) + 1}")
+        parts.append(f"{name} takes {_bytes(name)}")
         raise ValueError(f"{why} ({', '.join(parts)}): shorten the name it is made of")
     return out
 

@@ -210,16 +210,8 @@ def dispatch(args: argparse.Namespace) -> int:
         from skillbus.console import cli as console_cli
         return console_cli.main(args)
     if args.command == "record":
-        from skillbus.bus import resolve_url
-        args.url = resolve_url(args.url)
-        if args.url.startswith("dds://"):
-            from skillbus import dds_record
-            return dds_record.main(args)
-        if not args.url.startswith("udpm://"):
-            print(f"error: record reads udpm:// and dds:// buses; the bus is {args.url}", file=sys.stderr)
-            return 2
-        from skillbus import udpm_record
-        return udpm_record.main(args)
+        from skillbus import record
+        return record.main(args)
     if args.command == "dds-record":
         from skillbus import dds_record
         return dds_record.main(args)

@@ -16,15 +16,18 @@ messages of a channel are not lost while discovery runs.
 
 from __future__ import annotations
 
-import signal
+import logging
 import struct
 import sys
 import time
 from pathlib import Path
 
+from skillbus.bus import BusError
+
 ENVELOPE_TYPE = "skillbus::Envelope"
 _SYNC = 0xEDA1DA01
 _HEADER = struct.Struct(">IqqII")  # sync, event number, utime, channel length, data length
+log = logging.getLogger("dds-record")
 FLUSH_S = 0.1
 DISCOVER_S = 0.005  # (a new topic is read at once: its first messages beyond the last 16 would be lost)
 
@@ -66,6 +69,7 @@ class DdsRecorder:
             self.log.close()
             raise
         self.channels: set[str] = set()
+        self.skipped: dict[str, str] = {}  # topics found that cannot be recorded, and why
         self._publications = BuiltinDataReader(self.bus._dp, BuiltinTopicDcpsPublication)
         self._next_discovery = 0.0
 
@@ -77,7 +81,11 @@ class DdsRecorder:
                 name = getattr(p, "topic_name", None)
                 if getattr(p, "type_name", None) == ENVELOPE_TYPE and name and name not in self.channels:
                     self.channels.add(name)
-                    self.bus.subscribe(name, self.log.write)
+                    try:
+                        self.bus.subscribe(name, self.log.write)
+                    except BusError as e:  # (a topic no skillbus channel can be: a writer of another build)
+                        self.skipped[name] = str(e)
+                        log.warning("not recording DDS topic %s: %s", ascii(name), e)
             if len(found) < 64:
                 return
 
@@ -97,28 +105,11 @@ class DdsRecorder:
 
 
 def main(args) -> int:
-    from skillbus.bus import BusError, resolve_url
+    """``skillbus dds-record``: ``skillbus record`` for DDS domains only."""
+    from skillbus import record
+    from skillbus.bus import resolve_url
     url = resolve_url(args.url)
     if not url.startswith("dds://"):
         print(f"error: dds-record records a DDS domain; the bus is {url} (skillbus record records either)", file=sys.stderr)
         return 2
-    stop = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda s, f: stop.append(s))
-    try:
-        rec = DdsRecorder(url, args.file)
-    except OSError as e:
-        print(f"error: cannot write {args.file}: {e.strerror}", file=sys.stderr)
-        return 2
-    except BusError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    deadline = time.monotonic() + args.seconds if args.seconds else None
-    try:
-        while not stop and (deadline is None or time.monotonic() < deadline):
-            rec.spin()
-    finally:
-        events = rec.log.events
-        rec.close()
-    print(f'{{"events": {events}, "channels": {len(rec.channels)}}}', flush=True)
-    return 0
+    return record.main(args)

@@ -48,7 +48,7 @@ LOG_MARK_CHANNEL = "SB_LOG_MARK"  # (not a channel any program listens to)
 
 
 def mark_log(log: str | Path, timeout: float = 10.0, url: str | None = None) -> str:
-    """Waits until lcm-logger, writing `log`, has recorded a marker published now: from
+    """Waits until the recorder (skillbus record, lcm-logger), writing `log`, has recorded a marker published now: from
     then on it records everything, and everything that reached it before the marker is
     in the file. Call it after starting the logger (before what must be recorded) and
     before stopping it (instead of a pause "for the last messages"). The marker is a
@@ -76,7 +76,7 @@ def mark_log(log: str | Path, timeout: float = 10.0, url: str | None = None) -> 
         except FileNotFoundError:
             return False
 
-    wait_until(logged, timeout, f"a marker in the LCM log {log} (is lcm-logger recording it, on this bus?)")
+    wait_until(logged, timeout, f"a marker in the LCM log {log} (is a recorder, skillbus record, writing it, on this bus?)")
     return token
 
 

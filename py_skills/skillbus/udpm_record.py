@@ -16,9 +16,6 @@ skillbus.dds_record.
 from __future__ import annotations
 
 import select
-import signal
-import sys
-import time
 
 from skillbus.bus import BusError, check_multicast_interface, lane1_url, udpm_address
 from skillbus.dds_record import LogWriter
@@ -32,12 +29,12 @@ class UdpmRecorder:
 
     def __init__(self, url: str, path: str) -> None:
         check_multicast_interface(url)  # it joins the group: on this host only, unless told otherwise
+        lanes = [udpm_address(lane) for lane in [url] + ([lane1_url(url)] if lane1_url(url) else [])]
         self.log = LogWriter(path)  # (before joining: a file it cannot write stops it first)
-        lanes = [url] + ([lane1_url(url)] if lane1_url(url) else [])
+        self.channels: set[str] = set()
         self.receivers = []
         try:
-            for lane in lanes:
-                group, port, _ = udpm_address(lane)
+            for group, port, _ in lanes:
                 self.receivers.append(UdpmReceiver(group, port, RECEIVE_BUFFER))
         except OSError as e:
             self.close()
@@ -54,34 +51,10 @@ class UdpmRecorder:
                     break
                 if got is not None:
                     self.log.write(got[0], got[1])
+                    self.channels.add(got[0])
         self.log.flush_if_due()
 
     def close(self) -> None:
         self.log.close()
         for r in self.receivers:
             r.close()
-
-
-def main(args) -> int:
-    """`args`: file, url (udpm://), seconds (None: until SIGINT or SIGTERM)."""
-    stop: list[int] = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda s, f: stop.append(s))
-    try:
-        rec = UdpmRecorder(args.url, args.file)
-    except BusError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    except OSError as e:
-        print(f"error: cannot write {args.file}: {e.strerror}", file=sys.stderr)
-        return 2
-    print("recording", file=sys.stderr, flush=True)
-    deadline = time.monotonic() + args.seconds if args.seconds else None
-    try:
-        while not stop and (deadline is None or time.monotonic() < deadline):
-            rec.spin()
-    finally:
-        events = rec.log.events
-        rec.close()
-    print(f'{{"events": {events}}}', flush=True)
-    return 0

@@ -90,6 +90,16 @@ TEST(Channels, ANameLongerThanLcmAllowsIsRefusedWhereItIsMade) {
   EXPECT_THROW(channel("SB_WM_REQ"), std::invalid_argument);
 }
 
+TEST(Channels, TheLimitIsInBytesAsLcmCountsThem) {
+  RobotReset reset;
+  std::string fits, too_long;
+  for (int i = 0; i < 31; ++i) fits += "\xc3\xa9";  // é: 31 characters of 2 bytes, and one more byte
+  fits += "x";
+  too_long = fits.substr(0, 62) + "\xc3\xa9";  // 32 characters, 64 bytes
+  EXPECT_EQ(channel(fits).size(), 63u);
+  EXPECT_THROW(channel(too_long), std::invalid_argument);
+}
+
 TEST(Channels, EveryBusRefusesAChannelLcmCannotCarry) {
   auto bus = open_bus("memq://");
   const std::string too_long(64, 'C');

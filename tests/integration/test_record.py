@@ -94,3 +94,27 @@ def test_record_names_a_file_it_cannot_write(tmp_path):
             assert box.wait(p, 60) == 2, p.stderr()
             assert f"cannot write {tmp_path / 'no' / 'x.lcmlog'}: No such file" in p.stderr(), p.stderr()
             assert "Traceback" not in p.stderr()
+
+
+LONG_CHANNEL = """
+from skillbus.bus import BusError, open_bus
+bus = open_bus()
+for what, call in (("subscribe", lambda: bus.subscribe("C" * 64, lambda ch, d: None)),
+                   ("publish", lambda: bus.publish("C" * 64, b"x"))):
+    try:
+        call()
+        print(what, "accepted")
+    except BusError as e:
+        print(what, "refused:", e)
+"""
+
+
+def test_dds_refuses_a_channel_lcm_could_not_carry(tmp_path):
+    # (DDS would carry it; one name must work on both transports: see test_channels.py)
+    from skillbus.netns import Sandbox
+    with Sandbox(log_dir=tmp_path / "logs", transport="dds") as box:
+        p = box.start("long", [sys.executable, "-c", LONG_CHANNEL])
+        assert box.wait(p, 60) == 0, p.stderr()
+    lines = p.stdout().splitlines()
+    assert [line.split(":")[0] for line in lines] == ["subscribe refused", "publish refused"], lines
+    assert all("is 64 bytes: LCM ends channel names at 63" in line for line in lines), lines

@@ -129,15 +129,15 @@ def test_nothing_joins_a_multicast_group_on_a_network_card_unless_told(monkeypat
     # The guard of open_bus, also where a udpm:// socket is made without it: an LcmBus made
     # directly, and the recorder (which joined the group on eth0 from a shell on the host).
     from skillbus import bus as bus_module
-    from skillbus import udpm, udpm_record
+    from skillbus import udpm_record
     monkeypatch.setattr(bus_module, "route_interface", lambda address, table="": "eth9")
     monkeypatch.delenv("SKILLBUS_NETWORK", raising=False)
 
     def no_socket(*a, **k):
         raise AssertionError("a socket joined the group before the check")
-    monkeypatch.setattr(udpm, "UdpmReceiver", no_socket)
     monkeypatch.setattr(udpm_record, "UdpmReceiver", no_socket)
     monkeypatch.setattr(bus_module, "UdpmReceiver", no_socket)
+    monkeypatch.setattr(bus_module.lcm, "LCM", no_socket)
     url = "udpm://239.255.76.67:7667?ttl=0"
     with pytest.raises(BusError, match="network interface eth9"):
         bus_module.LcmBus(url)

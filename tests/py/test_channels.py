@@ -75,6 +75,15 @@ def test_a_channel_name_longer_than_lcm_allows_is_refused_naming_its_parts(monke
         channel("SB_WM_REQ")
 
 
+def test_the_limit_is_in_bytes_as_lcm_counts_them():
+    from skillbus.bus import BusError, open_bus
+    assert len(robot_channel("é" * 31 + "x", "")) == 32  # 63 bytes: fits
+    with pytest.raises(ValueError, match="64 bytes"):
+        robot_channel("é" * 32, "")  # 32 characters, 64 bytes
+    with pytest.raises(BusError, match="64 bytes"):
+        open_bus("memq://").subscribe("é" * 32, lambda ch, data: None)
+
+
 def test_every_bus_refuses_to_subscribe_to_a_channel_lcm_cannot_carry():
     from skillbus.bus import BusError, open_bus
     bus = open_bus("memq://")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import bisect
 import collections
 import hashlib
+import os
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -105,6 +106,9 @@ class ReplayLog:
             lambda: collections.defaultdict(list))
         self._participants: dict[int, list[str]] = {}
         self.master = ""
+        # A system apart on one bus ($SKILLBUS_NAMESPACE) has every channel behind its
+        # namespace: the channels are recognised behind it (the console's own namespace).
+        self._namespace = os.environ.get("SKILLBUS_NAMESPACE", "")
         stopped_at = None
         try:
             for ev in log:
@@ -123,8 +127,9 @@ class ReplayLog:
 
     # -- reading ------------------------------------------------------------------
     def _take(self, ch: str, data: bytes, stopped_at):
-        base = ch.rsplit("/", 1)[-1]
-        robot = ch[: -len(base) - 1] if "/" in ch else ""
+        local = ch[len(self._namespace):] if self._namespace and ch.startswith(self._namespace) else ch
+        base = local.rsplit("/", 1)[-1]
+        robot = local[: -len(base) - 1] if "/" in local else ""
         if base == "SB_LOCKSTEP_CLOCK":
             c = decode(lockstep_clock_t, data)
             if c is not None:

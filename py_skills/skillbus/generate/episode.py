@@ -36,7 +36,7 @@ def _mark(box: Any, log: Path, name: str) -> None:
     p = box.start(name, [sys.executable, "-c", "import sys; from skillbus.monitor import mark_log; "
                                                "mark_log(sys.argv[1], timeout=20)", str(log)])
     if box.wait(p, 30) != 0:
-        raise EpisodeError(f"lcm-logger did not record ({name}): {p.stderr()[-500:]}")
+        raise EpisodeError(f"the recorder did not record ({name}): {p.stderr()[-500:]}")
 
 
 def compact_task(skills: list[dict]) -> str:

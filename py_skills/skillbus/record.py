@@ -1,0 +1,50 @@
+"""``skillbus record FILE``: every message of the bus into an LCM event log, the format
+lcm-logger writes, losing none under load (docs/transport.md, "Recording"). The recorder
+is skillbus.udpm_record's on LCM and skillbus.dds_record's on DDS; this runs either until
+SIGINT, SIGTERM or --seconds, then prints what it wrote as JSON.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import time
+
+from skillbus.bus import BusError, resolve_url
+
+
+def open_recorder(url: str, path: str):
+    """The recorder of the bus `url`, writing `path`; BusError for a bus it cannot record
+    (or join), OSError for a file it cannot write."""
+    if url.startswith("dds://"):
+        from skillbus.dds_record import DdsRecorder
+        return DdsRecorder(url, path)
+    if url.startswith("udpm://"):
+        from skillbus.udpm_record import UdpmRecorder
+        return UdpmRecorder(url, path)
+    raise BusError(f"record reads udpm:// and dds:// buses; the bus is {url}")
+
+
+def main(args) -> int:
+    """`args`: file, url (None: $SKILLBUS_BUS_URL), seconds (None: until a signal)."""
+    stop: list[int] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda s, f: stop.append(s))
+    try:
+        rec = open_recorder(resolve_url(args.url), args.file)
+    except OSError as e:
+        print(f"error: cannot write {args.file}: {e.strerror}", file=sys.stderr)
+        return 2
+    except BusError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print("recording", file=sys.stderr, flush=True)
+    deadline = time.monotonic() + args.seconds if args.seconds is not None else None
+    try:
+        while not stop and (deadline is None or time.monotonic() < deadline):
+            rec.spin()
+    finally:
+        events = rec.log.events
+        rec.close()
+    print(f'{{"events": {events}, "channels": {len(rec.channels)}}}', flush=True)
+    return 0
