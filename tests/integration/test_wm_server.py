@@ -44,7 +44,7 @@ def test_scene_files_are_named_never_paths_and_stay_in_the_data_directory(sandbo
     import stat
     data = tmp_path / "data"
     server = start_server(sandbox, wm_binary(), data)
-    assert run_scenario(sandbox, "scene_files")["ok"]
+    assert run_scenario(sandbox, "scene_files", data)["ok"]
     saved = data / "scenes" / "snap-1.ttl"
     assert saved.exists() and stat.S_IMODE(saved.stat().st_mode) == 0o600
     assert sorted(p.name for p in data.iterdir()) == ["journal.bin", "lock", "scenes", "snapshot.bin"], \

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import random
 import sys
+from pathlib import Path
 
 from skillbus.bus import channel, open_bus
 from skillbus.msgs import rpc_reply_t, wm_change_t, wm_elements_t, wm_op_t
@@ -194,8 +195,9 @@ def lockstep_writer(frames: int) -> None:
     sys.exit(0 if r.ok else 1)
 
 
-def scene_files() -> None:
-    """Scene files by name only, inside DATA/scenes: a path never reaches the disk."""
+def scene_files(data: str) -> None:
+    """Scene files by name only, inside DATA/scenes: a path never reaches the disk. A
+    save that cannot be written fails naming why and leaves the saved scene whole."""
     from skillbus.msgs import wm_scene_t
     wmi = WorldModelInterface(open_bus(), "scene-files-test")
 
@@ -211,6 +213,16 @@ def scene_files() -> None:
         assert "root:" not in err, err
     saved = call("save_scene", "snap-1")
     assert saved.path == "snap-1" and "skiros:Cube-2" in saved.turtle
+    on_disk = Path(data) / "scenes" / "snap-1.ttl"
+    assert on_disk.read_text() == saved.turtle
+    # A write that fails (here its file beside cannot be made; a full disk fails alike):
+    # refused, naming why, and the file saved before is whole (before, it was truncated
+    # first and then written in place).
+    blocker = Path(data) / "scenes" / "snap-1.ttl.tmp"
+    blocker.mkdir()
+    expect_error(lambda: call("save_scene", "snap-1"), "cannot write the scene snap-1")
+    assert on_disk.read_text() == saved.turtle
+    blocker.rmdir()
     expect_error(lambda: call("load_scene", "no-such-scene"), "cannot read")
     loaded = call("load_scene", "snap-1.ttl")
     print(json.dumps({"ok": True, "loaded_version": loaded.version}), flush=True)
@@ -223,7 +235,7 @@ if __name__ == "__main__":
     elif what == "bad_input":
         bad_input()
     elif what == "scene_files":
-        scene_files()
+        scene_files(sys.argv[2])
     elif what == "writer":
         writer(int(sys.argv[2]))
     elif what == "lockstep_writer":

@@ -867,6 +867,10 @@ long Journal::snapshots_written() const {
   return snapshots_;
 }
 
+void write_file_durably(const std::string& dir, const std::string& name, const std::string& bytes) {
+  replace_file_durably(dir, name, bytes);
+}
+
 RepairResult repair_data_dir(const std::string& dir) {
   const std::string jpath = dir + "/journal.bin", spath = dir + "/snapshot.bin";
   try {

@@ -422,11 +422,15 @@ wm_scene_t WorldModelServer::on_save_scene(const wm_scene_t& req) const {
   out.version = store_.version();
   if (!req.path.empty()) {
     const std::string path = scene_path(req.path);
-    ::mkdir((opt_.data_dir + "/scenes").c_str(), 0700);
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0600);
-    const bool ok = fd >= 0 && ::write(fd, out.turtle.data(), out.turtle.size()) == static_cast<ssize_t>(out.turtle.size());
-    if (fd >= 0) ::close(fd);
-    if (!ok) throw WmError("cannot write the scene " + req.path + ": " + std::strerror(errno));
+    const std::string dir = path.substr(0, path.rfind('/'));
+    ::mkdir(dir.c_str(), 0700);
+    // Beside, synced, then renamed over the old file: a failed or cut write (a full disk,
+    // a crash) leaves the previous scene whole, and the reply means the file is on disk.
+    try {
+      write_file_durably(dir, path.substr(path.rfind('/') + 1), out.turtle);
+    } catch (const WmError& e) {
+      throw WmError("cannot write the scene " + req.path + ": " + e.what());
+    }
     out.path = req.path;
   }
   return out;

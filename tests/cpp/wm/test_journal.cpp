@@ -703,6 +703,8 @@ TEST(Snapshot, AKillDuringABackgroundSnapshotLosesNoAcknowledgedRecord) {
     EXPECT_LE(last, acked + 1);   // (the append in flight may have been durable)
     for (size_t i = 0; i < rec.txns.size(); ++i)
       ASSERT_EQ(rec.txns[i].ops[0].element.label, "r" + std::to_string(base + static_cast<int64_t>(i)));
-    if (step != "random") EXPECT_GT(acked, 40);
+    if (step != "random") {
+      EXPECT_GT(acked, 40);
+    }
   }
 }

@@ -226,4 +226,8 @@ struct RepairResult {
 };
 RepairResult repair_data_dir(const std::string& dir);
 
+// Writes DIR/NAME so that it is either the old file or the whole new one, on disk on
+// return (beside as NAME.tmp, synced, renamed, the directory synced); WmError naming why.
+void write_file_durably(const std::string& dir, const std::string& name, const std::string& bytes);
+
 }  // namespace skillbus::wm
