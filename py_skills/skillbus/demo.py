@@ -229,12 +229,19 @@ def session_over(conf: Path) -> bool:
 SCATTER = {"on": "table", "region": [0.3, -0.25, 0.65, 0.3], "min_gap": 0.1}
 
 
+MAX_SEED = 2**32 - 1  # the scene's "scatter" seed (sim_server/scene)
+
+
+def check_seed(seed: int) -> None:
+    if not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"--seed {seed}: a seed is a whole number from 0 to {MAX_SEED}")
+
+
 def scattered_scene(folder: Path, seed: int) -> Path:
     """The demo scene with its cubes at seeded-random places (the scene's "scatter"), and
     its world model file beside it, in `folder`."""
     from skillbus.sim import scene as scenes
-    if seed < 0:
-        raise ValueError(f"--seed {seed}: a seed is a whole number >= 0")
+    check_seed(seed)
     folder.mkdir(parents=True, exist_ok=True)
     doc = json.loads(paths.demo_scene().read_text())
     doc["scatter"] = {**SCATTER, "seed": seed}
@@ -254,13 +261,16 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
         # longer sees end).
         raise DemoError(f"{run_dir} is in use: the supervisord of another demo answers there; wait for it to end, "
                         f"stop it (skillbus shutdown {run_dir / 'supervisord.conf'}), or give --run-dir")
-    if run_dir.exists():
-        shutil.rmtree(run_dir)
-    run_dir.mkdir(parents=True)
+    # What it was asked is checked before the folder of the last run is cleared.
     if perception and robots != 1:
         raise ValueError("--perception: the two-arm scene has no depth camera yet")
     if seed is not None and robots != 1:
         raise ValueError("--seed: the two-arm scene's cubes stay where its file puts them")
+    if seed is not None:
+        check_seed(seed)
+    if run_dir.exists():
+        shutil.rmtree(run_dir)
+    run_dir.mkdir(parents=True)
     scene = scattered_scene(run_dir / "scene", seed) if seed is not None else None
     progs = programs(run_dir, scene=scene, perception=perception) if robots == 1 else robots_programs(run_dir, robots)
     robot_names = [""] if robots == 1 else list(TWO_ARMS_REGIONS)

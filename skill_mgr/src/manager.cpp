@@ -373,6 +373,19 @@ void Manager::end_if_finished(std::map<int64_t, std::unique_ptr<Task>>::iterator
   }
 }
 
+// Skills tick at sim times that are a whole number of tick periods: with frames that do not
+// divide the period (30 ms frames, 40 ms ticks) they would tick only every 120 ms, silently.
+// The clock's frames are known only from its first frames: the session fails, naming both.
+void Manager::check_frame_period(int64_t frame, int64_t sim_time_ns) const {
+  const int64_t period = sim_time_ns / frame;
+  if (period > 0 && period * frame == sim_time_ns && opt_.tick_period_ns % period == 0) return;
+  const double frame_ms = sim_time_ns / 1e6 / static_cast<double>(frame), tick_ms = opt_.tick_period_ns / 1e6;
+  std::ostringstream why;
+  why << "the clock's frames of " << frame_ms << " ms do not divide the skill manager's tick period of " << tick_ms
+      << " ms (--tick-hz): skills would not tick at their rate; run frames that divide it";
+  throw std::runtime_error(why.str());
+}
+
 void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
   if (frame == 0 && opt_.wall_clock && !world_.ready()) {
     // The world copy before the first task: its element parameters are checked and
@@ -384,6 +397,7 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     last_world_try_ = std::chrono::steady_clock::now();
   }
   if (liveness_) liveness_->on_frame();
+  if (!opt_.wall_clock && frame > 0 && frame_ <= 0) check_frame_period(frame, sim_time_ns);
   frame_ = frame;
   sim_time_ns_ = sim_time_ns;
   while (!stopped_queued_.empty()) {  // a task stopped before it began still ends visibly

@@ -92,6 +92,7 @@ class Manager {
   std::map<std::string, std::unique_ptr<RpcClient>> clients_;
   std::map<int64_t, std::unique_ptr<Task>> tasks_;
   int64_t frame_ = -1, sim_time_ns_ = 0;  // of the tick in progress
+  void check_frame_period(int64_t frame, int64_t sim_time_ns) const;
   std::deque<std::pair<int64_t, skillbus_msgs::skill_start_t>> starts_;  // applied at the next tick
   std::deque<std::pair<int64_t, std::string>> stopped_queued_;  // stopped before they began: (task, type)
   int64_t next_task_ = 1;

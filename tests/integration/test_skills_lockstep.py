@@ -57,3 +57,17 @@ def test_killing_a_skill_process_fails_the_task_by_name_and_a_restart_succeeds(t
         assert box.wait(clock, 120) == 0
         box.wait(mgr, 30)
         assert last_json(mgr.stdout())["tasks"] == {"1": "Success: all succeeded"}
+
+
+def test_frames_that_do_not_divide_the_tick_period_fail_the_session_naming_both(tmp_path):
+    # 30 ms frames and the manager's 40 ms ticks: skills would tick only every 120 ms.
+    # Before, the session ran so, silently; now the manager fails its first frame.
+    with Sandbox(log_dir=tmp_path / "frames") as box:
+        clock = box.start("clock", [paths.binary("sb_clock"), "--frames", "50", "--participants", "skill_mgr",
+                                    "--period-ms", "30"])
+        mgr = box.start("skill_mgr", [mgr_binary()])
+        assert box.wait(clock, 60) != 0, clock.stdout()
+        box.wait(mgr, 30)
+    why = "the clock's frames of 30 ms do not divide the skill manager's tick period of 40 ms"
+    assert why in clock.stdout() + clock.stderr(), clock.stdout() + clock.stderr()[-2000:]
+    assert why in mgr.stderr(), mgr.stderr()[-2000:]

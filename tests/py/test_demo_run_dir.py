@@ -45,3 +45,14 @@ def test_a_demo_whose_supervisord_is_gone_fails_naming_it(tmp_path):
     launch.shutdown(conf)
     with pytest.raises(demo.DemoError, match=r"no longer answers: its socket or process is gone"):
         demo.session_over(conf)
+
+
+@pytest.mark.parametrize("seed", [-1, 2**32])
+def test_a_seed_out_of_range_is_refused_before_the_last_run_is_cleared(tmp_path, seed):
+    # Before, 2**32 cleared the last run's folder, then the physics server refused the
+    # scene with "scatter.seed must be a whole number >= 0".
+    (tmp_path / "demo").mkdir()
+    (kept := tmp_path / "demo" / "demo.lcmlog").write_bytes(b"the last run")
+    with pytest.raises(ValueError, match=rf"--seed {seed}: a seed is a whole number from 0 to 4294967295"):
+        demo.run(tmp_path / "demo", quiet=True, seed=seed)
+    assert kept.read_bytes() == b"the last run"

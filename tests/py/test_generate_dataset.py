@@ -231,3 +231,24 @@ def test_one_articulated_object_is_kept_per_episode():
     assert kept == {"cabinet", "cupboard"}
     with pytest.raises(ConfigError, match="no articulated object 'shed'"):
         randomized(scene, {"choose_articulated": ["shed"]}, 1)
+
+
+@pytest.mark.parametrize("extra,why", [
+    ("fps: 30\n", "fps 30 is not a whole number of 20 ms frames per row: rows come every whole frame (50, 25, 16.6667"),
+    ("frame_ms: 30\n", "frame_ms 30 does not divide the skill manager's tick of 40 ms"),
+    ("frame_ms: 5\n", "frame_ms 5 is not a whole number of the scene's physics steps (2 ms)"),
+])
+def test_frames_and_rows_that_do_not_fit_are_refused_before_any_episode(tmp_path, extra, why):
+    # Before: fps 30 wrote rows every 40 ms into a dataset that said 30 fps; frames of
+    # 30 ms made skills tick every 120 ms; 5 ms frames broke every episode in the physics.
+    from skillbus import paths
+    from skillbus.generate import config
+    base = paths.REPO_ROOT / "deploy" / "generate" / "pick_place.yaml"
+    text = "\n".join(line for line in base.read_text().splitlines() if not line.startswith(("fps:", "frame_ms:")))
+    text = text.replace("../", str(base.parent.parent) + "/")  # (the scene and task beside the original)
+    (cfg := tmp_path / "c.yaml").write_text(text + "\n" + extra)
+    with pytest.raises(ConfigError) as e:
+        config.load(cfg)
+    assert why in str(e.value), str(e.value)
+    (ok := tmp_path / "ok.yaml").write_text(text + "\nfps: 25\nframe_ms: 20\n")
+    assert config.load(ok).fps == 25.0

@@ -180,7 +180,7 @@ def test_scatter_mistakes_are_named(tmp_path):
     for bad, message in (({"on": "post", "region": [0, 0, 1, 1]}, "scatter.on names 'post', which is not a fixture"),
                          ({"on": "table"}, "scatter.region is missing"),
                          ({"on": "table", "region": [1, 0, 0, 1]}, "scatter.region must be [x_min, y_min, x_max, y_max] with max > min"),
-                         ({"on": "table", "region": [0, 0, 1, 1], "seed": -1}, "scatter.seed must be a whole number >= 0"),
+                         ({"on": "table", "region": [0, 0, 1, 1], "seed": -1}, "scatter.seed must be a whole number from 0 to 4294967295"),
                          ({"on": "table", "region": [0, 0, 1, 1], "yaw": "yes"}, "scatter.yaw must be true or false"),
                          ({"on": "table", "region": [0, 0, 0.05, 0.05], "min_gap": 0.1},
                           "scatter cannot place 2 objects 0.100000 m apart in its region (a larger region or a smaller min_gap)")):

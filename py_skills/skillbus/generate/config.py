@@ -20,6 +20,7 @@ Every path is relative to the config file. ConfigError names the key that is wro
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -90,11 +91,42 @@ def load(path: str | Path) -> GenerateConfig:
     retries = data.get("retries", 1)
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
         raise ConfigError(f"{where}: retries must be a whole number >= 0, not {retries!r}")
+    fps, frame_ms = _number(data, "fps", 10.0, 0.1, where), _number(data, "frame_ms", 20.0, 1, where)
+    _check_timing(fps, frame_ms, scene, where)
     return GenerateConfig(path=path, scene=scene, skills=skills,
                           instruction=str(data.get("instruction") or f"task of {path.stem}"),
-                          fps=_number(data, "fps", 10.0, 0.1, where), max_sim_s=_number(data, "max_sim_s", 240.0, 1, where),
-                          retries=retries, cameras=cameras, frame_ms=_number(data, "frame_ms", 20.0, 1, where), randomize=randomize,
+                          fps=fps, max_sim_s=_number(data, "max_sim_s", 240.0, 1, where),
+                          retries=retries, cameras=cameras, frame_ms=frame_ms, randomize=randomize,
                           arm=str(data.get("arm", "arm")), gripper=str(data.get("gripper", "gripper")))
+
+
+TICK_MS = 40.0  # the skill manager's tick period (25 Hz): its ticks fall on frames
+
+
+def _whole(x: float) -> bool:
+    return abs(x - round(x)) < 1e-9 and round(x) >= 1
+
+
+def _check_timing(fps: float, frame_ms: float, scene: Path, where: str) -> None:
+    """Refused here, before any episode runs: a frame that is not a whole number of physics
+    steps (the physics server refuses it, and every episode would break), one that does
+    not divide the manager's tick (skills would tick at a fraction of their rate), and a
+    row rate that is not a whole number of frames (the dataset would say fps while its
+    rows come at another rate)."""
+    try:
+        step_ms = float((json.loads(scene.read_text()).get("physics") or {}).get("step_ms", 2.0))
+    except (OSError, ValueError, TypeError, AttributeError):
+        step_ms = 2.0  # (the scene's own errors are named when it is loaded)
+    if step_ms > 0 and not _whole(frame_ms / step_ms):
+        raise ConfigError(f"{where}: frame_ms {frame_ms:g} is not a whole number of the scene's physics steps "
+                          f"({step_ms:g} ms)")
+    if not _whole(TICK_MS / frame_ms):
+        raise ConfigError(f"{where}: frame_ms {frame_ms:g} does not divide the skill manager's tick of {TICK_MS:g} ms "
+                          f"(frames of 2, 4, 5, 8, 10, 20 or 40 ms)")
+    if not _whole(1000.0 / (fps * frame_ms)):
+        rates = [f"{1000.0 / (k * frame_ms):g}" for k in range(1, 6)]
+        raise ConfigError(f"{where}: fps {fps:g} is not a whole number of {frame_ms:g} ms frames per row: rows come "
+                          f"every whole frame ({', '.join(rates)}, ... fps)")
 
 
 def episode_seed(seed: int, index: int) -> int:

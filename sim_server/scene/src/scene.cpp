@@ -94,7 +94,7 @@ void scatter(const Reader& r, Scene& s) {
   for (const auto& f : s.fixtures) found = found || (f.name == on && !f.obstacle);
   if (!found) r.fail_field("on", "names '" + on + "', which is not a fixture");
   const double seed = r.num("seed", 0);
-  if (seed < 0 || seed != std::floor(seed) || seed > 4294967295.0) r.fail_field("seed", "must be a whole number >= 0");
+  if (seed < 0 || seed != std::floor(seed) || seed > 4294967295.0) r.fail_field("seed", "must be a whole number from 0 to 4294967295");
   const auto region = r.vec<4>("region", {}, true);  // x_min y_min x_max y_max
   if (!(region[2] > region[0] && region[3] > region[1])) r.fail_field("region", "must be [x_min, y_min, x_max, y_max] with max > min");
   const double gap = r.num("min_gap", 0.1);
