@@ -68,11 +68,30 @@ void refuse_long_channel(const std::string& name) {
   if (name.size() > kMaxChannel) throw BusError(channel_too_long(name));
 }
 
+std::string channel_bad_characters(const std::string& name) {
+  // What Cyclone DDS 0.10 takes in a topic name; LCM takes anything: one name, both transports.
+  const auto ok = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) && !(c & 0x80); };
+  std::string bad;
+  for (char c : name)
+    if (!ok(c) && c != '_' && c != '/' && bad.find(c) == std::string::npos) bad += c;
+  if (!bad.empty())
+    return "channel name '" + name + "': '" + bad +
+           "' cannot be in a channel name (letters, digits, _ and /: DDS topics allow no more)";
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0])))
+    return "channel name '" + name + "': a channel name cannot start with a digit (letters, digits, _ and /: DDS "
+           "topics allow no more)";
+  return "";
+}
+
 std::string robot_channel(const std::string& name, const std::string& robot) {
   const char* ns_env = std::getenv("SKILLBUS_NAMESPACE");
   const std::string ns = ns_env ? ns_env : "";
   const std::string mine = !robot.empty() && robot_scoped(name) ? robot : "";
   const std::string out = ns + (mine.empty() ? "" : mine + "/") + name;
+  const std::string bad = channel_bad_characters(out);
+  if (!bad.empty())
+    throw std::invalid_argument(
+        bad + (!ns.empty() && !channel_bad_characters(ns + "X").empty() ? " ($SKILLBUS_NAMESPACE is '" + ns + "')" : ""));
   const std::string why = channel_too_long(out);
   if (!why.empty()) {
     // Said where the name is made: later, on LCM, it subscribes and never hears a message.

@@ -69,12 +69,31 @@ def too_long(name: str) -> str:
     return f"channel name '{name}' is {size} bytes: LCM ends channel names at {MAX_CHANNEL}"
 
 
+_TOPIC = re.compile(r"[A-Za-z_][A-Za-z0-9_/]*")  # what a DDS topic name may be (Cyclone 0.10)
+
+
+def bad_characters(name: str) -> str:
+    """Why `name` cannot be a channel on DDS ("" when it can): Cyclone DDS (the C++ side's
+    0.10) takes letters, digits, _ and / in a topic name, not starting with a digit; LCM
+    takes anything. One name must work on both transports."""
+    if _TOPIC.fullmatch(name):
+        return ""
+    bad = sorted({c for c in name if not (c.isascii() and (c.isalnum() or c in "_/"))})
+    what = (f"{', '.join(repr(c) for c in bad)} cannot be in a channel name" if bad
+            else "a channel name cannot start with a digit")
+    return f"channel name {name!r}: {what} (letters, digits, _ and /: DDS topics allow no more)"
+
+
 def robot_channel(name: str, robot: str) -> str:
     """`name` for an explicit robot ("" for none). Raises ValueError for a name longer
-    than a channel may be, saying which part made it long."""
+    than a channel may be, or with characters a DDS topic refuses, saying which part
+    made it so."""
     prefix = os.environ.get("SKILLBUS_NAMESPACE", "")
     mine = robot if robot and robot_scoped(name) else ""
     out = prefix + (f"{mine}/" if mine else "") + name
+    why = bad_characters(out)
+    if why:
+        raise ValueError(why + (f" ($SKILLBUS_NAMESPACE is {prefix!r})" if prefix and bad_characters(prefix + "X") else ""))
     why = too_long(out)
     if why:
         parts = [f"$SKILLBUS_NAMESPACE '{prefix}' takes {_bytes(prefix)}"] if prefix else []

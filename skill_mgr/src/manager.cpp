@@ -92,12 +92,12 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     auto name_ok = [](const std::string& n, size_t max) {
       if (n.empty() || n.size() > max) return false;
       for (char c : n)
-        // (no '.': a DDS topic refuses it, as a pattern character; one name works on both transports)
-        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+        // (what a DDS topic takes, channel_bad_characters: one name works on both transports)
+        if (!((std::isalnum(static_cast<unsigned char>(c)) && !(c & 0x80)) || c == '_')) return false;
       return true;
     };
     if (!name_ok(reg.process, 64) || !name_ok(reg.rpc_area, 64))
-      throw RpcBadRequest("register: a process name and RPC area are 1 to 64 letters, digits, '_' or '-'");
+      throw RpcBadRequest("register: a process name and RPC area are 1 to 64 letters, digits or '_'");
     try {  // the manager calls the process there: a name that cannot be a channel is refused now
       rpc_request_channel(reg.rpc_area);
       rpc_reply_channel(reg.rpc_area);

@@ -96,8 +96,27 @@ TEST(Channels, TheLimitIsInBytesAsLcmCountsThem) {
   for (int i = 0; i < 31; ++i) fits += "\xc3\xa9";  // é: 31 characters of 2 bytes, and one more byte
   fits += "x";
   too_long = fits.substr(0, 62) + "\xc3\xa9";  // 32 characters, 64 bytes
-  EXPECT_EQ(channel(fits).size(), 63u);
-  EXPECT_THROW(channel(too_long), std::invalid_argument);
+  EXPECT_TRUE(channel_too_long(fits).empty());  // (as LCM counts: bytes)
+  EXPECT_FALSE(channel_too_long(too_long).empty());
+  EXPECT_THROW(refuse_long_channel(too_long), BusError);
+}
+
+// Cyclone DDS 0.10 takes letters, digits, _ and / in a topic name, not a leading digit; before,
+// such names ran on LCM and failed on DDS at their first use.
+TEST(Channels, ANameADdsTopicRefusesIsRefusedOnEitherTransport) {
+  RobotReset reset;
+  for (const char* bad : {"SB_SKPROC_MY-ARM_REQ", "SB_X.Y", "SB_\xc3\xa9", "9SB_X", "SB X"})
+    EXPECT_THROW(channel(bad), std::invalid_argument) << bad;
+  ::setenv("SKILLBUS_NAMESPACE", "lab-", 1);
+  try {
+    channel("SB_WM_REQ");
+    ADD_FAILURE() << "a namespace with '-' was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("$SKILLBUS_NAMESPACE is 'lab-'"), std::string::npos) << e.what();
+  }
+  ::setenv("SKILLBUS_NAMESPACE", "lab_", 1);
+  set_robot("r2");
+  EXPECT_EQ(channel("SB_SKILL_REQ"), "lab_r2/SB_SKILL_REQ");
 }
 
 TEST(Channels, EveryBusRefusesAChannelLcmCannotCarry) {

@@ -181,3 +181,13 @@ def test_a_process_name_too_long_for_its_channel_is_refused_at_start_and_at_regi
         assert sandbox.wait(probe, 30) == 0, probe.stderr()
         assert probe.stdout().startswith(want), probe.stdout()
     assert mgr.returncode is None  # (the manager goes on)
+
+
+def test_a_process_name_a_dds_topic_refuses_is_refused_at_start(sandbox):
+    # '-' and '.' ran on LCM and failed on DDS at the manager's first tick.
+    for name in ("my-arm", "my.arm"):
+        proc = sandbox.start(f"bad-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", "skills-process",
+                                                            "--name", name, "--library", "flow_skills"],
+                             env={"PYTHONPATH": str(LIBS)})
+        assert sandbox.wait(proc, 30) == 2, proc.stderr()
+        assert f"error: --name '{name}': a skill process name is 1 to 64 letters, digits or '_'" in proc.stderr()

@@ -77,11 +77,26 @@ def test_a_channel_name_longer_than_lcm_allows_is_refused_naming_its_parts(monke
 
 def test_the_limit_is_in_bytes_as_lcm_counts_them():
     from skillbus.bus import BusError, open_bus
-    assert len(robot_channel("é" * 31 + "x", "")) == 32  # 63 bytes: fits
-    with pytest.raises(ValueError, match="64 bytes"):
-        robot_channel("é" * 32, "")  # 32 characters, 64 bytes
+    bus = open_bus("memq://")
+    bus.subscribe("é" * 31 + "x", lambda ch, data: None)  # 63 bytes: fits (LCM takes any bytes)
     with pytest.raises(BusError, match="64 bytes"):
-        open_bus("memq://").subscribe("é" * 32, lambda ch, data: None)
+        bus.subscribe("é" * 32, lambda ch, data: None)  # 32 characters, 64 bytes
+
+
+@pytest.mark.parametrize("part,bad", [("name", "SB_SKPROC_MY-ARM_REQ"), ("name", "SB_X.Y"), ("name", "SB_é"),
+                                      ("name", "9SB_X"), ("namespace", "lab-"), ("namespace", "lab ")])
+def test_a_channel_name_a_dds_topic_refuses_is_refused_on_either_transport(monkeypatch, part, bad):
+    # Cyclone DDS 0.10 (the C++ side) takes letters, digits, _ and / in a topic name, not
+    # a leading digit; before, such names ran on LCM and failed on DDS at their first use.
+    if part == "namespace":
+        monkeypatch.setenv("SKILLBUS_NAMESPACE", bad)
+        with pytest.raises(ValueError, match=rf"cannot be in a channel name .*\$SKILLBUS_NAMESPACE is '{bad}'"):
+            channel("SB_WM_REQ")
+    else:
+        with pytest.raises(ValueError, match="cannot (be in|start with a digit)"):
+            channel(bad)
+    monkeypatch.setenv("SKILLBUS_NAMESPACE", "lab_")
+    assert channel("SB_WM_REQ") == "lab_SB_WM_REQ" and robot_channel("SB_SKILL_REQ", "r2") == "lab_r2/SB_SKILL_REQ"
 
 
 def test_every_bus_refuses_to_subscribe_to_a_channel_lcm_cannot_carry():

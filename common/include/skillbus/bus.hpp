@@ -78,6 +78,9 @@ std::string robot_channel(const std::string& name, const std::string& robot);
 constexpr size_t kMaxChannel = 63;
 // Why `name` cannot be a channel, "" when it can; the backends' check, throwing BusError.
 std::string channel_too_long(const std::string& name);
+// Why `name` cannot be a DDS topic (Cyclone 0.10: letters, digits, _ and /, not starting
+// with a digit), "" when it can; channel() refuses such names on either transport.
+std::string channel_bad_characters(const std::string& name);
 void refuse_long_channel(const std::string& name);
 bool robot_scoped(const std::string& name);
 // The process's robot: set_robot() (a program's --robot), else $SKILLBUS_ROBOT, else "".

@@ -382,16 +382,16 @@ def apply_config(args) -> None:
     args.config_interfaces = dict(conf.get("interfaces", {}))
 
 
-_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")  # (no '.': a DDS topic refuses it as a pattern character)
+_NAME = re.compile(r"[A-Za-z0-9_]{1,64}")  # (what a DDS topic takes: skillbus.channels.bad_characters)
 
 
 def name_problem(name: str) -> str:
     """Why `name` cannot name a skill process ("" when it can): the skill manager's rule
-    (1 to 64 letters, digits, _ or -) and its RPC channels, which must fit LCM's 63
+    (1 to 64 letters, digits or _) and its RPC channels, which must fit LCM's 63
     bytes with the robot's name in front. Said at start: else the process would register
     and then fail every tick, or be refused by the manager after loading its libraries."""
     if not _NAME.fullmatch(name):
-        return "a skill process name is 1 to 64 letters, digits, '_' or '-'"
+        return "a skill process name is 1 to 64 letters, digits or '_' (it becomes part of channel names)"
     try:
         request_channel("SKPROC_" + name.upper())
         reply_channel("SKPROC_" + name.upper())
