@@ -27,7 +27,12 @@ std::string lcm_lane1_url(const std::string& url) {
   static const std::regex udpm(R"(^udpm://([^:/?]*)(?::(\d+))?(\?.*)?$)");
   std::smatch m;
   if (!std::regex_match(url, m, udpm)) return "";
-  const int port = m[2].matched ? std::stoi(m[2].str()) : 7667;
+  // Lane 1 is port+1: a port that leaves no room for it is refused here, naming why (LCM
+  // would refuse lane 1's URL only when the first ack is sent; a receiver would wrap it).
+  const std::string p = m[2].matched ? m[2].str() : "7667";
+  const int port = p.size() <= 5 ? std::stoi(p) : 0;
+  if (port < 1 || port > 65534)
+    throw BusError("bus URL '" + url + "': port " + p + " (1 to 65534: the second lane, for acks and joins, is port+1)");
   const std::string addr = m[1].str().empty() ? "239.255.76.67" : m[1].str();
   return "udpm://" + addr + ":" + std::to_string(port + 1) + m[3].str();
 }

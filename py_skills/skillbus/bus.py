@@ -233,6 +233,9 @@ def lane1_url(url: str) -> str:
     if not m:
         return ""
     port = int(m.group(2)) if m.group(2) else 7667
+    if not 1 <= port <= 65534:  # (refused here, naming why: LCM would refuse lane 1 only at the first ack)
+        raise BusError(f"bus URL '{url}': port {m.group(2)} (1 to 65534: the second lane, for acks and joins, "
+                       f"is port+1)")
     return f"udpm://{m.group(1) or '239.255.76.67'}:{port + 1}{m.group(3) or ''}"
 
 
@@ -262,9 +265,9 @@ class LcmBus(Bus):
     """
 
     def __init__(self, url: str) -> None:
+        lane1 = lane1_url(url)  # (a URL that cannot be is named first)
         check_multicast_interface(url)  # (here, not only in open_raw_bus: before any socket joins a group)
         self._url = url
-        lane1 = lane1_url(url)
         self._lane_urls = [receive_buffer_url(url), receive_buffer_url(lane1) if lane1 else ""]
         self._lanes: list[lcm.LCM | None] = [None, None]
         self._lane_subs = [0, 0]

@@ -102,6 +102,11 @@ TEST(LcmLanes, ManyToOneChannelsUsePortPlusOne) {
   EXPECT_EQ(lcm_lane1_url("udpm://239.255.76.67:7667?ttl=0"), "udpm://239.255.76.67:7668?ttl=0");
   EXPECT_EQ(lcm_lane1_url("udpm://239.1.2.3"), "udpm://239.1.2.3:7668");
   EXPECT_EQ(lcm_lane1_url("memq://"), "");
+  // A port that leaves no room for lane 1 is refused at once (before: the first ack failed,
+  // and a receiver of port+1 bound a wrapped port).
+  for (const char* bad : {"udpm://239.1.2.3:65535", "udpm://239.1.2.3:0", "udpm://239.1.2.3:99999999999"})
+    EXPECT_THROW(lcm_lane1_url(bad), BusError) << bad;
+  EXPECT_EQ(lcm_lane1_url("udpm://239.1.2.3:65534"), "udpm://239.1.2.3:65535");
 }
 
 TEST(LcmUrl, AsksForALargeReceiveBufferUnlessTheUrlNamesOne) {

@@ -160,3 +160,12 @@ def test_lcm_tools_are_not_started_on_a_bus_a_network_card_would_carry(monkeypat
     assert monitor.main_replay(argparse.Namespace(url=url, log=str(log), speed=1.0, channels=None)) == 2
     err = capsys.readouterr().err
     assert err.count("would be joined on the network interface eth9") == 2, err
+
+
+@pytest.mark.parametrize("port", ["0", "65535", "70000"])
+def test_a_port_that_leaves_no_room_for_the_second_lane_is_refused_at_once(port):
+    # Before, 65535 opened, then the first lockstep ack failed (LCM refused port 65536
+    # for lane 1) and a C++ receiver would have bound a wrapped port.
+    from skillbus.bus import LcmBus
+    with pytest.raises(BusError, match=rf"port {port} \(1 to 65534: the second lane, for acks and joins, is port\+1\)"):
+        LcmBus(f"udpm://239.255.76.67:{port}?ttl=0")
