@@ -174,7 +174,12 @@ Policy Policy::parse(const std::string& text, const std::string& source) {
     std::istringstream words(body);
     Rule r;
     if (!(words >> r.pattern)) continue;
-    for (std::string w; words >> w;) r.identities.push_back(w);
+    for (std::string w; words >> w;) {
+      if (w.size() > 255)
+        throw BusError(source + ", line " + std::to_string(n) + ": the identity '" + w.substr(0, 40) +
+                       "...' is longer than 255 bytes, which no sender can have (the trailer's room)");
+      r.identities.push_back(w);
+    }
     if (r.identities.empty())
       throw BusError(source + ", line " + std::to_string(n) + ": '" + r.pattern +
                      "' names a channel and no identity (a rule is CHANNEL IDENTITY...; * for any holder of the key)");
@@ -213,7 +218,10 @@ bool Policy::allows(const std::string& identity, const std::string& channel) con
 
 Sealer::Sealer(Key key, std::string identity)
     : key_(std::move(key)), identity_(std::move(identity)), incarnation_(static_cast<uint64_t>(wall_ns())) {
-  if (identity_.size() > 255) identity_.resize(255);
+  // Cut, it would be another identity, which the policy forbids everywhere: refused, named.
+  if (identity_.empty() || identity_.size() > 255)
+    throw BusError("the bus identity '" + identity_.substr(0, 40) + (identity_.size() > 40 ? "..." : "") + "' is " +
+                   std::to_string(identity_.size()) + " bytes: an identity is 1 to 255 bytes ($" + kIdentityEnv + ")");
 }
 
 Bytes Sealer::seal(const std::string& channel, const void* data, size_t size) {

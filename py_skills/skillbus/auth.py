@@ -151,11 +151,27 @@ def _mac(key: bytes, channel: str, payload: bytes, fields: bytes) -> bytes:
 _U32 = struct.Struct("<I")
 
 
+MAX_IDENTITY = 255  # bytes: the trailer's one-byte length
+
+
+def identity_problem(identity: str) -> str:
+    """Why `identity` cannot sign messages ("" when it can): 1 to 255 bytes, the trailer's
+    room, as common/src/auth.cpp."""
+    size = len(identity.encode("utf-8", "surrogateescape"))
+    if 1 <= size <= MAX_IDENTITY:
+        return ""
+    return (f"the bus identity {identity[:40]!r}{'...' if len(identity) > 40 else ''} is {size} bytes: an identity "
+            f"is 1 to {MAX_IDENTITY} bytes (${IDENTITY_ENV})")
+
+
 class Sealer:
     """Appends the trailer to what one process publishes."""
 
     def __init__(self, key: bytes, identity: str, clock=time.time_ns) -> None:
-        ident = identity.encode()[:255]
+        ident = identity.encode("utf-8", "surrogateescape")
+        why = identity_problem(identity)
+        if why:  # (cut, it would be another identity, which the policy forbids everywhere)
+            raise ValueError(why)
         self._key, self._clock = key, clock
         self._ident = bytes([len(ident)]) + ident
         self.incarnation = clock()

@@ -475,7 +475,10 @@ def authenticated(inner: Bus) -> Bus:
         rules = policy.from_env()
     except (auth.KeyFileError, policy.PolicyError) as e:
         raise BusError(str(e)) from None
-    return AuthenticatedBus(inner, keys, auth.default_identity(), rules)
+    try:
+        return AuthenticatedBus(inner, keys, auth.default_identity(), rules)
+    except ValueError as e:  # (an identity that cannot sign)
+        raise BusError(str(e)) from None
 
 
 _warned_open = False

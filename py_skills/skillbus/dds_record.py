@@ -62,11 +62,11 @@ class DdsRecorder:
         from cyclonedds.builtin import BuiltinDataReader, BuiltinTopicDcpsPublication
 
         from skillbus.dds import DdsBus
-        self.log = LogWriter(path)  # (first: a file it cannot write stops it before it joins the domain)
-        try:
-            self.bus = DdsBus(url)  # (no key: the bytes are recorded as they came, authenticators and all)
+        self.bus = DdsBus(url)  # (no key: the bytes are recorded as they came, authenticators and all)
+        try:  # (once it can record: a domain it cannot join leaves an existing file as it was)
+            self.log = LogWriter(path)
         except BaseException:
-            self.log.close()
+            self.bus.close()
             raise
         self.channels: set[str] = set()
         self.skipped: dict[str, str] = {}  # topics found that cannot be recorded, and why

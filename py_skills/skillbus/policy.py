@@ -63,6 +63,10 @@ class Policy:
             if not re.fullmatch(r"[A-Za-z0-9_*/]+", words[0]):
                 raise PolicyError(f"{source}, line {n}: '{words[0]}' is not a channel name or pattern "
                                   f"(letters, digits, _, / and *)")
+            for ident in words[1:]:
+                if len(ident.encode("utf-8", "surrogateescape")) > 255:
+                    raise PolicyError(f"{source}, line {n}: the identity '{ident[:40]}...' is longer than 255 bytes, "
+                                      f"which no sender can have (the trailer's room)")
             regex = re.compile("".join(".*" if c == "*" else re.escape(c) for c in words[0]))
             rules.append(Rule(words[0], frozenset(words[1:]), regex))
         return Policy(rules, source)

@@ -30,9 +30,9 @@ class UdpmRecorder:
     def __init__(self, url: str, path: str) -> None:
         check_multicast_interface(url)  # it joins the group: on this host only, unless told otherwise
         lanes = [udpm_address(lane) for lane in [url] + ([lane1_url(url)] if lane1_url(url) else [])]
-        self.log = LogWriter(path)  # (before joining: a file it cannot write stops it first)
         self.channels: set[str] = set()
         self.receivers = []
+        self.log: LogWriter | None = None
         try:
             for group, port, _ in lanes:
                 self.receivers.append(UdpmReceiver(group, port, RECEIVE_BUFFER))
@@ -40,6 +40,11 @@ class UdpmRecorder:
             self.close()
             raise BusError(f"cannot receive on {url}: {e.strerror} (for udpm:// the host needs a multicast route, "
                            f"e.g. `ip route add 224.0.0.0/4 dev lo`)") from None
+        try:  # (once it can record: a bus it cannot join leaves an existing file as it was)
+            self.log = LogWriter(path)
+        except OSError:
+            self.close()
+            raise
 
     def spin(self, timeout: float = 0.05) -> None:
         """Writes what arrived, waiting at most `timeout` for it."""
@@ -55,6 +60,7 @@ class UdpmRecorder:
         self.log.flush_if_due()
 
     def close(self) -> None:
-        self.log.close()
+        if self.log is not None:
+            self.log.close()
         for r in self.receivers:
             r.close()

@@ -209,3 +209,12 @@ TEST(Auth, TheReplayWindowSpansWords) {
   EXPECT_TRUE(open(o, "SB_X", sealed[4000]).ok);
   EXPECT_EQ(open(o, "SB_X", sealed[4000]).reason, Reason::Replayed);
 }
+
+// Before, a longer identity was cut to 255 bytes: receivers saw another identity than the
+// policy's and dropped everything as forbidden, while the sender's own check passed.
+TEST(Auth, AnIdentityTheTrailerCannotHoldIsRefusedNotCut) {
+  EXPECT_THROW(Sealer(key_of(0), std::string(256, 'i')), BusError);
+  EXPECT_THROW(Sealer(key_of(0), ""), BusError);
+  EXPECT_NO_THROW(Sealer(key_of(0), std::string(255, 'i')));
+  EXPECT_THROW(Policy::parse("SB_X " + std::string(256, 'y') + "\n", "test"), BusError);
+}

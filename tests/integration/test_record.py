@@ -118,3 +118,15 @@ def test_dds_refuses_a_channel_lcm_could_not_carry(tmp_path):
     lines = p.stdout().splitlines()
     assert [line.split(":")[0] for line in lines] == ["subscribe refused", "publish refused"], lines
     assert all("is 64 bytes: LCM ends channel names at 63" in line for line in lines), lines
+
+
+def test_a_bus_it_cannot_join_leaves_an_earlier_recording_as_it_was(tmp_path):
+    # Before, the file was emptied first, then joining failed.
+    from skillbus.netns import Sandbox
+    (log := tmp_path / "kept.lcmlog").write_bytes(b"an earlier run")
+    with Sandbox(log_dir=tmp_path / "logs") as box:
+        p = box.start("rec", [sys.executable, "-m", "skillbus.cli", "record", str(log),
+                              "--url", "udpm://10.9.9.9:7667?ttl=0"])  # (no such group here)
+        assert box.wait(p, 60) == 2, p.stderr()
+    assert "error: cannot receive on udpm://10.9.9.9:7667?ttl=0" in p.stderr(), p.stderr()
+    assert log.read_bytes() == b"an earlier run"

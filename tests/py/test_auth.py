@@ -172,3 +172,21 @@ def test_skillbus_key_creates_rotates_and_retires(tmp_path, capsys):
     os.chmod(path, 0o640)
     assert main(["key", "show", "--path", str(path)]) == 1
     assert "chmod 600" in capsys.readouterr().err
+
+
+def test_an_identity_the_trailer_cannot_hold_is_refused_not_cut(monkeypatch, tmp_path):
+    # Before, a 300-byte identity was cut to 255 bytes: every receiver saw another identity
+    # than the policy's and dropped every message as forbidden, while the sender's own
+    # policy check (on the whole identity) passed.
+    from skillbus.bus import BusError
+    for bad in ("i" * 256, "é" * 128, ""):
+        with pytest.raises(ValueError, match=r"is \d+ bytes: an identity is 1 to 255 bytes \(\$SKILLBUS_IDENTITY\)"):
+            auth.Sealer(KEY, bad)
+    auth.Sealer(KEY, "i" * 255)
+    key = auth.create_key_file(tmp_path / "bus.key")
+    monkeypatch.setenv("SKILLBUS_KEY_FILE", str(key))
+    monkeypatch.setenv("SKILLBUS_IDENTITY", "x" * 300)
+    with pytest.raises(BusError, match="is 300 bytes"):
+        open_bus("memq://")
+    with pytest.raises(PolicyError, match="longer than 255 bytes"):
+        Policy.parse("SB_X " + "y" * 256 + "\n")
