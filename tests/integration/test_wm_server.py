@@ -155,3 +155,25 @@ def test_cli_get_query_tree_save_load(sandbox, tmp_path):
     (tmp_path / "broken.ttl").write_text("this is not turtle")
     rc, _, err = cli("load", tmp_path / "broken.ttl")
     assert rc == 1 and "malformed Turtle" in err
+
+
+def test_a_scene_load_that_cannot_be_made_durable_changes_nothing(sandbox, tmp_path):
+    # Before, the world went on at the new scene's version with no journal record of it:
+    # the commits after were acknowledged, and a restart refused the journal (a gap in
+    # its versions) so that `wm repair` dropped them.
+    data = tmp_path / "data"
+    server = start_server(sandbox, wm_binary(), data)
+    r = run_scenario(sandbox, "failed_load", data)
+    assert r["labels"] == ["after-load", "before-load"] and r["version"] == r["version_before"] + 1, r
+    sandbox.kill(server, signal.SIGTERM)
+    assert sandbox.wait(server, 20) == 0, server.stderr()[-2000:]
+    again = start_server(sandbox, wm_binary(), data, name="wm-again")
+    import sys
+    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
+            "w = WorldModelInterface(open_bus(), 'probe'); print(json.dumps({'version': w.version, 'labels': "
+            "sorted(e.label for e in w.get_elements() if e.label.endswith('-load'))}))")
+    probe = sandbox.start("probe", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
+    seen = last_json(probe.stdout())
+    assert seen == {"version": r["version"], "labels": r["labels"]}, (seen, r)
+    assert again.returncode is None

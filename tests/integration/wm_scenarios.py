@@ -156,6 +156,27 @@ def bad_input() -> None:
     print(json.dumps({"ok": True}))
 
 
+def failed_load(data: str) -> None:
+    """A scene load that cannot be made durable (its snapshot cannot be written) changes
+    nothing: the world and its version are as before, and later commits are kept."""
+    from skillbus.msgs import wm_scene_t
+    wmi = WorldModelInterface(open_bus(), "failed-load")
+    req = wm_scene_t()
+    req.path = "saved"
+    wmi._call("save_scene", req, wm_scene_t)
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "before-load"))])
+    version = wmi.version
+    blocker = Path(data) / "snapshot.bin.tmp"
+    blocker.mkdir()
+    req.path = "saved.ttl"
+    err = expect_error(lambda: wmi._call("load_scene", req, wm_scene_t), "could not be made durable, nothing changed")
+    blocker.rmdir()
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "after-load"))])
+    labels = sorted(e.label for e in wmi.get_elements() if e.label.endswith("-load"))
+    print(json.dumps({"ok": True, "error": err, "version_before": version, "version": wmi.version,
+                      "labels": labels}), flush=True)
+
+
 def writer(n: int) -> None:
     """Adds n elements labelled w0..w{n-1}, one transaction each; prints each acknowledged
     index. Retries ride through a server restart (RPC timeout 20 s)."""
@@ -236,6 +257,8 @@ if __name__ == "__main__":
         bad_input()
     elif what == "scene_files":
         scene_files(sys.argv[2])
+    elif what == "failed_load":
+        failed_load(sys.argv[2])
     elif what == "writer":
         writer(int(sys.argv[2]))
     elif what == "lockstep_writer":

@@ -842,6 +842,11 @@ void Journal::rotate_journal(int64_t base_version, uint64_t tail_from, long reco
   ::close(in);
 }
 
+void Journal::fail(const std::string& why) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (broken_.empty()) broken_ = why;
+}
+
 bool Journal::snapshot_running() const {
   std::lock_guard<std::mutex> lock(mu_);
   return running_;

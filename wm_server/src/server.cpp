@@ -361,6 +361,14 @@ const std::string& WorldModelServer::sparql_data() {
   return sparql_data_;
 }
 
+bool WorldModelServer::snapshot_on_disk(int64_t version) const {
+  try {
+    return SnapshotFile(opt_.data_dir + "/snapshot.bin").version() == version;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 void WorldModelServer::load_scene_text(const std::string& text, const std::string& source, std::string* report) {
   // From the --ontology files (and what they import), not from the live ontology: a scene
   // replaces the last one's imports and axioms, and what it imports is found again even if
@@ -378,18 +386,55 @@ void WorldModelServer::load_scene_text(const std::string& text, const std::strin
   for (const auto& e : scene.elements) ops.push_back(Op{Op::AddElement, e, {}});
   for (const auto& r : scene.relations) ops.push_back(Op{Op::AddRelation, {}, r});
   if (!ops.empty()) check.apply(ops);  // validates every element and relation
-  journal_.write_scene_imports(imported.triples.empty() ? "" : write_turtle(imported.triples, px));
-  journal_.write_scene_extra(scene.extra.empty() ? "" : write_turtle(scene.extra, px));
-  ontology_ = onto;
-  prefixes_ = px;
-  scene_extra_ = std::move(scene.extra);
-  scene_imports_ = imported.triples;
+  // What the load replaces, to put back if it cannot be made durable (a full disk): else
+  // the world would go on at a version no journal record explains, every later commit
+  // would be acknowledged into a journal that a restart refuses, and the side files
+  // would describe a scene the snapshot does not hold.
+  const std::string was_imports = journal_.read_scene_imports(), was_extra = journal_.read_scene_extra();
+  const WorldImage was_world = store_.image();
+  Ontology was_ontology = ontology_;
+  Prefixes was_prefixes = prefixes_;
+  std::vector<Triple> was_scene_extra = scene_extra_, was_scene_imports = scene_imports_;
+  try {
+    journal_.write_scene_imports(imported.triples.empty() ? "" : write_turtle(imported.triples, px));
+    journal_.write_scene_extra(scene.extra.empty() ? "" : write_turtle(scene.extra, px));
+    ontology_ = onto;
+    prefixes_ = px;
+    scene_extra_ = std::move(scene.extra);
+    scene_imports_ = imported.triples;
+    store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
+    snapshot(false);  // a scene load is made durable as a snapshot before the reply
+  } catch (const WmError& e) {
+    if (snapshot_on_disk(was_world.version + 1)) {
+      // The snapshot of the new scene is in place and only the journal's switch failed:
+      // the disk holds the new scene, and so does the server; no commit until a restart.
+      journal_.fail(std::string("the journal could not be restarted after a scene load (") + e.what() +
+                    "); restart the server");
+      throw WmError(std::string("the scene was loaded and is on disk as a snapshot, but the journal could not be "
+                                "restarted (") + e.what() + "): no commit is taken until the server restarts");
+    }
+    std::vector<Element> elements;
+    std::vector<Relation> relations;
+    for (const auto& el : was_world.elements) elements.push_back(*el);
+    for (const auto& r : was_world.relations) relations.push_back(*r);
+    ontology_ = std::move(was_ontology);
+    prefixes_ = std::move(was_prefixes);
+    scene_extra_ = std::move(was_scene_extra);
+    scene_imports_ = std::move(was_scene_imports);
+    store_.reset(std::move(elements), std::move(relations), was_world.version, was_world.next_id);
+    try {
+      journal_.write_scene_imports(was_imports);
+      journal_.write_scene_extra(was_extra);
+    } catch (const WmError& again) {
+      journal_.fail(std::string("a scene load failed (") + e.what() + ") and its side files could not be put back (" +
+                    again.what() + "); restart the server");
+    }
+    throw WmError(std::string("the scene could not be made durable, nothing changed: ") + e.what());
+  }
   for (const auto& f : imported.files) scene.notes.push_back("imported the ontology " + f);
   for (const auto& i : imported.missing_imports)
     scene.notes.push_back("imports " + i + ", which neither the server's ontology nor its library declares");
-  store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
   for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
-  snapshot(false);  // a scene load is made durable as a snapshot before the reply
 }
 
 // Scene files named in a request live in DATA/scenes: a request names a scene, never a

@@ -170,6 +170,9 @@ class Journal {
   bool start_snapshot(SnapshotData snapshot);
   bool snapshot_running() const;
   void wait_for_snapshot();  // until the background snapshot, if any, has ended
+  // From now on every append and snapshot is refused with `why` (the data directory no
+  // longer matches what the server holds): nothing more is acknowledged until a restart.
+  void fail(const std::string& why);
   // Records in the journal after the snapshot, and whether a snapshot is due (`every`
   // records since the last one, or since the last attempt that failed).
   long records_since_snapshot() const;

@@ -89,6 +89,7 @@ class WorldModelServer {
   Bus& bus_;
   ServerOptions opt_;
   Prefixes prefixes_;
+  bool snapshot_on_disk(int64_t version) const;  // DATA/snapshot.bin is whole and at `version`
   Ontology ontology_;
   Ontology base_ontology_;  // the --ontology files and what they import: where a scene load starts
   WorldStore store_;
