@@ -193,3 +193,18 @@ def test_can_log_names_a_file_it_cannot_read(sandbox, tmp_path):
     out = sandbox.start("can-log", [sys.executable, "-m", "skillbus.cli", "can-log", str(tmp_path / "none.log")])
     assert sandbox.wait(out, 30) == 2
     assert "none.log" in out.stderr()
+
+
+def test_can_record_names_what_it_cannot_record_before_it_says_it_records(sandbox, tmp_path):
+    # Before, it said "recording" before it opened its file, and ended with a traceback.
+    hub = start_hub(sandbox, tmp_path / "grip.sock")
+    cases = [(tmp_path / "nohub.sock", tmp_path / "a.log", "CAN channel"),
+             (hub, tmp_path / "no" / "b.log", "No such file"),
+             (hub, tmp_path / "c.unknown", "unknown")]
+    for channel, log, why in cases:
+        p = sandbox.start(f"rec-{log.name}", [sys.executable, "-m", "skillbus.cli", "can-record", str(log),
+                                              "--channel", str(channel)])
+        assert sandbox.wait(p, 30) == 2, p.stderr()
+        err = p.stderr()
+        assert f"error: can-record {log}" in err and why.lower() in err.lower(), err
+        assert "recording" not in err and "Traceback" not in err, err

@@ -31,10 +31,13 @@ SDO_CLIENT = {1: "download", 2: "upload", 4: "abort"}       # ccs, bits 7-5 of b
 SDO_SERVER = {3: "download ok", 2: "upload answer", 4: "abort"}  # scs
 
 
+FLUSH_S = 0.1  # the file is flushed this often: a recorder killed with -9 loses at most this much
+
+
 def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: float | None = None) -> int:
     """Writes every frame on the bus to `path` (candump format for .log) until `seconds`
-    pass or SIGINT/SIGTERM; returns how many."""
-    bus = can.Bus(interface=interface, channel=channel)
+    pass or SIGINT/SIGTERM; returns how many. OSError, ValueError (a file name python-can
+    has no format for) or can.CanError, before it says it records, when it cannot."""
     stop = [False]
 
     def on_signal(*_):
@@ -42,16 +45,29 @@ def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: f
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
+    bus = can.Bus(interface=interface, channel=channel)
+    try:
+        log = can.Logger(path)
+    except BaseException:
+        bus.shutdown()
+        raise
     n = 0
-    end = time.monotonic() + seconds if seconds else None
-    print(f"recording {channel} to {path}", file=sys.stderr, flush=True)  # the bus has us from here on
-    with can.Logger(path) as log:  # nothing is lost on a stop: the file is flushed and closed
+    end = time.monotonic() + seconds if seconds is not None else None
+    flushed = time.monotonic()
+    try:
+        # Said once the bus and the file are both open: from here on every frame is kept.
+        print(f"recording {channel} to {path}", file=sys.stderr, flush=True)
         while not stop[0] and (end is None or time.monotonic() < end):
             msg = bus.recv(0.1)
             if msg is not None:
                 log.on_message_received(msg)
                 n += 1
-    bus.shutdown()
+            if time.monotonic() - flushed >= FLUSH_S and getattr(log, "file", None) is not None:
+                log.file.flush()
+                flushed = time.monotonic()
+    finally:  # nothing is lost on a stop: the file is flushed and closed
+        log.stop()
+        bus.shutdown()
     return n
 
 
@@ -138,7 +154,11 @@ def lines(path: str, node_id: int = 5, eds: str | Path = EDS) -> Iterator[str]:
 
 
 def main_record(args) -> int:
-    n = record(args.channel, args.file, args.interface, args.seconds)
+    try:
+        n = record(args.channel, args.file, args.interface, args.seconds)
+    except (OSError, ValueError, can.CanError) as e:
+        print(f"error: can-record {args.file} (CAN channel {args.channel}): {e}", file=sys.stderr)
+        return 2
     print(f"{n} frames written to {args.file}", file=sys.stderr)
     return 0
 
