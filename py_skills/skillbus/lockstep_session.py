@@ -50,11 +50,16 @@ def print_summary(s: dict) -> None:
 
 
 def main(args) -> int:
+    from skillbus.netns import SandboxError
     as_json = getattr(args, "json", False)
-    with Sandbox() as box:
-        print(f"running {args.frames} frames with {args.python} Python and {args.cpp} C++ participants "
-              f"({box.mode}, {box.url})", file=sys.stderr if as_json else sys.stdout, flush=True)
-        s = run_session(box, args.frames, args.python, args.cpp, timeout=args.timeout)
+    try:
+        with Sandbox() as box:
+            print(f"running {args.frames} frames with {args.python} Python and {args.cpp} C++ participants "
+                  f"({box.mode}, {box.url})", file=sys.stderr if as_json else sys.stdout, flush=True)
+            s = run_session(box, args.frames, args.python, args.cpp, timeout=args.timeout)
+    except SandboxError as e:  # (no private network namespace here, and no safe way without one)
+        print(f"error: lockstep-session: {e}", file=sys.stderr)
+        return 2
     if as_json:
         print(json.dumps(s))
     else:

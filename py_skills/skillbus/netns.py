@@ -127,6 +127,10 @@ class Sandbox:
             self.mode = "netns"
         except SandboxError as why:
             if not _host_routes_multicast_to_lo():
+                # (__exit__ never runs for a sandbox that did not start: its key goes now)
+                shutil.rmtree(self._key_dir, ignore_errors=True)
+                if self._own_dir:
+                    shutil.rmtree(self.log_dir, ignore_errors=True)
                 raise SandboxError(f"no private network namespace ({why}) and the host does not route "
                                    f"multicast to lo; refusing to join multicast groups on a real "
                                    f"interface") from None
