@@ -510,6 +510,14 @@ class AuthenticatedBus(Bus):
         """Messages dropped, by reason (skillbus.auth.REASONS); "ok" counts the good ones."""
         return self._opener.stats
 
+    def refused(self, channel: str) -> str:
+        """Why this process may not send on `channel` under the policy ("" when it may): a
+        program checks the channels it answers on at start, not at its first answer."""
+        if self._rules is None or self._rules.allows(self.identity, channel):
+            return ""
+        return (f"the bus policy {self._rules.source} does not let '{self.identity}' send on {channel} (set "
+                f"$SKILLBUS_IDENTITY to an identity the policy names for it, or add a rule; docs/security.md)")
+
     def publish(self, channel: str, data: bytes) -> None:
         """Raises BusError when the policy does not let this identity send on the
         channel: every receiver would drop the message (and a lockstep frame would wait

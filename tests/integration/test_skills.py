@@ -191,3 +191,21 @@ def test_a_process_name_a_dds_topic_refuses_is_refused_at_start(sandbox):
                              env={"PYTHONPATH": str(LIBS)})
         assert sandbox.wait(proc, 30) == 2, proc.stderr()
         assert f"error: --name '{name}': a skill process name is 1 to 64 letters, digits or '_'" in proc.stderr()
+
+
+def test_a_process_the_policy_would_silence_is_refused_at_start(sandbox, tmp_path):
+    # An added process signs as "operator" unless told otherwise; under deploy/policy.conf
+    # only "skills" answers ticks. Before, it registered and every tick it answered was
+    # dropped as forbidden ("did not answer the tick"); now it names the rule at start.
+    from skillbus import paths
+    policy = paths.REPO_ROOT / "deploy" / "policy.conf"
+    env = {"PYTHONPATH": str(LIBS), "SKILLBUS_POLICY_FILE": str(policy), "SKILLBUS_IDENTITY": "operator"}
+    proc = sandbox.start("added", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "added",
+                                   "--library", "flow_skills"], env=env)
+    assert sandbox.wait(proc, 30) == 2, proc.stderr()
+    assert (f"error: skills-process added: the bus policy {policy} does not let 'operator' send on "
+            "SB_SKPROC_ADDED_REP") in proc.stderr(), proc.stderr()
+    env["SKILLBUS_IDENTITY"] = "skills"  # as the policy names skill processes
+    ok = sandbox.start("added-ok", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "added",
+                                    "--library", "flow_skills", "--standalone"], env=env)
+    ok.wait_for("serving", 30)

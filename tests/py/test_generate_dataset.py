@@ -187,6 +187,28 @@ def test_what_a_writer_killed_mid_episode_left_is_removed_on_open(tmp_path):
     assert sorted(p.name for p in chunk.iterdir()) == ["episode_000000.parquet", "episode_000001.parquet"]
 
 
+def test_a_line_cut_by_a_killed_writer_is_dropped_with_its_episode(tmp_path):
+    # Before, a cut last line of episodes.jsonl (kill -9 or a power loss in its write)
+    # stopped every later run with a JSONDecodeError traceback.
+    ep, root, w = an_episode_and_a_writer(tmp_path)
+    w.write_episode(ep, "put the cube away", {"seed": 1, "success": True})
+    w.write_episode(ep, "put the cube away", {"seed": 2, "success": True})
+    meta = root / "meta" / "episodes.jsonl"
+    lines = meta.read_text().splitlines()
+    meta.write_text(lines[0] + "\n" + lines[1][: len(lines[1]) // 2])  # the second line cut
+    w2 = DatasetWriter(root, fps=10)
+    assert [e["episode_index"] for e in w2.episodes] == [0]
+    assert meta.read_text() == lines[0] + "\n"
+    chunk = root / "data" / "chunk-000"
+    assert sorted(p.name for p in chunk.iterdir()) == ["episode_000000.parquet"]
+    stats = root / "meta" / "episodes_stats.jsonl"
+    assert [json.loads(x)["episode_index"] for x in stats.read_text().splitlines()] == [0]
+    assert w2.write_episode(ep, "put the cube away", {"seed": 3, "success": True}) == 1
+    meta.write_text("{not json}\n" + meta.read_text())  # damage that is no cut: named, not guessed
+    with pytest.raises(ValueError, match=r"episodes.jsonl, line 1: not JSON"):
+        DatasetWriter(root, fps=10)
+
+
 def test_a_depth_camera_is_recorded_as_its_latest_whole_capture(tmp_path):
     log = tmp_path / "e.lcmlog"
     write_log(log, range(0, 30), clouds=[cloud(3, 0, 1.2), cloud(13, 1, 0.8)])
@@ -252,3 +274,18 @@ def test_frames_and_rows_that_do_not_fit_are_refused_before_any_episode(tmp_path
     assert why in str(e.value), str(e.value)
     (ok := tmp_path / "ok.yaml").write_text(text + "\nfps: 25\nframe_ms: 20\n")
     assert config.load(ok).fps == 25.0
+
+
+def test_generate_names_a_damaged_dataset_before_it_runs_an_episode(tmp_path):
+    # Before: a JSONDecodeError traceback (and, for a refusal mid-run, workers left running).
+    import subprocess
+    import sys
+    from skillbus import paths
+    (tmp_path / "out" / "meta").mkdir(parents=True)
+    (tmp_path / "out" / "meta" / "episodes.jsonl").write_text("{damaged\n{\"episode_index\": 0}\n")
+    r = subprocess.run([sys.executable, "-m", "skillbus.cli", "generate",
+                        str(paths.REPO_ROOT / "deploy" / "generate" / "pick_place.yaml"), "--episodes", "1",
+                        "--seed", "1", "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2, r.stderr[-2000:]
+    assert f"error: the dataset {tmp_path / 'out'}: " in r.stderr and "episodes.jsonl, line 1: not JSON" in r.stderr
+    assert "Traceback" not in r.stderr

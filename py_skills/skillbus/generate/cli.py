@@ -66,6 +66,9 @@ def main(args) -> int:
     except gconfig.ConfigError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    except ValueError as e:  # the dataset in --out cannot take these episodes (damaged, other features)
+        print(f"error: the dataset {out}: {e}", file=sys.stderr)
+        return 2
     finally:
         bar.close()
     if summary.interrupted:

@@ -35,10 +35,37 @@ VECTORS = ("observation.state", "observation.velocity", "observation.tool_pose",
            "observation.articulation", "action")
 
 
+def _sync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _sync_file(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 def _atomic_write(path: Path, text: str) -> None:
+    """`path` is the old text or the whole new one, on disk on return (beside, synced,
+    renamed, the folder synced): a power loss never leaves a meta file cut."""
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(text)
+    _sync_file(tmp)
     os.replace(tmp, path)
+    _sync_dir(path.parent)
+
+
+def _append_line(path: Path, line: dict[str, Any]) -> None:
+    with open(path, "a") as f:
+        f.write(json.dumps(line) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
 
 
 def _episode_index(path: Path) -> int:
@@ -84,10 +111,30 @@ class DatasetWriter:
             self.write_meta()  # its totals from episodes.jsonl again
 
     def _lines(self, name: str) -> list[dict[str, Any]]:
+        """The lines of a meta file; a last line cut by a killed writer (no newline, or not
+        JSON) is dropped, and the file rewritten without it. A damaged line before the last
+        is a ValueError naming it: that is no cut, and nothing is guessed."""
         p = self.root / "meta" / name
         if not p.exists():
             return []
-        return [json.loads(x) for x in p.read_text().splitlines() if x.strip()]
+        text = p.read_text()
+        raw = text.split("\n")
+        whole, tail = raw[:-1], raw[-1]  # (tail: after the last newline, "" when the file ends with one)
+        out = []
+        for i, x in enumerate(whole, 1):
+            if not x.strip():
+                continue
+            try:
+                out.append(json.loads(x))
+            except ValueError:
+                if i == len(whole) and not tail:
+                    whole = whole[:-1]
+                    tail = x  # (a last line cut within its JSON, yet ended: dropped as cut)
+                    break
+                raise ValueError(f"{p}, line {i}: not JSON ({x[:60]!r}); the dataset needs repair by hand") from None
+        if tail.strip():
+            _atomic_write(p, "".join(line + "\n" for line in whole if line.strip()))
+        return out
 
     def write_episode(self, episode: Any, task: str, meta: dict[str, Any]) -> int:
         """Writes one episode (skillbus.generate.record.Episode) labelled with `meta`;
@@ -121,18 +168,20 @@ class DatasetWriter:
         tmp = path.with_name(path.name + ".tmp")
         try:
             pq.write_table(pa.table(cols), tmp)
+            _sync_file(tmp)
             os.replace(tmp, path)  # whole, or not at all
+            _sync_dir(path.parent)
         finally:
             tmp.unlink(missing_ok=True)
-        # Only now, with the file in place, does the writer's state change.
+        # Only now, with the file on disk, does the writer's state change. The episode's
+        # line in episodes.jsonl comes last and makes it part of the dataset: a writer
+        # killed before it leaves a file and a stats line that the next open removes.
         self.names, self.shapes, self.tasks[task] = episode.names, shapes, task_index
         line = {"episode_index": index, "tasks": [task], "length": n, **meta}
+        _append_line(self.root / "meta" / "episodes_stats.jsonl", {"episode_index": index, "stats": stats(rows)})
+        _append_line(self.root / "meta" / "episodes.jsonl", line)
         self.episodes.append(line)
         self.total_frames += n
-        with open(self.root / "meta" / "episodes.jsonl", "a") as f:
-            f.write(json.dumps(line) + "\n")
-        with open(self.root / "meta" / "episodes_stats.jsonl", "a") as f:
-            f.write(json.dumps({"episode_index": index, "stats": stats(rows)}) + "\n")
         self.write_meta()
         return index
 

@@ -216,7 +216,7 @@ def _run_with_threads(cfg, seed, requests, attempts, workers, work, settle, flus
                 if not settle(request, r):
                     pending[pool.submit(run_local, cfg, seed, request, attempts[request], work)] = request
             flush()
-    except KeyboardInterrupt:
+    except BaseException:  # Ctrl-C, SIGTERM, or the dataset refused an episode: no worker goes on
         stop_workers()  # Ctrl-C reached them already; a SIGTERM sent to generate alone did not
         raise
     finally:
@@ -244,7 +244,7 @@ def _run_with_ray(cfg, seed, requests, attempts, workers, address, settle, flush
                 if not settle(request, r):
                     pending[task.remote(str(cfg.path), seed, request, attempts[request])] = request
             flush()
-    except KeyboardInterrupt:
+    except BaseException:  # Ctrl-C, SIGTERM, or the dataset refused an episode: no task goes on
         for ref in pending:  # a forced cancel kills the Ray worker, and with it the episode's namespaces
             ray.cancel(ref, force=True)
         raise

@@ -418,6 +418,18 @@ def main(args) -> int:
         print("error: --standalone serves without a manager on the wall clock; not with --lockstep", file=sys.stderr)
         return 2
     bus = open_bus(args.url)
+    # What it will answer on, checked now: under a policy that does not let its identity
+    # send there, the manager would drop every answer as forbidden and only say that a
+    # tick was not answered (an added process runs as "operator" unless told otherwise).
+    from skillbus.bus import channel as bus_channel
+    answers = [reply_channel("SKPROC_" + args.name.upper())]
+    if not getattr(args, "standalone", False):  # (alone it sends no heartbeats)
+        answers.append(bus_channel("SB_LOCKSTEP_ACK" if args.lockstep else "SB_SKILL_HEARTBEAT"))
+    for ch in answers:
+        why = bus.refused(ch) if hasattr(bus, "refused") else ""
+        if why:
+            print(f"error: skills-process {args.name}: {why}", file=sys.stderr)
+            return 2
     participant = None
     if args.lockstep:
         from skillbus.lockstep import LockstepParticipant
