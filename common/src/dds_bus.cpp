@@ -102,9 +102,26 @@ void check_dds_local(const DdsUrl& u, const std::string& url) {
 
 DdsBus::DdsBus(const std::string& url) : url_(url), parsed_(parse_dds_url(url)) {
   check_dds_local(parsed_, url);
-  // Private by default: our configuration unless the user gave Cyclone one.
-  const char* given = std::getenv("CYCLONEDDS_URI");
-  if (!given || !*given) setenv("CYCLONEDDS_URI", dds_config_xml(parsed_).c_str(), 1);
+  // Private by default: our configuration, unless the user gave Cyclone one where the
+  // network is allowed ($SKILLBUS_NETWORK): one inherited from elsewhere (a ROS 2 shell)
+  // would put the robot's bus on the network. $SKILLBUS_DDS_CONFIG records ours, so that a
+  // child that inherits both knows it is not the user's. As skillbus.dds.cyclone_config.
+  const char* given_env = std::getenv("CYCLONEDDS_URI");
+  const char* own_env = std::getenv("SKILLBUS_DDS_CONFIG");
+  const std::string given = given_env ? given_env : "", own = own_env ? own_env : "";
+  if (!given.empty() && given != own) {
+    const char* allowed = std::getenv("SKILLBUS_NETWORK");
+    if (!allowed || !*allowed)
+      throw BusError("bus URL '" + url + "': $CYCLONEDDS_URI is set (" + given.substr(0, 80) +
+                     (given.size() > 80 ? "..." : "") +
+                     "), and Cyclone would use it as it is, which may reach other hosts. skillbus stays on this "
+                     "host unless told otherwise: unset it (skillbus then configures Cyclone for this host), or "
+                     "allow the network with --network IFACE (SKILLBUS_NETWORK=IFACE; docs/transport.md)");
+  } else {
+    const std::string xml = dds_config_xml(parsed_);
+    setenv("CYCLONEDDS_URI", xml.c_str(), 1);
+    setenv("SKILLBUS_DDS_CONFIG", xml.c_str(), 1);
+  }
   participant_ = dds_create_participant(static_cast<dds_domainid_t>(parsed_.domain), nullptr, nullptr);
   if (participant_ < 0)
     throw BusError("bus URL '" + url + "': cannot join DDS domain " + std::to_string(parsed_.domain) + ": " +

@@ -16,8 +16,9 @@ Quality of service per channel class (docs/transport.md, "DDS"):
   behind gets the latest), or with ``state=best-effort`` best-effort keep-last 32, for
   wall-clock state on a real network (never under lockstep: a lost state stops a run).
 
-Private by default: unless $CYCLONEDDS_URI is set, the participant talks on loopback
-only (no multicast; discovery by unicast to localhost). ``peers=`` adds hosts to
+Private by default: the participant talks on loopback only (no multicast; discovery by
+unicast to localhost); a $CYCLONEDDS_URI of the user's is used only where the network is
+allowed (cyclone_config). ``peers=`` adds hosts to
 discover (a fixed peer list, for a network without multicast), ``interface=`` names
 the address to talk on instead of 127.0.0.1 (the network guard applies as for udpm://).
 """
@@ -125,6 +126,29 @@ def check_local(u: DdsUrl, url: str, allowed: str | None = None) -> None:
                        f"(or SKILLBUS_NETWORK=IFACE; docs/security.md, docs/transport.md)")
 
 
+OWN_CONFIG_ENV = "SKILLBUS_DDS_CONFIG"  # the configuration skillbus set (children inherit both)
+
+
+def cyclone_config(u: DdsUrl, url: str, env: dict | None = None) -> str:
+    """The configuration Cyclone is to read ($CYCLONEDDS_URI): skillbus's own for the URL,
+    unless the user set one, which is used as it is only where the network is allowed
+    ($SKILLBUS_NETWORK): a $CYCLONEDDS_URI inherited from elsewhere (a ROS 2 shell) would
+    otherwise put the robot's bus on the network. Records its own in $SKILLBUS_DDS_CONFIG,
+    so that a child process that inherits both knows it is not the user's."""
+    env = os.environ if env is None else env
+    given, own = env.get("CYCLONEDDS_URI", ""), env.get(OWN_CONFIG_ENV, "")
+    if given and given != own:
+        if env.get("SKILLBUS_NETWORK"):
+            return given
+        raise BusError(f"bus URL '{url}': $CYCLONEDDS_URI is set ({given[:80]}{'...' if len(given) > 80 else ''}), "
+                       f"and Cyclone would use it as it is, which may reach other hosts. skillbus stays on this host "
+                       f"unless told otherwise: unset it (skillbus then configures Cyclone for this host), or allow "
+                       f"the network with --network IFACE (SKILLBUS_NETWORK=IFACE; docs/transport.md)")
+    xml = config_xml(u)
+    env[OWN_CONFIG_ENV] = xml
+    return xml
+
+
 def config_xml(u: DdsUrl) -> str:
     """Cyclone DDS's configuration for a URL: one interface, no multicast, discovery by
     unicast to localhost and the named peers."""
@@ -173,8 +197,7 @@ class DdsBus(Bus):
         except DdsUrlError as e:
             raise BusError(str(e)) from None
         check_local(self.parsed, url)
-        if not os.environ.get("CYCLONEDDS_URI"):
-            os.environ["CYCLONEDDS_URI"] = config_xml(self.parsed)
+        os.environ["CYCLONEDDS_URI"] = cyclone_config(self.parsed, url)
         if _IMPORT_ERROR is not None:
             raise BusError(f"bus URL '{url}': the cyclonedds package is missing ({_IMPORT_ERROR}); run make setup")
         from cyclonedds import domain

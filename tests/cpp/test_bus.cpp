@@ -161,3 +161,19 @@ TEST(DdsUrl, AnotherHostNeedsTheNetworkAllowed) {
   EXPECT_NO_THROW(check_dds_local(parse_dds_url("dds://1?peers=robot-b"), "dds://1"));
   unsetenv("SKILLBUS_NETWORK");
 }
+
+// A ROS 2 shell's $CYCLONEDDS_URI was used as it was: the robot's bus went on the network
+// without anyone saying so. Refused before any participant is made (nothing is sent).
+TEST(DdsUrl, ACycloneConfigurationFromElsewhereNeedsTheNetworkAllowed) {
+  ::setenv("CYCLONEDDS_URI", "file:///etc/ros/cyclone.xml", 1);
+  ::unsetenv("SKILLBUS_DDS_CONFIG");
+  ::unsetenv("SKILLBUS_NETWORK");
+  try {
+    open_bus("dds://5");
+    ADD_FAILURE() << "a foreign $CYCLONEDDS_URI was used";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("$CYCLONEDDS_URI is set (file:///etc/ros/cyclone.xml)"), std::string::npos)
+        << e.what();
+  }
+  ::unsetenv("CYCLONEDDS_URI");
+}

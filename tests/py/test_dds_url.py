@@ -31,3 +31,23 @@ def test_envelopes_carry_any_bytes_and_refuse_what_is_cut():
     for data in (b"", b"a", b"abcd", bytes(range(256)) * 300):
         assert unwrap(wrap(data)) == data
     assert unwrap(wrap(b"abcdef")[:9]) is None
+
+
+def test_a_cyclone_configuration_from_elsewhere_is_used_only_where_the_network_is_allowed():
+    # A ROS 2 shell's $CYCLONEDDS_URI (multicast on the network card) was used as it was:
+    # the robot's bus went on the network without anyone saying so.
+    import pytest
+    from skillbus.bus import BusError
+    from skillbus.dds import OWN_CONFIG_ENV, cyclone_config
+    u = parse_url("dds://3")
+    env = {"CYCLONEDDS_URI": "file:///etc/ros/cyclone.xml"}
+    with pytest.raises(BusError, match=r"\$CYCLONEDDS_URI is set \(file:///etc/ros/cyclone.xml\).*--network IFACE"):
+        cyclone_config(u, "dds://3", env)
+    env["SKILLBUS_NETWORK"] = "eth0"  # told: the user's configuration, as it is
+    assert cyclone_config(u, "dds://3", env) == "file:///etc/ros/cyclone.xml"
+    own: dict = {}
+    xml = cyclone_config(u, "dds://3", own)  # none given: skillbus's own, recorded as its own
+    assert xml == config_xml(u) and own[OWN_CONFIG_ENV] == xml
+    child = {"CYCLONEDDS_URI": xml, OWN_CONFIG_ENV: xml}  # inherited from a skillbus parent: not the user's
+    assert cyclone_config(parse_url("dds://3?peers=localhost"), "dds://3?peers=localhost", child) == \
+        config_xml(parse_url("dds://3?peers=localhost"))
