@@ -84,7 +84,9 @@ def guarded(handler: Handler) -> Handler:
 def refuse_long_channel(channel: str) -> None:
     """BusError when `channel` is longer than LCM carries: every backend refuses it, so a
     name that works on one transport works on the other (skillbus.channels.too_long)."""
-    if len(channel) > channels.MAX_CHANNEL // 4:  # (no name this short can be 64 bytes)
+    # (every publish passes here: an ASCII name is its length in bytes, and only a name of
+    # other characters is encoded to count them)
+    if len(channel) > channels.MAX_CHANNEL or (not channel.isascii() and len(channel) > channels.MAX_CHANNEL // 4):
         why = channels.too_long(channel)
         if why:
             raise BusError(why)

@@ -177,3 +177,22 @@ def test_a_scene_load_that_cannot_be_made_durable_changes_nothing(sandbox, tmp_p
     seen = last_json(probe.stdout())
     assert seen == {"version": r["version"], "labels": r["labels"]}, (seen, r)
     assert again.returncode is None
+
+
+def test_a_scene_load_whose_journal_cannot_be_restarted_takes_no_commit_until_a_restart(sandbox, tmp_path):
+    # The new scene's snapshot is in place, its new journal is not: the old journal must
+    # take no more records (the snapshot would hide them), and a restart has the new scene.
+    data = tmp_path / "data"
+    server = start_server(sandbox, wm_binary(), data)
+    r = run_scenario(sandbox, "journal_switch_fails", data)
+    sandbox.kill(server, signal.SIGTERM)
+    sandbox.wait(server, 20)
+    (data / "journal.bin.tmp").rmdir()
+    again = start_server(sandbox, wm_binary(), data, name="wm-again")
+    import sys
+    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
+            "w = WorldModelInterface(open_bus(), 'probe'); print(json.dumps({'version': w.version, 'labels': "
+            "sorted(e.label for e in w.get_elements() if e.label in ('before-load', 'after'))}))")
+    probe = sandbox.start("probe", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
+    assert last_json(probe.stdout()) == {"version": r["version_before"] + 1, "labels": []}, (probe.stdout(), r)

@@ -177,6 +177,24 @@ def failed_load(data: str) -> None:
                       "labels": labels}), flush=True)
 
 
+def journal_switch_fails(data: str) -> None:
+    """A scene load whose snapshot is written but whose new journal cannot be started: the
+    disk and the server hold the new scene, and no commit is taken until a restart."""
+    from skillbus.msgs import wm_scene_t
+    wmi = WorldModelInterface(open_bus(), "journal-switch")
+    req = wm_scene_t()
+    req.path = "saved"
+    wmi._call("save_scene", req, wm_scene_t)
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "before-load"))])
+    version = wmi.version
+    (Path(data) / "journal.bin.tmp").mkdir()
+    req.path = "saved.ttl"
+    err = expect_error(lambda: wmi._call("load_scene", req, wm_scene_t), "is on disk as a snapshot")
+    refused = expect_error(lambda: wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "after"))]),
+                           "restart the server")
+    print(json.dumps({"ok": True, "error": err, "refused": refused, "version_before": version}), flush=True)
+
+
 def writer(n: int) -> None:
     """Adds n elements labelled w0..w{n-1}, one transaction each; prints each acknowledged
     index. Retries ride through a server restart (RPC timeout 20 s)."""
@@ -257,6 +275,8 @@ if __name__ == "__main__":
         bad_input()
     elif what == "scene_files":
         scene_files(sys.argv[2])
+    elif what == "journal_switch_fails":
+        journal_switch_fails(sys.argv[2])
     elif what == "failed_load":
         failed_load(sys.argv[2])
     elif what == "writer":
