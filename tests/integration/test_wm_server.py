@@ -1,9 +1,14 @@
 """The world model server as a process: its API through the Python client, bad input,
 a crash in the middle of 2,000 writes, and determinism under lockstep."""
 
+import json
 import random
+import re
 import signal
+import sys
 from pathlib import Path
+
+import pytest
 
 from conftest import last_json, python_tool
 from skillbus.waiting import wait_until
@@ -196,3 +201,44 @@ def test_a_scene_load_whose_journal_cannot_be_restarted_takes_no_commit_until_a_
     probe = sandbox.start("probe", [sys.executable, "-c", code])
     assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
     assert last_json(probe.stdout()) == {"version": r["version_before"] + 1, "labels": []}, (probe.stdout(), r)
+
+
+@pytest.mark.parametrize("change", ["load", "axioms"])
+def test_a_crash_between_a_scene_changes_files_and_its_snapshot_leaves_the_old_scene_whole(sandbox, tmp_path, change):
+    # A scene load (or new axioms) writes the scene's side files, then its snapshot. Before,
+    # a crash in between restarted with the new scene's classes and axioms beside the old
+    # world: a scene that was never acknowledged, half in force.
+    data = tmp_path / "data"
+    server = start_server(sandbox, wm_binary(), data)
+    client = sandbox.start("change-blocked", python_tool("wm_scenarios.py", "change_blocked", str(data), change))
+    before = json.loads(client.wait_for(re.compile(r'\{"version_before": \d+\}'), 60, stream="stdout").group(0))
+
+    def new_scene_files_written() -> bool:
+        return any("Widget" in f.read_text(errors="replace") for f in data.glob("scene_extra*.ttl"))
+    wait_until(new_scene_files_written, 30, "the scene change's side files")
+    sandbox.kill(server)  # SIGKILL: the snapshot is blocked on a FIFO nobody reads
+    sandbox.wait(server, 20)
+    sandbox.kill(client)
+    sandbox.wait(client, 20)
+    again = start_server(sandbox, wm_binary(), data, name="wm-again")
+    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
+            "w = WorldModelInterface(open_bus(), 'probe'); "
+            "print(json.dumps({'version': w.version, 'widget': 'Widget' in w.save_scene(), "
+            "'labels': sorted(e.label for e in w.get_elements() if e.label == 'before-change')}))")
+    probe = sandbox.start("probe", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
+    assert last_json(probe.stdout()) == {"version": before["version_before"], "widget": False,
+                                         "labels": ["before-change"]}, (probe.stdout(), before)
+    assert not [f.name for f in data.glob("scene_*") if str(before["version_before"] + 1) in f.name]
+    assert again.returncode is None
+
+
+def test_new_axioms_that_cannot_be_made_durable_change_nothing(sandbox, tmp_path):
+    # Before, the axioms were in force (and in the side file) at a version no snapshot or
+    # journal record explained.
+    data = tmp_path / "data"
+    server = start_server(sandbox, wm_binary(), data)
+    r = run_scenario(sandbox, "failed_axioms", data)
+    assert r["unchanged"] == {"version": r["version_before"], "widget": False}, r
+    assert r["version_after_commit"] == r["version_before"] + 1, r
+    assert server.returncode is None

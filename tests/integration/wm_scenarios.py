@@ -195,6 +195,48 @@ def journal_switch_fails(data: str) -> None:
     print(json.dumps({"ok": True, "error": err, "refused": refused, "version_before": version}), flush=True)
 
 
+def change_blocked(data: str, what: str) -> None:
+    """Commits 'before-change', prints the version, then makes a scene change (a load of
+    the demo scene with a new class, or the class as a new axiom) whose snapshot blocks
+    for ever (snapshot.bin.tmp is a FIFO nobody reads): the test kills the server there."""
+    import os
+    from skillbus.msgs import wm_scene_t
+    wmi = WorldModelInterface(open_bus(), "change-blocked", timeout=2.0)
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "before-change"))])
+    print(json.dumps({"version_before": wmi.version}), flush=True)
+    os.mkfifo(Path(data) / "snapshot.bin.tmp")
+    axiom = "skiros:Widget rdfs:subClassOf skiros:Product ."
+    req = wm_scene_t()
+    if what == "load":
+        req.turtle = (Path(__file__).resolve().parents[2] / "deploy" / "scenes" / "demo.ttl").read_text() + axiom + "\n"
+        name = "load_scene"
+    else:
+        req.turtle = axiom
+        name = "add_axioms"
+    try:
+        wmi._call(name, req, wm_scene_t)
+    except WorldModelError as e:
+        print(json.dumps({"error": str(e)}), flush=True)
+
+
+def failed_axioms(data: str) -> None:
+    """New axioms that cannot be made durable change nothing: no new class, the same
+    version, and the next commit is taken."""
+    from skillbus.msgs import wm_scene_t
+    wmi = WorldModelInterface(open_bus(), "failed-axioms")
+    version = wmi.version
+    blocker = Path(data) / "snapshot.bin.tmp"
+    blocker.mkdir()
+    req = wm_scene_t()
+    req.turtle = "skiros:Widget rdfs:subClassOf skiros:Product ."
+    err = expect_error(lambda: wmi._call("add_axioms", req, wm_scene_t), "could not be made durable, nothing changed")
+    blocker.rmdir()
+    unchanged = {"version": wmi.version, "widget": "Widget" in wmi.save_scene()}
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "after-axioms"))])
+    print(json.dumps({"ok": True, "error": err, "version_before": version, "unchanged": unchanged,
+                      "version_after_commit": wmi.version}), flush=True)
+
+
 def writer(n: int) -> None:
     """Adds n elements labelled w0..w{n-1}, one transaction each; prints each acknowledged
     index. Retries ride through a server restart (RPC timeout 20 s)."""
@@ -275,6 +317,10 @@ if __name__ == "__main__":
         bad_input()
     elif what == "scene_files":
         scene_files(sys.argv[2])
+    elif what == "failed_axioms":
+        failed_axioms(sys.argv[2])
+    elif what == "change_blocked":
+        change_blocked(sys.argv[2], sys.argv[3])
     elif what == "journal_switch_fails":
         journal_switch_fails(sys.argv[2])
     elif what == "failed_load":

@@ -7,6 +7,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -952,13 +953,29 @@ RepairResult repair_data_dir(const std::string& dir) {
   }
 }
 
-void Journal::write_side_file(const char* name, const std::string& turtle) {
-  if (turtle.empty() && ::access((dir_ + "/" + name).c_str(), F_OK) != 0) return;
-  replace_file_durably(dir_, name, turtle);
+namespace {
+
+constexpr const char* kSceneKinds[] = {"scene_imports", "scene_extra"};
+
+std::string scene_file_name(const char* kind, int64_t version) {
+  return version == 0 ? std::string(kind) + ".ttl" : std::string(kind) + "." + std::to_string(version) + ".ttl";
 }
 
-std::string Journal::read_side_file(const char* name) const {
-  const std::string path = dir_ + "/" + name;
+// The version of a scene file's name: KIND.ttl (0) or KIND.V.ttl; -1 for any other name.
+int64_t scene_file_version(const std::string& name, const char* kind) {
+  const std::string k = kind;
+  if (name == k + ".ttl") return 0;
+  if (name.size() <= k.size() + 5 || name.compare(0, k.size() + 1, k + ".") != 0 ||
+      name.compare(name.size() - 4, 4, ".ttl") != 0)
+    return -1;
+  const std::string digits = name.substr(k.size() + 1, name.size() - k.size() - 5);
+  if (digits.empty() || digits.size() > 18 || digits[0] == '0' ||
+      digits.find_first_not_of("0123456789") != std::string::npos)
+    return -1;
+  return std::stoll(digits);
+}
+
+std::string read_text(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     if (errno == ENOENT) return "";
@@ -974,9 +991,85 @@ std::string Journal::read_side_file(const char* name) const {
   return out;
 }
 
-void Journal::write_scene_extra(const std::string& turtle) { write_side_file("scene_extra.ttl", turtle); }
-std::string Journal::read_scene_extra() const { return read_side_file("scene_extra.ttl"); }
-void Journal::write_scene_imports(const std::string& turtle) { write_side_file("scene_imports.ttl", turtle); }
-std::string Journal::read_scene_imports() const { return read_side_file("scene_imports.ttl"); }
+void remove_file(const std::string& path) {
+  if (::unlink(path.c_str()) != 0 && errno != ENOENT) throw WmError(sys_error("cannot remove " + path));
+}
+
+// The versions of the generations on disk, and the leftovers of writes cut short.
+struct SceneGenerations {
+  std::vector<int64_t> versions;
+  std::vector<std::string> leftovers;
+};
+
+SceneGenerations scene_generations(const std::string& dir) {
+  SceneGenerations g;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    for (const char* kind : kSceneKinds) {
+      const std::string k = kind;
+      if (name.compare(0, k.size(), k) != 0) continue;
+      if (name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0) {
+        g.leftovers.push_back(name);
+        continue;
+      }
+      const int64_t v = scene_file_version(name, kind);
+      if (v >= 0 && std::find(g.versions.begin(), g.versions.end(), v) == g.versions.end()) g.versions.push_back(v);
+    }
+  }
+  if (ec) throw WmError("cannot list " + dir + ": " + ec.message());
+  return g;
+}
+
+}  // namespace
+
+void Journal::write_scene_files(int64_t version, const std::string& imports, const std::string& extra) {
+  // A scene without such triples needs no files, unless they must replace an older generation.
+  if (imports.empty() && extra.empty() && scene_generations(dir_).versions.empty()) return;
+  replace_file_durably(dir_, scene_file_name("scene_imports", version), imports);
+  replace_file_durably(dir_, scene_file_name("scene_extra", version), extra);
+}
+
+void Journal::remove_scene_files(int64_t version) {
+  for (const char* kind : kSceneKinds) remove_file(dir_ + "/" + scene_file_name(kind, version));
+  sync_dir(dir_);
+}
+
+Journal::SceneFiles Journal::settle_scene_files(int64_t snapshot_version) {
+  const SceneGenerations g = scene_generations(dir_);
+  const std::vector<int64_t>& versions = g.versions;
+  const std::vector<std::string>& leftovers = g.leftovers;
+  SceneFiles out;
+  bool found = false;
+  for (int64_t v : versions)
+    if (v <= snapshot_version && (!found || v > out.version)) {
+      out.version = v;
+      found = true;
+    }
+  if (found) {
+    out.imports_path = dir_ + "/" + scene_file_name("scene_imports", out.version);
+    out.extra_path = dir_ + "/" + scene_file_name("scene_extra", out.version);
+    out.imports = read_text(out.imports_path);
+    out.extra = read_text(out.extra_path);
+  }
+  // Once the generations before it are gone, an empty generation in force says what no
+  // files say.
+  const bool empty_in_force = found && out.imports.empty() && out.extra.empty();
+  bool removed = false;
+  for (int64_t v : versions)
+    if (!found || v != out.version || empty_in_force) {
+      if (v > snapshot_version)
+        SB_WARN(kLog, "removed the scene files of version " << v << " in " << dir_
+                                                              << ": a scene change whose snapshot was never written");
+      for (const char* kind : kSceneKinds) remove_file(dir_ + "/" + scene_file_name(kind, v));
+      removed = true;
+    }
+  for (const auto& name : leftovers) {
+    remove_file(dir_ + "/" + name);
+    removed = true;
+  }
+  if (removed) sync_dir(dir_);
+  return out;
+}
 
 }  // namespace skillbus::wm

@@ -83,16 +83,6 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
     SB_WARN(kLog, "the ontology imports " << i << ", which neither an --ontology file nor the --ontology-library "
                                           "declares (give its file or folder)");
   base_ontology_ = ontology_;  // what every scene load starts from
-  // The ontologies the loaded scene imported, then its own axioms, before the journal's
-  // records, which may use their classes.
-  if (const std::string imports = journal_.read_scene_imports(); !imports.empty()) {
-    scene_imports_ = parse_turtle(imports, prefixes_, journal_.dir() + "/scene_imports.ttl");
-    ontology_.add_triples(scene_imports_, prefixes_);
-  }
-  if (const std::string extra = journal_.read_scene_extra(); !extra.empty()) {
-    scene_extra_ = parse_turtle(extra, prefixes_, journal_.dir() + "/scene_extra.ttl");
-    ontology_.add_triples(scene_extra_, prefixes_);
-  }
   recover();
 
   rpc_.add_method<wm_query_t, wm_elements_t>("get", [this](const wm_query_t& q) { return on_get(q); });
@@ -145,6 +135,17 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
 
 void WorldModelServer::recover() {
   Journal::Recovered rec = journal_.recover();
+  // The ontologies the loaded scene imported, then its own axioms (the generation that goes
+  // with the snapshot), before the world and the journal's records, which may use their classes.
+  const Journal::SceneFiles files = journal_.settle_scene_files(rec.snapshot ? rec.snapshot->version() : 0);
+  if (!files.imports.empty()) {
+    scene_imports_ = parse_turtle(files.imports, prefixes_, files.imports_path);
+    ontology_.add_triples(scene_imports_, prefixes_);
+  }
+  if (!files.extra.empty()) {
+    scene_extra_ = parse_turtle(files.extra, prefixes_, files.extra_path);
+    ontology_.add_triples(scene_extra_, prefixes_);
+  }
   std::string report;
   if (rec.snapshot) {
     // Element by element from the mapped file into the store: a large world is never
@@ -386,32 +387,53 @@ void WorldModelServer::load_scene_text(const std::string& text, const std::strin
   for (const auto& e : scene.elements) ops.push_back(Op{Op::AddElement, e, {}});
   for (const auto& r : scene.relations) ops.push_back(Op{Op::AddRelation, {}, r});
   if (!ops.empty()) check.apply(ops);  // validates every element and relation
-  // What the load replaces, to put back if it cannot be made durable (a full disk): else
-  // the world would go on at a version no journal record explains, every later commit
-  // would be acknowledged into a journal that a restart refuses, and the side files
-  // would describe a scene the snapshot does not hold.
-  const std::string was_imports = journal_.read_scene_imports(), was_extra = journal_.read_scene_extra();
+  SceneChange change;
+  change.what = "the scene";
+  change.ontology = std::move(onto);
+  change.prefixes = std::move(px);
+  change.imports = imported.triples;
+  change.extra = std::move(scene.extra);
+  change.new_world = true;
+  change.elements = std::move(scene.elements);
+  change.relations = std::move(scene.relations);
+  change_scene(std::move(change));
+  for (const auto& f : imported.files) scene.notes.push_back("imported the ontology " + f);
+  for (const auto& i : imported.missing_imports)
+    scene.notes.push_back("imports " + i + ", which neither the server's ontology nor its library declares");
+  for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
+}
+
+// What the change replaces is kept to put back if it cannot be made durable (a full disk):
+// else the world would go on at a version no journal record explains, every later commit
+// would be acknowledged into a journal that a restart refuses, and the scene files in
+// force would describe a scene the snapshot does not hold.
+void WorldModelServer::change_scene(SceneChange c) {
+  const int64_t version = store_.version() + 1;
+  const std::string imports_ttl = c.imports.empty() ? "" : write_turtle(c.imports, c.prefixes);
+  const std::string extra_ttl = c.extra.empty() ? "" : write_turtle(c.extra, c.prefixes);
   const WorldImage was_world = store_.image();
   Ontology was_ontology = ontology_;
   Prefixes was_prefixes = prefixes_;
   std::vector<Triple> was_scene_extra = scene_extra_, was_scene_imports = scene_imports_;
   try {
-    journal_.write_scene_imports(imported.triples.empty() ? "" : write_turtle(imported.triples, px));
-    journal_.write_scene_extra(scene.extra.empty() ? "" : write_turtle(scene.extra, px));
-    ontology_ = onto;
-    prefixes_ = px;
-    scene_extra_ = std::move(scene.extra);
-    scene_imports_ = imported.triples;
-    store_.reset(scene.elements, scene.relations, store_.version() + 1, 1);
-    snapshot(false);  // a scene load is made durable as a snapshot before the reply
+    journal_.write_scene_files(version, imports_ttl, extra_ttl);
+    ontology_ = std::move(c.ontology);
+    prefixes_ = std::move(c.prefixes);
+    scene_extra_ = std::move(c.extra);
+    scene_imports_ = std::move(c.imports);
+    if (c.new_world)
+      store_.reset(std::move(c.elements), std::move(c.relations), version, 1);
+    else
+      store_.set_version(version, store_.next_id());
+    snapshot(false);  // durable as a snapshot before the reply
   } catch (const WmError& e) {
-    if (snapshot_on_disk(was_world.version + 1)) {
-      // The snapshot of the new scene is in place and only the journal's switch failed:
-      // the disk holds the new scene, and so does the server; no commit until a restart.
-      journal_.fail(std::string("the journal could not be restarted after a scene load (") + e.what() +
-                    "); restart the server");
-      throw WmError(std::string("the scene was loaded and is on disk as a snapshot, but the journal could not be "
-                                "restarted (") + e.what() + "): no commit is taken until the server restarts");
+    if (snapshot_on_disk(version)) {
+      // The snapshot is in place and only the journal's switch failed: the disk holds the
+      // change, and so does the server; no commit until a restart.
+      journal_.fail(std::string("the journal could not be restarted after a change of ") + c.what + " (" +
+                    e.what() + "); restart the server");
+      throw WmError(c.what + " changed and is on disk as a snapshot, but the journal could not be restarted (" +
+                    e.what() + "): no commit is taken until the server restarts");
     }
     std::vector<Element> elements;
     std::vector<Relation> relations;
@@ -423,18 +445,20 @@ void WorldModelServer::load_scene_text(const std::string& text, const std::strin
     scene_imports_ = std::move(was_scene_imports);
     store_.reset(std::move(elements), std::move(relations), was_world.version, was_world.next_id);
     try {
-      journal_.write_scene_imports(was_imports);
-      journal_.write_scene_extra(was_extra);
+      journal_.remove_scene_files(version);
     } catch (const WmError& again) {
-      journal_.fail(std::string("a scene load failed (") + e.what() + ") and its side files could not be put back (" +
+      // Left in place they would be taken for the scene of a later snapshot at this version.
+      journal_.fail("a change of " + c.what + " failed (" + e.what() + ") and its scene files could not be removed (" +
                     again.what() + "); restart the server");
     }
-    throw WmError(std::string("the scene could not be made durable, nothing changed: ") + e.what());
+    throw WmError(c.what + " could not be made durable, nothing changed: " + e.what());
   }
-  for (const auto& f : imported.files) scene.notes.push_back("imported the ontology " + f);
-  for (const auto& i : imported.missing_imports)
-    scene.notes.push_back("imports " + i + ", which neither the server's ontology nor its library declares");
-  for (const auto& n : scene.notes) *report += (report->empty() ? "" : "; ") + n;
+  try {
+    journal_.settle_scene_files(version);  // the generations it replaced
+  } catch (const WmError& e) {
+    SB_WARN(kLog, "the scene files of earlier versions stay in " << journal_.dir() << " until the next start: "
+                                                                   << e.what());
+  }
 }
 
 // Scene files named in a request live in DATA/scenes: a request names a scene, never a
@@ -453,11 +477,7 @@ wm_scene_t WorldModelServer::on_load_scene(const wm_scene_t& req) {
   wm_scene_t out{};
   load_scene_text(text, source, &out.report);
   out.version = store_.version();
-  wm_change_t change{};  // replicas resync on a scene load: it replaces everything
-  change.version = store_.version();
-  change.reset = true;
-  pending_changes_.push_back(change);
-  if (opt_.wall_clock) on_frame(participant_.frame(), 0);
+  announce_reset();  // replicas resync on a scene load: it replaces everything
   return out;
 }
 

@@ -137,18 +137,19 @@ wm_scene_t WorldModelServer::on_add_axioms(const wm_scene_t& req) {
     Ontology onto = ontology_;
     onto.add_triples(triples, px);
     OntologyLoad imported = library_.resolve(onto, px);  // (an owl:imports among them)
+    std::vector<Triple> imports = scene_imports_;
     if (!imported.triples.empty()) {
       onto.add_triples(extra, px);
-      std::vector<Triple> imports = scene_imports_;
       imports.insert(imports.end(), imported.triples.begin(), imported.triples.end());
-      journal_.write_scene_imports(write_turtle(imports, px));
-      scene_imports_ = std::move(imports);
       for (const auto& f : imported.files) out.report += "; imported the ontology " + f;
     }
-    journal_.write_scene_extra(write_turtle(extra, px));  // durable before the reply
-    ontology_ = std::move(onto);
-    prefixes_ = px;
-    scene_extra_ = std::move(extra);
+    SceneChange change;
+    change.what = "the scene's axioms";
+    change.ontology = std::move(onto);
+    change.prefixes = std::move(px);
+    change.imports = std::move(imports);
+    change.extra = std::move(extra);
+    change_scene(std::move(change));  // durable before the reply
     announce_reset();
   }
   out.version = store_.version();
@@ -156,8 +157,6 @@ wm_scene_t WorldModelServer::on_add_axioms(const wm_scene_t& req) {
 }
 
 void WorldModelServer::announce_reset() {
-  store_.set_version(store_.version() + 1, store_.next_id());
-  snapshot(false);  // the new version is durable before anyone hears of it
   wm_change_t change{};
   change.version = store_.version();
   change.reset = true;

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
@@ -707,4 +708,68 @@ TEST(Snapshot, AKillDuringABackgroundSnapshotLosesNoAcknowledgedRecord) {
       EXPECT_GT(acked, 40);
     }
   }
+}
+
+// The scene's side files come in generations by world version: the one in force is the
+// newest not newer than the snapshot, so files written for a scene change whose snapshot
+// a crash prevented never meet the old snapshot's world.
+TEST(JournalSceneFiles, TheGenerationInForceIsTheNewestNotNewerThanTheSnapshot) {
+  TempDir d;
+  Journal j(d.path.string());
+  j.recover();
+  j.write_scene_files(3, "imports 3", "extra 3");
+  j.write_scene_files(7, "imports 7", "extra 7");
+  j.write_scene_files(9, "imports 9", "extra 9");  // its snapshot (9) never came
+  const Journal::SceneFiles f = j.settle_scene_files(8);
+  EXPECT_EQ(f.version, 7);
+  EXPECT_EQ(f.imports, "imports 7");
+  EXPECT_EQ(f.extra, "extra 7");
+  EXPECT_TRUE(contains(f.extra_path, "scene_extra.7.ttl")) << f.extra_path;
+  // The replaced generation (3) and the one that never got its snapshot (9) are gone.
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(d.path)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"journal.bin", "lock", "scene_extra.7.ttl", "scene_imports.7.ttl"}));
+}
+
+TEST(JournalSceneFiles, FilesWithoutAVersionAreTheGenerationOfVersion0AndANewerOneReplacesThem) {
+  TempDir d;
+  Journal j(d.path.string());
+  j.recover();
+  write_bytes((d.path / "scene_extra.ttl").string(), "old extra");  // a data directory of an earlier skillbus
+  Journal::SceneFiles f = j.settle_scene_files(5);
+  EXPECT_EQ(f.version, 0);
+  EXPECT_EQ(f.extra, "old extra");
+  EXPECT_EQ(f.imports, "");
+  j.write_scene_files(6, "", "new extra");
+  f = j.settle_scene_files(6);
+  EXPECT_EQ(f.extra, "new extra");
+  EXPECT_FALSE(fs::exists(d.path / "scene_extra.ttl"));
+  // An empty generation replaces a full one, and once in force needs no files.
+  j.write_scene_files(8, "", "");
+  f = j.settle_scene_files(8);
+  EXPECT_EQ(f.extra, "");
+  EXPECT_FALSE(fs::exists(d.path / "scene_extra.6.ttl"));
+  EXPECT_FALSE(fs::exists(d.path / "scene_extra.8.ttl"));
+  // With no generation on disk, an empty one is not written at all.
+  j.write_scene_files(9, "", "");
+  EXPECT_FALSE(fs::exists(d.path / "scene_extra.9.ttl"));
+}
+
+TEST(JournalSceneFiles, NoGenerationNotNewerThanTheSnapshotMeansNoSceneFilesAndLeftoversAreRemoved) {
+  TempDir d;
+  Journal j(d.path.string());
+  j.recover();
+  j.write_scene_files(2, "i", "e");
+  write_bytes((d.path / "scene_extra.4.ttl.tmp").string(), "cut short");
+  write_bytes((d.path / "scene_extra.notaversion.ttl").string(), "not ours");  // left alone
+  const Journal::SceneFiles f = j.settle_scene_files(1);
+  EXPECT_EQ(f.version, 0);
+  EXPECT_EQ(f.imports + f.extra, "");
+  EXPECT_FALSE(fs::exists(d.path / "scene_extra.2.ttl"));
+  EXPECT_FALSE(fs::exists(d.path / "scene_extra.4.ttl.tmp"));
+  EXPECT_TRUE(fs::exists(d.path / "scene_extra.notaversion.ttl"));
+  j.write_scene_files(2, "i", "e");
+  j.remove_scene_files(2);
+  EXPECT_FALSE(fs::exists(d.path / "scene_imports.2.ttl"));
 }

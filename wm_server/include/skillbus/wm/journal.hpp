@@ -14,6 +14,9 @@
 //                          (record i of a journal applied to base + i)
 //                   frame  the same 12 bytes again
 //   lock          flock()ed by the process that uses the directory.
+//   scene_imports.V.ttl, scene_extra.V.ttl
+//                 the scene's triples that are no elements, per world version V of a scene
+//                 change (Journal::write_scene_files).
 //
 // Reading the journal tells a torn tail from corruption:
 //   torn     a partial record at the very end, after the last complete record: a frame
@@ -183,20 +186,28 @@ class Journal {
   // before the appends are held back), to hold it there or to crash there.
   std::function<void(const char* step)> test_hook;
   const std::string& dir() const { return dir_; }
-  // The loaded scene's triples that are no elements (Scene::extra), as Turtle, in
-  // DIR/scene_extra.ttl: replaced durably by a scene load (before its snapshot), read at
-  // start ("" when there is none).
-  void write_scene_extra(const std::string& turtle);
-  std::string read_scene_extra() const;
-  // The ontologies the loaded scene imported from the server's ontology library, as
-  // Turtle, in DIR/scene_imports.ttl: written like scene_extra.ttl (the library's files
-  // may change or go; the world keeps the concepts it was loaded with).
-  void write_scene_imports(const std::string& turtle);
-  std::string read_scene_imports() const;
+  // The loaded scene's triples that are no elements (Scene::extra) and the ontologies it
+  // imported from the server's library (the library's files may change or go; the world
+  // keeps the concepts it was loaded with), as Turtle. A scene load or new axioms take the
+  // world to a new version V with new ones: a generation of two files,
+  // DIR/scene_imports.V.ttl and DIR/scene_extra.V.ttl, written durably before the snapshot
+  // of V. The generation in force is the newest that is not newer than the snapshot, so a
+  // crash between the files and the snapshot leaves the old scene whole. (Files without a
+  // version, DIR/scene_imports.ttl and DIR/scene_extra.ttl, are the generation of version 0.)
+  struct SceneFiles {
+    int64_t version = 0;  // of the generation; 0 when there is none
+    std::string imports, extra;
+    std::string imports_path, extra_path;  // to name in errors
+  };
+  void write_scene_files(int64_t version, const std::string& imports, const std::string& extra);
+  // The generation in force next to a snapshot at `snapshot_version` (0 without one).
+  // Removes, durably, the generations that never got their snapshot and those it replaced.
+  SceneFiles settle_scene_files(int64_t snapshot_version);
+  // Removes the generation of `version` (a change that could not be made durable); throws
+  // WmError if it cannot: a later snapshot at that version would take it for its own.
+  void remove_scene_files(int64_t version);
 
  private:
-  void write_side_file(const char* name, const std::string& turtle);
-  std::string read_side_file(const char* name) const;
   void start_journal(int64_t base_version);
   void write_snapshot_file(const SnapshotData& snapshot) const;
   void rotate_journal(int64_t base_version, uint64_t tail_from, long records_before);

@@ -82,8 +82,22 @@ class WorldModelServer {
   skillbus_msgs::wm_scene_t on_add_axioms(const skillbus_msgs::wm_scene_t& req);
   skillbus_msgs::wm_lock_t on_lock(const skillbus_msgs::wm_lock_t& req);
   std::vector<Triple> all_axioms() const;  // the ontology's files, the scene's imports and axioms
+  // A scene load or new axioms: the world goes to the next version with a new ontology
+  // and new scene triples (and, for a load, new elements), made durable before the reply
+  // (the scene files of that version, then its snapshot; journal.hpp). What cannot be
+  // made durable changes nothing, and throws WmError.
+  struct SceneChange {
+    std::string what;  // "the scene", for errors
+    Ontology ontology;
+    Prefixes prefixes;
+    std::vector<Triple> imports, extra;
+    bool new_world = false;  // a load: the world becomes these elements and relations
+    std::vector<Element> elements;
+    std::vector<Relation> relations;
+  };
+  void change_scene(SceneChange change);
   // Replicas read the world again (and the skill manager the ontology): a change that
-  // says "reset" at a new version, made durable by a snapshot before the reply.
+  // says "reset" at the new version of a scene change.
   void announce_reset();
 
   Bus& bus_;
