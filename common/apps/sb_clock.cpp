@@ -8,6 +8,7 @@
 // Reads:   SB_LOCKSTEP_JOIN, SB_LOCKSTEP_ACK, SB_DEMO_CMD (with --demo)
 // Writes:  SB_LOCKSTEP_CLOCK, SB_DEMO_STATE (with --demo)
 // Role:    lockstep master. Exit code 0 when all frames ran, 1 on a lockstep error.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
   app.add_option("--period-ms", period_ms, "sim time per frame, ms")->check(apps::positive());
   app.add_option("--join-timeout-ms", join_ms, "how long to wait for every participant to join");
   app.add_option("--ack-timeout-ms", ack_ms, "how long to wait for a frame's acks");
+  std::vector<std::string> ack_of;
+  apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
   app.add_option("--lose-clocks-every", lose_clocks_every, "tests: lose every N-th clock message (0: none)");
   app.add_flag("--demo", demo, "play the toy world: publish SB_DEMO_STATE, fold in SB_DEMO_CMD");
@@ -49,6 +52,10 @@ int main(int argc, char** argv) {
   cfg.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
   cfg.join_timeout = std::chrono::milliseconds(join_ms);
   cfg.ack_timeout = std::chrono::milliseconds(ack_ms);
+  cfg.ack_timeout_of = apps::parse_ack_timeouts(app, ack_of);
+  for (const auto& [name, ms] : cfg.ack_timeout_of)
+    if (std::find(cfg.participants.begin(), cfg.participants.end(), name) == cfg.participants.end())
+      apps::usage_error(app, "--ack-timeout-ms-of names '" + name + "', who is not among --participants");
   cfg.message_timeout = std::chrono::milliseconds(message_ms);
   if (cfg.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
 

@@ -4,7 +4,7 @@
 // order) into its state and publishes SB_DEMO_CMD with the result. Prints a JSON summary.
 // --drop-at-frame N announces but does not send its SB_DEMO_CMD of frame N (to test that
 // a lost message is reported with its channel and frame). --bare: no demo traffic.
-// --slow-at-frame N spends 0.8 s in frame N dispatching the bus (a slow participant).
+// --slow-at-frame N spends --slow-ms (0.8 s) in frame N dispatching the bus (a slow participant).
 //
 // Reads:   SB_LOCKSTEP_CLOCK, SB_DEMO_STATE, SB_DEMO_CMD
 // Writes:  SB_LOCKSTEP_JOIN, SB_LOCKSTEP_ACK, SB_DEMO_CMD
@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   std::string url;
   ParticipantConfig cfg;
   bool wall_clock = false, bare = false;
-  int64_t frames = -1, clock_ms = 10000, message_ms = 2000, drop_at = -1, slow_at = -1;
+  int64_t frames = -1, clock_ms = 10000, message_ms = 2000, drop_at = -1, slow_at = -1, slow_ms = 800;
   apps::add_url_option(app, url);
   app.add_option("--name", cfg.name, "its participant name (required)");
   app.add_flag("--wall-clock", wall_clock, "run on the wall clock instead of in lockstep");
@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
   app.add_option("--clock-timeout-ms", clock_ms, "how long to wait for the next clock message");
   app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
   app.add_option("--drop-at-frame", drop_at, "tests: announce but do not send its SB_DEMO_CMD of this frame");
-  app.add_option("--slow-at-frame", slow_at, "tests: spend 0.8 s dispatching the bus in this frame");
+  app.add_option("--slow-at-frame", slow_at, "tests: spend --slow-ms dispatching the bus in this frame");
+  app.add_option("--slow-ms", slow_ms, "tests: how long the slow frame takes (ms)")->check(apps::positive());
   app.add_flag("--bare", bare, "only the lockstep protocol, no demo traffic (benchmarks)");
   apps::parse_or_exit(app, argc, argv);
   if (cfg.name.empty()) apps::usage_error(app, "--name is required");
@@ -94,7 +95,7 @@ int main(int argc, char** argv) {
     if (frame == slow_at) {
       // Test: a slow frame, longer than the master's clock resend interval, spent
       // dispatching the bus as a long synchronous RPC call would.
-      const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(800);
+      const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(slow_ms);
       while (std::chrono::steady_clock::now() < end) bus->handle(std::chrono::milliseconds(50));
     }
     skillbus_msgs::test_sample_t out{};

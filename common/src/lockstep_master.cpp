@@ -49,6 +49,11 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
   for (const auto& name : enders)
     if (!std::binary_search(expected_.begin(), expected_.end(), name))
       throw std::invalid_argument("end_when_asked_by names '" + name + "', who is not a participant");
+  for (const auto& [name, timeout] : cfg_.ack_timeout_of) {
+    if (!std::binary_search(expected_.begin(), expected_.end(), name))
+      throw std::invalid_argument("an ack timeout for '" + name + "', who is not a participant");
+    if (timeout.count() <= 0) throw std::invalid_argument("the ack timeout for '" + name + "' must be positive");
+  }
   subs_.push_back(bus_.subscribe(join_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_join(d, n, ch);
   }));
@@ -187,14 +192,23 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   const auto start = steady::now();
   clock_sent_ = start;
   auto resend_at = start;
+  auto ack_timeout = [&](const std::string& p) {
+    const auto it = cfg_.ack_timeout_of.find(p);
+    return it == cfg_.ack_timeout_of.end() ? cfg_.ack_timeout : it->second;
+  };
   while (acks_.size() < expected_.size()) {
     const auto now = steady::now();
-    if (now - start >= cfg_.ack_timeout) {
-      std::vector<std::string> missing;
-      for (const auto& p : expected_)
-        if (!acks_.count(p)) missing.push_back(p);
-      error = "lockstep: no ack for frame " + std::to_string(frame) + " from participant(s) " + join_names(missing) +
-              " within " + secs_text(cfg_.ack_timeout);
+    // The earliest deadline among the participants still to ack, and who is past theirs.
+    auto deadline = steady::time_point::max();
+    std::vector<std::string> late;
+    for (const auto& p : expected_)
+      if (!acks_.count(p)) {
+        deadline = std::min(deadline, start + ack_timeout(p));
+        if (now - start >= ack_timeout(p)) late.push_back(p);
+      }
+    if (!late.empty()) {
+      error = "lockstep: no ack for frame " + std::to_string(frame) + " from participant(s) " + join_names(late) +
+              " within " + secs_text(ack_timeout(late.front()));
       return false;
     }
     if (now >= resend_at) {
@@ -211,8 +225,8 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
         resend_at = std::max(resend_at, steady::now() + std::chrono::milliseconds(1));
       }
     }
-    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
-        std::min(resend_at, start + cfg_.ack_timeout) - steady::now());
+    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(std::min(resend_at, deadline) -
+                                                                             steady::now());
     bus_.handle(std::max(wait, std::chrono::milliseconds(0)));
   }
   awaiting_frame_ = -1;

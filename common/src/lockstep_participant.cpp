@@ -75,7 +75,10 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     return;
   }
   if (c.header.frame == last_acked_ && !last_ack_.empty()) {
-    bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());  // our ack was lost
+    // The master resends the clock while a participant is still at work on the frame: it
+    // is alive, so this one waits on (a frame may take a slow participant long).
+    master_heard_ = steady::now();
+    bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());  // our ack was lost, or not yet counted
     return;
   }
   if (c.header.frame <= last_acked_ || c.header.frame == current_) return;  // resend of the frame in hand
@@ -147,7 +150,7 @@ RunResult LockstepParticipant::run_lockstep() {
     // Wait for the clock of the next frame.
     last_event = steady::now();
     while (!have_clock_ && !stop_seen_) {
-      if (steady::now() - last_event > cfg_.clock_timeout) {
+      if (steady::now() - std::max(last_event, master_heard_) > cfg_.clock_timeout) {
         fail("lockstep: no clock after frame " + std::to_string(last_acked_) + " within " +
              std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) + " s (master " + master_ + " gone?)");
         return r;

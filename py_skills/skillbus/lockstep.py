@@ -215,6 +215,7 @@ class LockstepParticipant:
         self._last_acked, self._last_ack = -1, b""
         self._current = -1  # the frame being worked on (its clock may be resent meanwhile)
         self._last_sim_time = 0  # sim time of the last clock taken: it never runs backwards
+        self._master_heard = 0.0  # monotonic time of the last resend of the clock we acked
         self._running = bytes(32)
         self._stop_requested = False
         self._held: list[tuple[int, str, Any]] = []  # (due frame, channel, message): from ticks
@@ -305,7 +306,10 @@ class LockstepParticipant:
             return
         frame = c.header.frame
         if frame == self._last_acked and self._last_ack:
-            self.bus.publish(self._ack_channel, self._last_ack)  # our ack was lost: resend
+            # The master resends the clock while a participant is still at work on the
+            # frame: it is alive, so this one waits on (a slow participant's frame may be long).
+            self._master_heard = time.monotonic()
+            self.bus.publish(self._ack_channel, self._last_ack)  # our ack was lost, or not yet counted
             return
         if frame <= self._last_acked or frame == self._current:
             return  # a resend of the clock of the frame we are working on
@@ -367,7 +371,7 @@ class LockstepParticipant:
         while not self._stop_requested:
             last_event = time.monotonic()
             while self._next_clock is None and not self._stop_seen:
-                if time.monotonic() - last_event > self.clock_timeout:
+                if time.monotonic() - max(last_event, self._master_heard) > self.clock_timeout:
                     return self._fail(r, f"lockstep: no clock after frame {self._last_acked} within "
                                          f"{self.clock_timeout:.1f} s (master {self._master} gone?)")
                 self.bus.handle(0.05)

@@ -32,9 +32,9 @@ def to_int64(u: int) -> int:
 
 class DemoParticipant:
     def __init__(self, participant: LockstepParticipant, drop_at_frame: int = -1,
-                 slow_at_frame: int = -1) -> None:
+                 slow_at_frame: int = -1, slow_s: float = 0.8) -> None:
         self.p = participant
-        self.slow_at_frame = slow_at_frame
+        self.slow_at_frame, self.slow_s = slow_at_frame, slow_s
         self.state = 0
         self.received = 0
         self.drop_at_frame = drop_at_frame
@@ -54,7 +54,7 @@ class DemoParticipant:
         if frame == self.slow_at_frame:
             # Test: a slow frame, longer than the master's clock resend interval, spent
             # dispatching the bus as a long synchronous RPC call would.
-            end = time.monotonic() + 0.8
+            end = time.monotonic() + self.slow_s
             while time.monotonic() < end:
                 self.p.bus.handle(0.05)
         out = test_sample_t()
@@ -78,7 +78,7 @@ def main(args) -> int:
     p = LockstepParticipant(bus, args.name, kind="python-demo", wall_clock=args.wall_clock,
                             wall_frames=args.frames, clock_timeout=args.clock_timeout,
                             message_timeout=args.message_timeout)
-    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame)
+    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame, args.slow_s)
     r = p.run()
     print(json.dumps({"ok": r.ok, "error": r.error, "name": args.name, "frames": r.frames,
                       "received": demo.received if demo else 0, "digest": r.digest_hex,

@@ -18,6 +18,7 @@ from pathlib import Path
 from skillbus import paths
 
 PARTICIPANTS = ["wm", "skill_mgr", "skills", "gripper"]
+MAP_ACK_TIMEOUT_MS = 60_000  # how long the physics waits for the map's ack of a frame
 TASK = ("ClearTable Gripper=skiros:Gripper-7 Arm=skiros:Arm-8 Table=skiros:Table-1 Bin=skiros:Bin-5")
 LIBRARIES = ["skillbus.skills.gripper", "skillbus.skills.manipulation", "skillbus.skills.planning"]
 
@@ -85,6 +86,10 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     if lockstep:
         # With perception the occupancy map is a participant (its answers as of a frame).
         sim += ["--participants", ",".join(PARTICIPANTS + (["map"] if perception else [])), "--join-timeout-ms", "60000"]
+        if perception:
+            # The map inserts a whole depth capture in one frame: about 2 s on an idle 2-core
+            # machine, several on a busy one. The others are still declared dead after 5 s.
+            sim += ["--ack-timeout-ms-of", f"map={MAP_ACK_TIMEOUT_MS}"]
     else:
         sim += ["--wall-clock"]
     sim += list(extra_sim)

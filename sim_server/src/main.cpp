@@ -1,5 +1,7 @@
 // sim_server: the DART physics server. See sim_server/README.md.
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "skillbus/apps/cli.hpp"
 #include "skillbus/apps/lifecycle.hpp"
@@ -41,11 +43,14 @@ int main(int argc, char** argv) {
   app.add_option("--frame-ms", o.frame_ms, "frame, ms (0: the scene's)");
   app.add_option("--join-timeout-ms", join_ms, "lockstep: how long to wait for every participant to join");
   app.add_option("--ack-timeout-ms", ack_ms, "lockstep: how long to wait for a frame's acks");
+  std::vector<std::string> ack_of;
+  apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "lockstep: how long to wait for an announced message");
   apps::parse_or_exit(app, argc, argv);
   if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
   o.join_timeout = std::chrono::milliseconds(join_ms);
   o.ack_timeout = std::chrono::milliseconds(ack_ms);
+  o.ack_timeout_of = apps::parse_ack_timeouts(app, ack_of);
   o.message_timeout = std::chrono::milliseconds(message_ms);
 
   std::unique_ptr<Bus> bus;

@@ -48,6 +48,9 @@ SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::mov
   for (const auto& name : opt_.end_when_asked_by)  // (the master checks it too; here it fails at start)
     if (std::find(opt_.participants.begin(), opt_.participants.end(), name) == opt_.participants.end())
       throw SceneError("--end-when-asked-by names '" + name + "', who is not among --participants");
+  for (const auto& [name, ms] : opt_.ack_timeout_of)
+    if (std::find(opt_.participants.begin(), opt_.participants.end(), name) == opt_.participants.end())
+      throw SceneError("--ack-timeout-ms-of names '" + name + "', who is not among --participants");
   physics_ = std::make_unique<Physics>(load(opt_.scene_file));
   scenes_dir_ = opt_.scenes_dir;
   if (scenes_dir_.empty()) {
@@ -409,6 +412,7 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   cfg.frames = opt_.frames;
   cfg.join_timeout = opt_.join_timeout;
   cfg.ack_timeout = opt_.ack_timeout;
+  cfg.ack_timeout_of = opt_.ack_timeout_of;
   cfg.message_timeout = opt_.message_timeout;
   cfg.end_when_asked_by = opt_.end_when_asked_by;
   LockstepMaster master(bus_, cfg);

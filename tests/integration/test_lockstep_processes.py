@@ -175,3 +175,39 @@ def test_a_slow_participant_is_waited_for_and_no_frame_is_skipped_or_repeated(sa
         sandbox.wait(p, 15)
         r = last_json(p.stdout())
         assert r["frames"] == 100 and r["received"] == clean["participant_results"][n]["received"]
+
+
+@pytest.mark.parametrize("slow", ["py1", "cpp1"])
+def test_a_participant_allowed_longer_frames_is_waited_for_and_the_others_wait_with_it(sandbox, binary, tmp_path, slow):
+    # One participant spends 3 s over frame 20 (the map server inserting a depth capture on
+    # a busy machine): longer than the master's ack timeout for everyone else (1 s) and than
+    # the others' clock timeout (2 s). The master waits for it (--ack-timeout-ms-of), and
+    # the others, hearing the master resend the clock meanwhile, wait on. Before, the
+    # session ended naming the slow one, or a waiting one reported the master gone.
+    with Sandbox(log_dir=tmp_path / "clean") as box:
+        clean = run_session(box, frames=60, n_python=2, n_cpp=1, timeout=60)
+    waiting = {"py1": ["--clock-timeout", "2"], "py2": ["--clock-timeout", "2"], "cpp1": ["--clock-timeout-ms", "2000"]}
+    slow_args = ["--slow-at-frame", "20", *(["--slow-s", "3"] if slow.startswith("py") else ["--slow-ms", "3000"])]
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=60,
+                         clock_args=["--ack-timeout-ms", "1000", "--ack-timeout-ms-of", f"{slow}=20000"],
+                         part_args={n: waiting[n] + (slow_args if n == slow else []) for n in waiting})
+    assert sandbox.wait(clock, 60) == 0, clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 60 and s["wall_time_s"] >= 3.0, s
+    assert s["digest"] == clean["digest"]
+    for n, p in parts.items():
+        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
+        assert last_json(p.stdout())["frames"] == 60
+
+
+def test_a_participant_without_the_longer_allowance_is_still_declared_dead_in_its_timeout(sandbox, binary):
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=10_000_000,
+                         clock_args=["--ack-timeout-ms", "1500", "--ack-timeout-ms-of", "py1=60000"])
+    clock.wait_for("starting frames", 30)
+    time.sleep(0.5)
+    killed_at = time.monotonic()
+    sandbox.kill(parts["py2"])
+    assert sandbox.wait(clock, 30) == 1
+    assert time.monotonic() - killed_at < 1.5 + 2.0
+    error = last_json(clock.stdout())["error"]
+    assert re.search(r"no ack for frame \d+ from participant\(s\) py2 within 1.5 s", error), error

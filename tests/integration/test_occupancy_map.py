@@ -99,7 +99,7 @@ def test_one_capture_maps_the_table_and_cubes_and_the_map_saves_and_loads(sandbo
 
 def lockstep_run(box, scene, tag):
     sim = box.start(f"sim-{tag}", [str(paths.binary("sim_server")), "--scene", str(scene), "--participants",
-                                   "eye,map", "--frames", "12"])
+                                   "eye,map", "--frames", "12", "--ack-timeout-ms-of", "map=60000"])
     mapper = box.start(f"map-{tag}", [str(paths.binary("map_server")), "--lockstep", "map", "--exit-with-session"])
     eye = box.start(f"eye-{tag}", [sys.executable, str(TESTS / "integration" / "map_participant.py"), "eye",
                                    json.dumps(named_points())])

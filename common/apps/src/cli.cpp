@@ -107,4 +107,29 @@ CLI::Option* add_list_option(CLI::App& app, const std::string& name, std::vector
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
 }
 
+CLI::Option* add_ack_timeouts_option(CLI::App& app, std::vector<std::string>& items) {
+  return app.add_option("--ack-timeout-ms-of", items,
+                        "lockstep: NAME=MS, a participant whose frames may take longer than --ack-timeout-ms "
+                        "(repeatable; e.g. map=60000)");
+}
+
+std::map<std::string, std::chrono::milliseconds> parse_ack_timeouts(const CLI::App& app,
+                                                                    const std::vector<std::string>& items) {
+  std::map<std::string, std::chrono::milliseconds> out;
+  for (const auto& item : items) {
+    const auto eq = item.find('=');
+    int64_t ms = 0;
+    try {
+      size_t used = 0;
+      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("no NAME=");
+      ms = std::stoll(item.substr(eq + 1), &used);
+      if (used != item.size() - eq - 1 || ms <= 0) throw std::invalid_argument("not a positive number");
+    } catch (const std::exception&) {
+      usage_error(app, "--ack-timeout-ms-of " + item + ": expected NAME=MS with MS a positive whole number");
+    }
+    out[item.substr(0, eq)] = std::chrono::milliseconds(ms);
+  }
+  return out;
+}
+
 }  // namespace skillbus::apps

@@ -36,6 +36,11 @@ struct MasterConfig {
   int64_t frames = -1;                    // how many frames to run; -1 = until stop()
   std::chrono::milliseconds join_timeout{10000};
   std::chrono::milliseconds ack_timeout{5000};
+  // Participants whose frames may take longer (the map server inserting a whole depth
+  // capture in one frame: seconds on a busy machine), each with its own ack timeout.
+  // The others are still declared dead after ack_timeout; while the master waits it
+  // resends the clock, which tells the participants that acked that it is alive.
+  std::map<std::string, std::chrono::milliseconds> ack_timeout_of;
   std::chrono::milliseconds message_timeout{2000};
   std::chrono::milliseconds resend_interval{250};  // re-publish an unacknowledged clock
   // Asked to end (lockstep_end_t): with names here, the session ends once each of them has
@@ -172,6 +177,7 @@ class LockstepParticipant {
     std::string stop_reason;
   };
   std::string master_;  // name of the master whose clock we follow (from the first clock)
+  std::chrono::steady_clock::time_point master_heard_{};  // the last resend of the clock we acked
   bool have_clock_ = false;
   int64_t completed_ = -1;
   Clock next_clock_;

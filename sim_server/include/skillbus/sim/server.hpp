@@ -66,6 +66,7 @@ struct ServerOptions {
   std::string collision_detector;          // overrides the scene's when set
   double step_ms = 0, frame_ms = 0;        // override the scene's when > 0
   std::chrono::milliseconds join_timeout{10000}, ack_timeout{5000}, message_timeout{2000};
+  std::map<std::string, std::chrono::milliseconds> ack_timeout_of;  // participants allowed longer frames
 };
 
 struct ServerReport {

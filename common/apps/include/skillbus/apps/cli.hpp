@@ -11,6 +11,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -46,5 +48,11 @@ const CLI::Validator& positive();
 // their participants and ontology files; the last occurrence counts.
 CLI::Option* add_list_option(CLI::App& app, const std::string& name, std::vector<std::string>& out,
                              const std::string& description);
+
+// --ack-timeout-ms-of NAME=MS (repeatable) of a lockstep master: each participant's own
+// ack timeout; a malformed item is a usage error naming it.
+CLI::Option* add_ack_timeouts_option(CLI::App& app, std::vector<std::string>& items);
+std::map<std::string, std::chrono::milliseconds> parse_ack_timeouts(const CLI::App& app,
+                                                                    const std::vector<std::string>& items);
 
 }  // namespace skillbus::apps
