@@ -4,6 +4,11 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 BUILD  := build
 JOBS   ?= 2
+# pytest's worker processes (pytest-xdist). The multi-process tests spend much of their
+# time waiting (processes starting, timeouts that must pass, lockstep round trips), so two
+# workers on two cores halve `make test` (docs/testing.md); 0 runs in one process.
+PYTEST_WORKERS ?= 2
+PYTEST_PAR := -n $(PYTEST_WORKERS) --dist worksteal
 
 .PHONY: setup build test test-cpp test-py test-dds faults fuzz fuzz-asan demo bench clean
 
@@ -24,20 +29,20 @@ build: setup
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
-	$(PY) -m pytest -q -rs --durations=30 tests
+	$(PY) -m pytest -q -rs $(PYTEST_PAR) --durations=30 tests
 
 test-cpp: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-py: build
 	$(PY) -m pytest -q -rs --doctest-modules py_skills/skillbus
-	$(PY) -m pytest -q -rs tests
+	$(PY) -m pytest -q -rs $(PYTEST_PAR) tests
 
 # Every multi-process test on Cyclone DDS instead of LCM (the `sandbox` fixture's
 # transport; `make test` runs the transport tests on both). Tests about LCM itself (its
-# wire, lcm-spy, lcm-logger) are skipped, saying so. About 20 minutes.
+# wire, lcm-spy, lcm-logger) are skipped, saying so. About 10 minutes.
 test-dds: build
-	SKILLBUS_TEST_TRANSPORT=dds $(PY) -m pytest -q -rs tests/integration
+	SKILLBUS_TEST_TRANSPORT=dds $(PY) -m pytest -q -rs $(PYTEST_PAR) tests/integration
 
 # The long fault runs: the world model's journal under simulated power loss at 1,000
 # random points of a write sequence (`make test` runs 50; docs/world_model.md), then
