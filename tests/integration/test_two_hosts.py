@@ -46,8 +46,10 @@ def test_a_cut_cable_is_reported_naming_the_participant_cut_off(tmp_path, transp
     with TwoHosts(log_dir=tmp_path / "logs", transport=transport, placement={"far": "b"}) as box:
         clock = box.start("clock", [binary("sb_clock"), "--demo", "--frames", "10000000",
                                     "--participants", "near,far", "--ack-timeout-ms", "1500"])
-        box.start("near", python_participant_argv("near"))
-        box.start("far", python_participant_argv("far", "--clock-timeout", "3"))
+        # near's wait for far's messages must end before the master's wait for acks (as
+        # with the defaults, 2 s and 5 s): else near, still waiting, is named as well.
+        box.start("near", python_participant_argv("near", "--message-timeout", "0.5"))
+        box.start("far", python_participant_argv("far", "--clock-timeout", "3", "--message-timeout", "0.5"))
         clock.wait_for("starting frames", 30)
         clock.wait_for(" joined", 5)
         box.cut()
