@@ -68,6 +68,13 @@ void refuse_long_channel(const std::string& name) {
   if (name.size() > kMaxChannel) throw BusError(channel_too_long(name));
 }
 
+void refuse_oversized(const std::string& channel, size_t size) {
+  if (size > kMaxMessageBytes)
+    throw BusError("a message of " + std::to_string(size) + " bytes on " + channel + ": over the " +
+                   std::to_string(kMaxMessageBytes) + " bytes (16 MiB) a receiver reassembles, so every receiver "
+                   "would drop it; send it in parts");
+}
+
 std::string channel_bad_characters(const std::string& name) {
   // What Cyclone DDS 0.10 takes in a topic name; LCM takes anything: one name, both transports.
   const auto ok = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) && !(c & 0x80); };

@@ -172,6 +172,7 @@ dds_entity_t DdsBus::topic(const std::string& channel) {
 }
 
 void DdsBus::publish(const std::string& channel, const void* data, size_t size) {
+  refuse_oversized(channel, size);  // (DDS would carry it; LCM, the other transport, would not)
   auto it = writers_.find(channel);
   if (it == writers_.end()) {
     dds_qos_t* q = qos(channel);

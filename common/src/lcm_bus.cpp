@@ -94,6 +94,7 @@ lcm_t* LcmBus::lane(int i) {
 
 void LcmBus::publish(const std::string& channel, const void* data, size_t size) {
   refuse_long_channel(channel);
+  refuse_oversized(channel, size);
   lcm_t* l = lane(lcm_lane_of(channel));
   errno = 0;
   if (lcm_publish(l, channel.c_str(), data, static_cast<unsigned int>(size)) == 0) return;

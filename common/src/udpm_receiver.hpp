@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "skillbus/bus.hpp"
+
 namespace skillbus {
 
 // Turns datagrams into messages; what does not parse is counted and dropped. One
@@ -30,7 +32,7 @@ namespace skillbus {
 class LcmReassembler {
  public:
   static constexpr size_t kMaxChannel = 63;             // LCM_MAX_CHANNEL_NAME_LENGTH
-  static constexpr uint32_t kMaxPartialBytes = 1u << 24;  // as LCM
+  static constexpr uint32_t kMaxPartialBytes = kMaxMessageBytes;  // as LCM
   static constexpr size_t kMaxPartials = 1000;           // as LCM
 
   // A complete message: its channel and bytes (valid until the next call).

@@ -92,6 +92,19 @@ def refuse_long_channel(channel: str) -> None:
             raise BusError(why)
 
 
+MAX_MESSAGE_BYTES = 1 << 24  # the largest message a receiver reassembles from LCM's fragments (as LCM)
+
+
+def refuse_oversized(channel: str, size: int) -> None:
+    """BusError when a message of `size` bytes is larger than a receiver reassembles: it
+    would be sent and dropped by every receiver. Every backend refuses it, DDS too (one
+    limit, both transports); replies of any size go in chunks (skillbus.rpc). As
+    common/src/channels.cpp."""
+    if size > MAX_MESSAGE_BYTES:
+        raise BusError(f"a message of {size} bytes on {channel}: over the {MAX_MESSAGE_BYTES} bytes (16 MiB) a "
+                       f"receiver reassembles, so every receiver would drop it; send it in parts")
+
+
 def resolve_url(url: str | None = None) -> str:
     return url or os.environ.get("SKILLBUS_BUS_URL") or DEFAULT_URL
 
@@ -312,6 +325,7 @@ class LcmBus(Bus):
 
     def publish(self, channel: str, data: bytes) -> None:
         refuse_long_channel(channel)
+        refuse_oversized(channel, len(data))
         try:
             self._lane(lane_of(channel)).publish(channel, data)
         except OSError as e:

@@ -31,7 +31,7 @@ import re
 import struct
 import time
 from dataclasses import dataclass
-from skillbus.bus import Bus, BusError, Handler, guarded, refuse_long_channel
+from skillbus.bus import Bus, BusError, Handler, guarded, refuse_long_channel, refuse_oversized
 
 log = logging.getLogger("bus")
 
@@ -257,6 +257,7 @@ class DdsBus(Bus):
         return t
 
     def publish(self, channel: str, data: bytes) -> None:
+        refuse_oversized(channel, len(data))  # (DDS would carry it; LCM, the other transport, would not)
         w = self._writers.get(channel)
         if w is None:
             from cyclonedds.pub import DataWriter

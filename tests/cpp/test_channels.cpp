@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <stdexcept>
+#include <vector>
 
 #include "skillbus/bus.hpp"
 
@@ -124,4 +125,23 @@ TEST(Channels, EveryBusRefusesAChannelLcmCannotCarry) {
   const std::string too_long(64, 'C');
   EXPECT_THROW(bus->subscribe(too_long, [](const std::string&, const uint8_t*, size_t) {}), BusError);
   EXPECT_THROW(bus->publish(too_long, "x", 1), BusError);
+}
+
+// Before, a message larger than a receiver reassembles (16 MiB, as LCM) was sent and
+// dropped by every receiver: an RPC request that large timed out without a word on why.
+TEST(Channels, EveryBusRefusesAMessageLargerThanAReceiverReassembles) {
+  auto bus = open_bus("memq://");
+  size_t got = 0;
+  bus->subscribe("SB_BIG", [&](const std::string&, const uint8_t*, size_t n) { got = n; });
+  const std::vector<uint8_t> big(kMaxMessageBytes + 1);
+  try {
+    bus->publish("SB_BIG", big.data(), big.size());
+    ADD_FAILURE() << "a message over the limit was sent";
+  } catch (const BusError& e) {
+    // (the size on the wire: with a key, the signature's trailer counts too)
+    EXPECT_NE(std::string(e.what()).find("bytes on SB_BIG: over the 16777216 bytes"), std::string::npos) << e.what();
+  }
+  bus->publish("SB_BIG", big.data(), kMaxMessageBytes - 1024);
+  bus->handle(std::chrono::milliseconds(1000));
+  EXPECT_EQ(got, kMaxMessageBytes - 1024);
 }

@@ -242,3 +242,23 @@ def test_new_axioms_that_cannot_be_made_durable_change_nothing(sandbox, tmp_path
     assert r["unchanged"] == {"version": r["version_before"], "widget": False}, r
     assert r["version_after_commit"] == r["version_before"] + 1, r
     assert server.returncode is None
+
+
+def test_a_request_larger_than_a_receiver_takes_fails_at_once_naming_the_limit(transport_sandbox, tmp_path):
+    # Before, a 17 MiB scene text went out, every receiver dropped it (LCM reassembles at
+    # most 16 MiB), and the call timed out saying nothing of why. DDS refuses it too: a
+    # program that works on one transport works on the other.
+    sandbox = transport_sandbox
+    server = start_server(sandbox, wm_binary(), tmp_path / "data")
+    code = ("import json, time; from skillbus.bus import open_bus, BusError; "
+            "from skillbus.world import WorldModelInterface; w = WorldModelInterface(open_bus(), 'big'); "
+            "t = time.monotonic()\n"
+            "try:\n    w.load_scene(turtle='#' * (17 << 20)); print(json.dumps({'error': ''}))\n"
+            "except BusError as e:\n    print(json.dumps({'error': str(e), 's': time.monotonic() - t, "
+            "'version': w.version}))")
+    probe = sandbox.start("big", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:]
+    r = last_json(probe.stdout())
+    assert "bytes on SB_WM_REQ: over the 16777216 bytes (16 MiB) a receiver reassembles" in r["error"], r
+    assert r["s"] < 2.0 and r["version"] >= 1, r
+    assert server.returncode is None

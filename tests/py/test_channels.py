@@ -106,3 +106,20 @@ def test_every_bus_refuses_to_subscribe_to_a_channel_lcm_cannot_carry():
         bus.subscribe("C" * 64, lambda ch, data: None)
     with pytest.raises(BusError, match="64 bytes"):
         bus.publish("C" * 64, b"x")
+
+
+def test_every_bus_refuses_a_message_larger_than_a_receiver_reassembles():
+    # Before, it was sent, and every receiver dropped it (LCM reassembles at most 16 MiB):
+    # an RPC request that large timed out without a word on why.
+    from skillbus.bus import MAX_MESSAGE_BYTES, BusError, open_bus
+    from skillbus.udpm import MAX_PARTIAL_BYTES
+    assert MAX_MESSAGE_BYTES == MAX_PARTIAL_BYTES == 16 << 20
+    bus = open_bus("memq://")
+    got: list[int] = []
+    bus.subscribe("SB_BIG", lambda ch, data: got.append(len(data)))
+    # (the size on the wire: with a key, the signature's trailer counts too)
+    with pytest.raises(BusError, match=rf"a message of \d+ bytes on SB_BIG: over the {MAX_MESSAGE_BYTES} bytes"):
+        bus.publish("SB_BIG", bytes(MAX_MESSAGE_BYTES + 1))
+    bus.publish("SB_BIG", bytes(MAX_MESSAGE_BYTES - 1024))
+    bus.handle(1.0)
+    assert got == [MAX_MESSAGE_BYTES - 1024]

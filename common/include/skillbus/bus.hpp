@@ -82,6 +82,12 @@ std::string channel_too_long(const std::string& name);
 // with a digit), "" when it can; channel() refuses such names on either transport.
 std::string channel_bad_characters(const std::string& name);
 void refuse_long_channel(const std::string& name);
+// The largest message a receiver reassembles from LCM's fragments (as LCM): a larger one
+// would be sent and dropped by every receiver, so every backend refuses it with a
+// BusError naming the channel and the size (on DDS too: one limit, both transports).
+// Replies of any size go in chunks (rpc.hpp); other large data goes in parts.
+constexpr size_t kMaxMessageBytes = size_t{1} << 24;  // 16 MiB
+void refuse_oversized(const std::string& channel, size_t size);
 bool robot_scoped(const std::string& name);
 // The process's robot: set_robot() (a program's --robot), else $SKILLBUS_ROBOT, else "".
 std::string current_robot();
