@@ -86,13 +86,21 @@ def start_clear_table(page: Page, shots: Path, args) -> dict:
 
 
 def control_cli_task(page: Page, shots: Path, args) -> dict:
-    """Pause, step, resume and stop a task someone else starts (args.task) once this page
-    is open (it says READY: under lockstep a ClearTable is over in seconds)."""
+    """Resume, pause, step, resume and stop a task someone else starts (args.task) and
+    holds paused once this page is open (it says READY)."""
     page.click("[data-testid=tab-tasks]")
     print("READY", flush=True)
     page.click(f'[data-testid=task-list] .item[data-task="{args.task}"]', timeout=60_000)
     wait_until("the task's tree", lambda: root_state(page) == "Running", 30)
     out: dict = {}
+    # The test holds the task with `skillbus pause` as soon as it starts (under lockstep a
+    # ClearTable can be over before a browser on a busy machine has clicked): resumed
+    # from here first, it must tick on.
+    time.sleep(1.0)
+    out["held"] = shown_tick(page)
+    page.click("[data-testid=task-resume]")
+    wait_until("ticks after resuming the held task", lambda: shown_tick(page) > out["held"] + 3, 20)
+    out["after_first_resume"] = shown_tick(page)
     page.click("[data-testid=task-pause]")
     time.sleep(1.5)  # a tick already under way when the pause came may still be shown
     out["paused_at"] = shown_tick(page)

@@ -27,6 +27,7 @@ import pytest
 from conftest import last_json
 from skillbus import paths
 from skillbus.system import programs, start
+from skillbus.waiting import wait_until
 
 DRIVER = Path(__file__).parent / "console_browser.py"
 CHROMIUM = Path("/usr/bin/chromium")
@@ -126,7 +127,11 @@ def test_a_task_started_from_the_cli_is_paused_stepped_resumed_and_stopped_from_
     page = start_browser(sandbox, url, "control_cli_task", "--task", "1")
     page.wait_for("READY", 60, stream="stdout")
     run = sandbox.start("run", [sys.executable, "-m", "skillbus.cli", "run", "ClearTable", "--timeout", "300"])
+    # Held as soon as it exists: a ClearTable under lockstep is over in seconds, and a
+    # browser beside other work can be slower than that (it once found the task done).
+    wait_until(lambda: cli(sandbox, "pause", "1")[0] == 0, 60, "task 1 held with `skillbus pause`", interval=0.1)
     seen = browser_result(sandbox, page, "control_cli_task")
+    assert seen["after_first_resume"] > seen["held"] + 3, seen  # the page's resume ticks it on
     assert seen["after_pause"] == seen["paused_at"], seen  # no tick while paused
     assert seen["after_step"] == seen["after_pause"] + 1, seen  # one step: one tick
     assert seen["after_resume"] > seen["after_step"] + 3, seen
