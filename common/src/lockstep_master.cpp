@@ -54,6 +54,11 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
       throw std::invalid_argument("an ack timeout for '" + name + "', who is not a participant");
     if (timeout.count() <= 0) throw std::invalid_argument("the ack timeout for '" + name + "' must be positive");
   }
+  // Each participant's ack timeout, in expected_'s order (looked up once, not every frame).
+  for (const auto& p : expected_) {
+    const auto it = cfg_.ack_timeout_of.find(p);
+    ack_timeouts_.push_back(it == cfg_.ack_timeout_of.end() ? cfg_.ack_timeout : it->second);
+  }
   subs_.push_back(bus_.subscribe(join_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_join(d, n, ch);
   }));
@@ -192,23 +197,23 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   const auto start = steady::now();
   clock_sent_ = start;
   auto resend_at = start;
-  auto ack_timeout = [&](const std::string& p) {
-    const auto it = cfg_.ack_timeout_of.find(p);
-    return it == cfg_.ack_timeout_of.end() ? cfg_.ack_timeout : it->second;
-  };
   while (acks_.size() < expected_.size()) {
     const auto now = steady::now();
     // The earliest deadline among the participants still to ack, and who is past theirs.
     auto deadline = steady::time_point::max();
     std::vector<std::string> late;
-    for (const auto& p : expected_)
-      if (!acks_.count(p)) {
-        deadline = std::min(deadline, start + ack_timeout(p));
-        if (now - start >= ack_timeout(p)) late.push_back(p);
+    std::chrono::milliseconds late_after{0};
+    for (size_t i = 0; i < expected_.size(); ++i)
+      if (!acks_.count(expected_[i])) {
+        deadline = std::min(deadline, start + ack_timeouts_[i]);
+        if (now - start >= ack_timeouts_[i]) {
+          late.push_back(expected_[i]);
+          late_after = ack_timeouts_[i];
+        }
       }
     if (!late.empty()) {
       error = "lockstep: no ack for frame " + std::to_string(frame) + " from participant(s) " + join_names(late) +
-              " within " + secs_text(ack_timeout(late.front()));
+              " within " + secs_text(late_after);
       return false;
     }
     if (now >= resend_at) {

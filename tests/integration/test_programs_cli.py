@@ -91,3 +91,18 @@ def test_a_bus_that_cannot_be_opened_is_one_line_too():
     r = run("sb_rpc_counter")  # parses, then opens the bus of SKILLBUS_BUS_URL
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
     assert r.stderr.startswith("sb_rpc_counter: cannot start: bus URL 'nowhere://") and len(r.stderr.splitlines()) == 1
+
+
+@pytest.mark.parametrize("name, extra", [("sim_server", ["--scene", "x.scene.json"]), ("sb_clock", [])])
+@pytest.mark.parametrize("item", ["map", "map=", "=100", "map=0", "map=-5", "map=1.5", "map=10x"])
+def test_a_malformed_per_participant_ack_timeout_is_named(name, extra, item):
+    r = run(name, *extra, "--participants", "map", "--ack-timeout-ms-of", item)
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stderr == f"{name}: error: --ack-timeout-ms-of {item}: expected NAME=MS with MS a positive whole " \
+                       "number (see --help)\n", r.stderr
+
+
+def test_an_ack_timeout_for_someone_who_is_no_participant_is_named():
+    r = run("sb_clock", "--participants", "a,b", "--ack-timeout-ms-of", "c=100")
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stderr == "sb_clock: error: --ack-timeout-ms-of names 'c', who is not among --participants (see --help)\n"

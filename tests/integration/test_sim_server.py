@@ -245,3 +245,12 @@ def test_pipelined_stepping_and_its_recorded_commands_replay_to_the_same_physics
                                     "--script", str(recorded), "--duration-s", "10"])
     assert sandbox.wait(alone, 120) == 0
     assert last_json(alone.stdout())["state_digest"] == r["sim"]["state_digest"]
+
+
+def test_an_ack_timeout_for_someone_who_is_no_participant_stops_the_start_naming_it(sandbox):
+    # Before, the lockstep master refused it only when the session began: an uncaught
+    # exception that terminated sim_server.
+    sim = sandbox.start("sim", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                "--participants", "a", "--ack-timeout-ms-of", "b=100"])
+    assert sandbox.wait(sim, 30) == 2, sim.stderr()[-2000:]
+    assert "sim_server: cannot start: --ack-timeout-ms-of names 'b', who is not among --participants" in sim.stderr()

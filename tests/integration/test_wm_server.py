@@ -33,6 +33,16 @@ def run_scenario(sandbox, name, *args, timeout=120):
     return last_json(p.stdout())
 
 
+def probe_world(sandbox, server, fields: str) -> dict:
+    """What a new client sees of the world: `fields`, a Python dict expression over the
+    client `w` (a WorldModelInterface), printed as JSON by a process in the sandbox."""
+    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
+            f"w = WorldModelInterface(open_bus(), 'probe'); print(json.dumps({fields}))")
+    probe = sandbox.start(f"probe-{len(sandbox.procs)}", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + server.stderr()[-2000:]
+    return last_json(probe.stdout())
+
+
 def test_api_through_the_python_client(sandbox, tmp_path):
     server = start_server(sandbox, wm_binary(), tmp_path / "data")
     assert run_scenario(sandbox, "api")["ok"]
@@ -173,13 +183,8 @@ def test_a_scene_load_that_cannot_be_made_durable_changes_nothing(sandbox, tmp_p
     sandbox.kill(server, signal.SIGTERM)
     assert sandbox.wait(server, 20) == 0, server.stderr()[-2000:]
     again = start_server(sandbox, wm_binary(), data, name="wm-again")
-    import sys
-    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
-            "w = WorldModelInterface(open_bus(), 'probe'); print(json.dumps({'version': w.version, 'labels': "
-            "sorted(e.label for e in w.get_elements() if e.label.endswith('-load'))}))")
-    probe = sandbox.start("probe", [sys.executable, "-c", code])
-    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
-    seen = last_json(probe.stdout())
+    seen = probe_world(sandbox, again, "{'version': w.version, 'labels': "
+                       "sorted(e.label for e in w.get_elements() if e.label.endswith('-load'))}")
     assert seen == {"version": r["version"], "labels": r["labels"]}, (seen, r)
     assert again.returncode is None
 
@@ -194,13 +199,9 @@ def test_a_scene_load_whose_journal_cannot_be_restarted_takes_no_commit_until_a_
     sandbox.wait(server, 20)
     (data / "journal.bin.tmp").rmdir()
     again = start_server(sandbox, wm_binary(), data, name="wm-again")
-    import sys
-    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
-            "w = WorldModelInterface(open_bus(), 'probe'); print(json.dumps({'version': w.version, 'labels': "
-            "sorted(e.label for e in w.get_elements() if e.label in ('before-load', 'after'))}))")
-    probe = sandbox.start("probe", [sys.executable, "-c", code])
-    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
-    assert last_json(probe.stdout()) == {"version": r["version_before"] + 1, "labels": []}, (probe.stdout(), r)
+    seen = probe_world(sandbox, again, "{'version': w.version, 'labels': "
+                       "sorted(e.label for e in w.get_elements() if e.label in ('before-load', 'after'))}")
+    assert seen == {"version": r["version_before"] + 1, "labels": []}, (seen, r)
 
 
 @pytest.mark.parametrize("change", ["load", "axioms"])
@@ -221,14 +222,9 @@ def test_a_crash_between_a_scene_changes_files_and_its_snapshot_leaves_the_old_s
     sandbox.kill(client)
     sandbox.wait(client, 20)
     again = start_server(sandbox, wm_binary(), data, name="wm-again")
-    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
-            "w = WorldModelInterface(open_bus(), 'probe'); "
-            "print(json.dumps({'version': w.version, 'widget': 'Widget' in w.save_scene(), "
-            "'labels': sorted(e.label for e in w.get_elements() if e.label == 'before-change')}))")
-    probe = sandbox.start("probe", [sys.executable, "-c", code])
-    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + again.stderr()[-2000:]
-    assert last_json(probe.stdout()) == {"version": before["version_before"], "widget": False,
-                                         "labels": ["before-change"]}, (probe.stdout(), before)
+    seen = probe_world(sandbox, again, "{'version': w.version, 'widget': 'Widget' in w.save_scene(), "
+                       "'labels': sorted(e.label for e in w.get_elements() if e.label == 'before-change')}")
+    assert seen == {"version": before["version_before"], "widget": False, "labels": ["before-change"]}, (seen, before)
     assert not [f.name for f in data.glob("scene_*") if str(before["version_before"] + 1) in f.name]
     assert again.returncode is None
 

@@ -156,16 +156,23 @@ def bad_input() -> None:
     print(json.dumps({"ok": True}))
 
 
+def saved_scene_then_a_commit(wmi: WorldModelInterface):
+    """Saves the world as DATA/scenes/saved.ttl, then commits 'before-load'; the request
+    that names the saved scene (to load it again), and the version after the commit."""
+    from skillbus.msgs import wm_scene_t
+    req = wm_scene_t()
+    req.path = "saved"
+    wmi._call("save_scene", req, wm_scene_t)
+    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "before-load"))])
+    return req, wmi.version
+
+
 def failed_load(data: str) -> None:
     """A scene load that cannot be made durable (its snapshot cannot be written) changes
     nothing: the world and its version are as before, and later commits are kept."""
     from skillbus.msgs import wm_scene_t
     wmi = WorldModelInterface(open_bus(), "failed-load")
-    req = wm_scene_t()
-    req.path = "saved"
-    wmi._call("save_scene", req, wm_scene_t)
-    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "before-load"))])
-    version = wmi.version
+    req, version = saved_scene_then_a_commit(wmi)
     blocker = Path(data) / "snapshot.bin.tmp"
     blocker.mkdir()
     req.path = "saved.ttl"
@@ -182,11 +189,7 @@ def journal_switch_fails(data: str) -> None:
     disk and the server hold the new scene, and no commit is taken until a restart."""
     from skillbus.msgs import wm_scene_t
     wmi = WorldModelInterface(open_bus(), "journal-switch")
-    req = wm_scene_t()
-    req.path = "saved"
-    wmi._call("save_scene", req, wm_scene_t)
-    wmi.commit([op(wm_op_t.ADD_ELEMENT, element=Element("skiros:Cube", "before-load"))])
-    version = wmi.version
+    req, version = saved_scene_then_a_commit(wmi)
     (Path(data) / "journal.bin.tmp").mkdir()
     req.path = "saved.ttl"
     err = expect_error(lambda: wmi._call("load_scene", req, wm_scene_t), "is on disk as a snapshot")

@@ -975,21 +975,8 @@ int64_t scene_file_version(const std::string& name, const char* kind) {
   return std::stoll(digits);
 }
 
-std::string read_text(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    if (errno == ENOENT) return "";
-    throw WmError(sys_error("cannot read " + path));
-  }
-  std::string out;
-  char buf[65536];
-  ssize_t n;
-  while ((n = ::read(fd, buf, sizeof buf)) > 0) out.append(buf, static_cast<size_t>(n));
-  const int err = errno;
-  ::close(fd);
-  if (n < 0) throw WmError("cannot read " + path + ": " + std::strerror(err));
-  return out;
-}
+// A generation's file, "" when it is missing (a write of the pair cut short before the second).
+std::string read_scene_file(const std::string& path) { return exists(path) ? read_all(path) : ""; }
 
 void remove_file(const std::string& path) {
   if (::unlink(path.c_str()) != 0 && errno != ENOENT) throw WmError(sys_error("cannot remove " + path));
@@ -1009,7 +996,7 @@ SceneGenerations scene_generations(const std::string& dir) {
     for (const char* kind : kSceneKinds) {
       const std::string k = kind;
       if (name.compare(0, k.size(), k) != 0) continue;
-      if (name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0) {
+      if (name.size() > 8 && name.compare(name.size() - 8, 8, ".ttl.tmp") == 0) {  // replace_file_durably's
         g.leftovers.push_back(name);
         continue;
       }
@@ -1049,8 +1036,8 @@ Journal::SceneFiles Journal::settle_scene_files(int64_t snapshot_version) {
   if (found) {
     out.imports_path = dir_ + "/" + scene_file_name("scene_imports", out.version);
     out.extra_path = dir_ + "/" + scene_file_name("scene_extra", out.version);
-    out.imports = read_text(out.imports_path);
-    out.extra = read_text(out.extra_path);
+    out.imports = read_scene_file(out.imports_path);
+    out.extra = read_scene_file(out.extra_path);
   }
   // Once the generations before it are gone, an empty generation in force says what no
   // files say.

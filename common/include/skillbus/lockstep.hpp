@@ -107,6 +107,7 @@ class LockstepMaster {
   std::map<std::string, Ack> acks_;
   Sha256 session_;
   Digest session_digest_{};
+  std::vector<std::chrono::milliseconds> ack_timeouts_;  // per participant, in expected_'s order
   bool stop_requested_ = false;
   std::string stop_reason_;
   int64_t end_at_ = -1;  // a participant asked to end after this frame (lockstep_end_t)
