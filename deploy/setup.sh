@@ -16,7 +16,7 @@ APT_PACKAGES=(
   xvfb imagemagick
   chromium libjs-three
   default-jdk-headless
-  python3-venv
+  python3-venv python3-dev
   iproute2 util-linux procps
 )
 

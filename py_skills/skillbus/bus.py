@@ -396,12 +396,7 @@ class LcmBus(Bus):
         while True:
             for r in receivers:
                 while (m := r.read()) is not False:
-                    if m is None:
-                        continue
-                    handlers = self._by_channel.get(m[0])
-                    if handlers:
-                        for h in list(handlers.values()):
-                            h(m[0], m[1])
+                    if m is not None and self._dispatch(m):
                         return True
             if deadline is None:
                 deadline = time.monotonic() + timeout
@@ -409,6 +404,34 @@ class LcmBus(Bus):
             if left <= 0:
                 return False
             select.select(receivers, [], [], left)
+
+    def _dispatch(self, m: tuple[str, bytes]) -> bool:
+        handlers = self._by_channel.get(m[0])
+        if not handlers:
+            return False
+        for h in list(handlers.values()):
+            h(m[0], m[1])
+        return True
+
+    def lane0_socket(self) -> int | None:
+        """The file descriptor of the lane-0 socket this bus reads on the caller's thread,
+        when it reads only that one (else None): what skillbus.quiet_frames waits on."""
+        if not self._direct or self._receivers[0] is None or self._receivers[1] is not None:
+            return None
+        return self._receivers[0].fileno()
+
+    @property
+    def lane1_url(self) -> str:
+        """The URL acks and joins go out on."""
+        return self._lane_urls[1] or self._lane_urls[0]
+
+    def feed_datagram(self, d: bytes, sender: object) -> bool:
+        """Hands a datagram read from the lane-0 socket by someone else (skillbus.
+        quiet_frames) to this bus's handlers, as handle() would have: True if it
+        completed a message someone here subscribed to."""
+        r = self._receivers[0]
+        m = r.parse(d, sender) if r is not None else None
+        return m is not None and self._dispatch(m)
 
     @property
     def undecodable(self) -> int:
@@ -510,6 +533,7 @@ class AuthenticatedBus(Bus):
     def __init__(self, inner: Bus, keys: list[bytes], identity: str, rules=None) -> None:
         from skillbus import auth
         self.inner, self.identity, self._rules = inner, identity, rules
+        self.keys = list(keys)
         self._sealer = auth.Sealer(keys[0], identity)
         self._opener = auth.Opener(keys, policy=rules)
         self._rejected_type = auth.Rejected
@@ -583,3 +607,18 @@ class AuthenticatedBus(Bus):
             return self.inner.handle(timeout)
         finally:
             self._verified.clear()
+
+    def feed_datagram(self, d: bytes, sender: object) -> bool:
+        """As LcmBus.feed_datagram, the message verified first."""
+        self._verified.clear()
+        try:
+            return self.inner.feed_datagram(d, sender)  # type: ignore[attr-defined]
+        finally:
+            self._verified.clear()
+
+    def note_rejected(self, reason: str, channel: str, count: int) -> None:
+        """Counts (and logs, as its own) `count` messages on `channel` dropped for `reason`
+        by someone who verified them for this bus (skillbus.quiet_frames)."""
+        from skillbus import auth
+        self._opener.stats[reason] += count
+        self._note(auth.Rejected(reason, f"{count} message(s) on {channel}"))

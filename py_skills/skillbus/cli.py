@@ -9,6 +9,13 @@ import sys
 from skillbus.log import setup_logging
 
 
+def _at_least_one(text: str) -> int:
+    n = int(text)
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{n}: at least 1")
+    return n
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="skillbus", description="skill-based robot control without ROS")
     ap.add_argument("--log-level", default=None, help="debug, info, warn or error")
@@ -66,6 +73,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--wall-clock", action="store_true", help="run on the wall clock, without a master")
     p.add_argument("--frames", type=int, default=None, help="wall-clock mode: stop after this many frames")
     p.add_argument("--bare", action="store_true", help="no demo traffic: only the lockstep protocol")
+    p.add_argument("--listen", action="store_true", help="with --bare: hear (and fold) SB_DEMO_CMD, publish nothing")
+    p.add_argument("--every", type=_at_least_one, default=1, help="test: publish SB_DEMO_CMD in every N-th frame only")
     p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
     p.add_argument("--slow-at-frame", type=int, default=-1, help="test: take --slow-s seconds over this frame")
     p.add_argument("--slow-s", type=float, default=0.8, help="test: how long the slow frame takes (s)")

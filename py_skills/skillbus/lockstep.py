@@ -35,6 +35,8 @@ from skillbus import tick_context as context
 from skillbus.validate import BadValue, integer
 from skillbus.lockstep_wire import AckEncoder, decode_clock, read_header
 from skillbus.msgs import channel_count_t, header_t, lockstep_clock_t, lockstep_join_t
+from skillbus import quiet_frames
+from skillbus.quiet_frames import QuietFrames
 
 
 def clock_channel() -> str:
@@ -220,6 +222,9 @@ class LockstepParticipant:
         self._stop_requested = False
         self._held: list[tuple[int, str, Any]] = []  # (due frame, channel, message): from ticks
         self.after_frame: list[Callable[[int], None]] = []  # run after each frame's ack
+        self._quiet: QuietFrames | None = None  # (skillbus.quiet_frames; made at the first wait)
+        self._quiet_made = False
+        self.quiet_frames = 0  # frames acked by that core
         if not wall_clock:
             self._subs.append(bus.subscribe(clock_channel(), self._on_clock))
 
@@ -230,6 +235,8 @@ class LockstepParticipant:
         self.handlers[ch] = handler
         if first:
             self._subs.append(self.bus.subscribe(ch, self._on_stamped))
+            if self._quiet is not None:
+                self._quiet.set_subscribed(set(self.handlers))
 
     def publish(self, ch: str, msg: Any) -> None:
         """Publishes for the current frame (from on_frame or a message handler).
@@ -336,6 +343,45 @@ class LockstepParticipant:
             integer(n.count, f"counts[{i}].count", 0)
             integer(n.frame, f"counts[{i}].frame", 0, c.header.frame)
 
+    # -- waiting for the clock -----------------------------------------------
+    def _quiet_core(self) -> QuietFrames | None:
+        """skillbus.quiet_frames' core while this participant has nothing to do in a
+        frame but take the clock and ack: no on_frame, nothing to run after a frame,
+        nothing held for one (the messages it subscribed to the core checks per clock)."""
+        if self.on_frame is not None or self.after_frame or self._held or self._stop_requested \
+                or not self._master or not self._last_ack:
+            return None
+        if not self._quiet_made:
+            self._quiet_made = True
+            self._quiet = quiet_frames.for_bus(self.bus, self.name, clock_channel(), self._ack_channel)
+            if self._quiet is not None:
+                self._quiet.set_subscribed(set(self.handlers))
+        return self._quiet
+
+    def _wait_for_clock(self, timeout: float) -> int:
+        """Handles the bus for at most `timeout` while the next clock is awaited; the
+        number of quiet frames acked meanwhile without Python (0 on Python's path)."""
+        q = self._quiet_core()
+        if q is None:
+            self.bus.handle(timeout)
+            return 0
+        datagram, sender, acked, last_acked, sim_time, last_ack, running, resends = q.core.wait(
+            timeout, self._master, self._last_acked, self._last_sim_time, self._last_ack, self._running)
+        if acked:
+            self._last_acked = self._current = last_acked
+            self._last_sim_time, self._last_ack, self._running = sim_time, last_ack, running
+            self.outbox.begin_frame(last_acked, sim_time)
+        if resends:
+            self._master_heard = time.monotonic()
+        q.note_rejected()
+        if datagram is not None:
+            q.feed(datagram, sender)
+        return acked
+
+    def quiet_core_rejected(self) -> dict[str, int]:
+        """Clocks the quiet-frame core dropped, by reason (counted in the bus's too)."""
+        return dict(self._quiet.core.rejected()) if self._quiet is not None else {}
+
     # -- loops -------------------------------------------------------------
     def _send_ack(self, frame: int, sim_time_ns: int, error: str) -> None:
         digest = self.outbox.finish_frame()
@@ -374,7 +420,12 @@ class LockstepParticipant:
                 if time.monotonic() - max(last_event, self._master_heard) > self.clock_timeout:
                     return self._fail(r, f"lockstep: no clock after frame {self._last_acked} within "
                                          f"{self.clock_timeout:.1f} s (master {self._master} gone?)")
-                self.bus.handle(0.05)
+                quiet = self._wait_for_clock(0.05)
+                if quiet:
+                    self.quiet_frames += quiet
+                    r.frames += quiet
+                    r.sim_time_ns = self._last_sim_time
+                    last_event = time.monotonic()
             if self._next_clock is None:
                 break  # stopped
             clk, self._next_clock = self._next_clock, None

@@ -32,9 +32,9 @@ def to_int64(u: int) -> int:
 
 class DemoParticipant:
     def __init__(self, participant: LockstepParticipant, drop_at_frame: int = -1,
-                 slow_at_frame: int = -1, slow_s: float = 0.8) -> None:
+                 slow_at_frame: int = -1, slow_s: float = 0.8, every: int = 1) -> None:
         self.p = participant
-        self.slow_at_frame, self.slow_s = slow_at_frame, slow_s
+        self.slow_at_frame, self.slow_s, self.every = slow_at_frame, slow_s, every
         self.state = 0
         self.received = 0
         self.drop_at_frame = drop_at_frame
@@ -51,6 +51,8 @@ class DemoParticipant:
         self.received += 1
 
     def on_frame(self, frame: int, sim_time_ns: int) -> None:
+        if frame % self.every:
+            return  # (tests: traffic in some frames only)
         if frame == self.slow_at_frame:
             # Test: a slow frame, longer than the master's clock resend interval, spent
             # dispatching the bus as a long synchronous RPC call would.
@@ -71,6 +73,22 @@ class DemoParticipant:
         self.p.publish(self.cmd_channel, out)
 
 
+class Listener:
+    """A participant with nothing to do but hear SB_DEMO_CMD (tests: frames quiet but for
+    the ones with a message for it): it folds what it hears, publishes nothing."""
+
+    def __init__(self, participant: LockstepParticipant) -> None:
+        self.state = self.received = 0
+        participant.subscribe(channel("SB_DEMO_CMD"), self.fold)
+
+    def fold(self, m: StampedMessage) -> None:
+        s = decode(test_sample_t, m.data)
+        if s is None:
+            raise ValueError(f"{m.channel} from {m.stamp.sender} in frame {m.stamp.frame} is not a test_sample_t")
+        self.state = demo_mix(self.state, s.i64 ^ m.stamp.frame)
+        self.received += 1
+
+
 def main(args) -> int:
     bus = open_bus(args.url)
     if args.lose_acks_every:
@@ -78,11 +96,18 @@ def main(args) -> int:
     p = LockstepParticipant(bus, args.name, kind="python-demo", wall_clock=args.wall_clock,
                             wall_frames=args.frames, clock_timeout=args.clock_timeout,
                             message_timeout=args.message_timeout)
-    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame, args.slow_s)
+    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame, args.slow_s,
+                                                  args.every)
+    listener = Listener(p) if args.bare and args.listen else None
     r = p.run()
+    received = demo.received if demo else listener.received if listener else 0
+    state = demo.state if demo else listener.state if listener else 0
+    rejected = getattr(bus, "rejected", {})
     print(json.dumps({"ok": r.ok, "error": r.error, "name": args.name, "frames": r.frames,
-                      "received": demo.received if demo else 0, "digest": r.digest_hex,
-                      "bad_input": p.bad_input.total}), flush=True)
+                      "received": received, "state": state, "digest": r.digest_hex,
+                      "bad_input": p.bad_input.total, "quiet_frames": p.quiet_frames,
+                      "rejected": {k: v for k, v in rejected.items() if k != "ok"},
+                      "core_rejected": p.quiet_core_rejected()}), flush=True)
     return 0 if r.ok else 1
 
 

@@ -175,6 +175,10 @@ class UdpmReceiver:
             d, sender = self.sock.recvfrom(65536)
         except (BlockingIOError, InterruptedError):
             return False
+        return self.parse(d, sender)
+
+    def parse(self, d: bytes, sender: object) -> tuple[str, bytes] | None:
+        """The message datagram `d` from `sender` completes, or None (as read() does)."""
         if d[:4] == SHORT_MAGIC:  # the common case, inline
             end = d.find(b"\0", 8, 8 + MAX_CHANNEL + 1)
             if end > 8:

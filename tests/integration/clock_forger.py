@@ -1,0 +1,70 @@
+"""Forges lockstep clocks inside a test's sandbox (test_quiet_frames.py).
+
+    clock_forger.py unsigned MASTER NAMES SECONDS   clocks for frames 1.. listing NAMES,
+                                                    from MASTER, without a trailer
+    clock_forger.py wrong-key MASTER NAMES SECONDS  the same, signed with a key of its own
+    clock_forger.py replay MASTER NAMES SECONDS     every genuine clock heard, sent again
+                                                    as it was on the wire
+
+Each runs for SECONDS, then prints one JSON line: {"sent": N}.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from skillbus import auth
+from skillbus.bus import channel, open_raw_bus
+from skillbus.msgs import header_t, lockstep_clock_t
+
+
+def clock(master: str, names: list[str], frame: int) -> bytes:
+    c = lockstep_clock_t()
+    c.header = header_t()
+    c.header.frame, c.header.sim_time_ns, c.header.sender, c.header.seq = frame, frame * 10_000_000, master, 0
+    c.frame_period_ns = 10_000_000
+    c.participants, c.num_participants = names, len(names)
+    c.counts, c.num_counts = [], 0
+    c.stop, c.stop_reason = False, ""
+    return c.encode()
+
+
+def main() -> int:
+    mode, master, names, seconds = sys.argv[1], sys.argv[2], sys.argv[3].split(","), float(sys.argv[4])
+    bus = open_raw_bus()
+    ch = channel("SB_LOCKSTEP_CLOCK")
+    sent = 0
+    end = time.monotonic() + seconds
+    if mode == "replay":
+        heard: list[bytes] = []
+        bus.subscribe(ch, lambda _c, data: heard.append(bytes(data)))
+        while time.monotonic() < end:
+            bus.handle(0.01)
+            for data in heard:  # (what this forger sends it hears too: once each)
+                bus.publish(ch, data)
+                sent += 1
+            heard.clear()
+            bus.handle(0.01)
+            heard.clear()
+    else:
+        sealer = None
+        if mode == "wrong-key":
+            path = auth.create_key_file(Path(tempfile.mkdtemp()) / "other.key")
+            sealer = auth.Sealer(auth.load_keys(path)[0], master)
+        frame = 1
+        while time.monotonic() < end:
+            data = clock(master, names, frame)
+            bus.publish(ch, sealer.seal(ch, data) if sealer else data)
+            sent += 1
+            frame = frame % 3000 + 1
+            time.sleep(0.0005)
+    print(json.dumps({"sent": sent}), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
