@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <system_error>
 
 #include "skillbus_msgs/lockstep_ack_t.hpp"
 #include "skillbus_msgs/lockstep_clock_t.hpp"
@@ -28,19 +29,7 @@ using steady = std::chrono::steady_clock;
 
 QuietFrames::QuietFrames(QuietConfig config) : cfg_(std::move(config)), buffer_(kMaxDatagram) {
   if (cfg_.fd < 0) throw BusError("quiet frames: no socket");
-  if (!cfg_.keys.empty()) {
-    std::shared_ptr<const auth::Policy> policy;
-    if (!cfg_.policy_text.empty()) {
-      auto p = std::make_shared<auth::Policy>(auth::Policy::parse(cfg_.policy_text, "the participant's policy"));
-      // Python refuses to send where the policy forbids it, naming the rule; the core
-      // leaves such a participant to Python.
-      if (!p->allows(cfg_.identity, cfg_.ack_channel))
-        throw BusError("the policy does not let " + cfg_.identity + " send on " + cfg_.ack_channel);
-      policy = std::move(p);
-    }
-    opener_ = std::make_unique<auth::Opener>(cfg_.keys, policy);
-    sealer_ = std::make_unique<auth::Sealer>(cfg_.keys.front(), cfg_.identity);  // (throws on a bad identity)
-  }
+  if (!cfg_.signing_key.empty()) sealer_ = std::make_unique<auth::Sealer>(cfg_.signing_key, cfg_.identity);
   lcm_ = lcm_create(cfg_.ack_url.c_str());
   if (!lcm_) throw BusError("quiet frames: cannot open LCM at " + cfg_.ack_url);
   Sha256 nothing;
@@ -55,21 +44,30 @@ bool QuietFrames::wait(QuietState& s, int timeout_ms, Datagram& out) {
   s.acked = s.resends = 0;
   const auto deadline = steady::now() + std::chrono::milliseconds(std::max(0, timeout_ms));
   // poll, then read one datagram: two system calls a frame (reading until EAGAIN would be
-  // three; datagrams rarely queue up here).
-  for (;;) {
+  // three; datagrams rarely queue up here). The deadline holds even while datagrams keep
+  // coming (a flood of forged clocks must not keep Python from its timeouts and signals).
+  for (bool first = true;; first = false) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - steady::now()).count();
+    if (left <= 0 && !first) return false;
     pollfd p{cfg_.fd, POLLIN, 0};
-    if (::poll(&p, 1, static_cast<int>(std::max<int64_t>(0, left))) <= 0) {
-      if (left <= 0) return false;
-      continue;  // EINTR, or poll's own rounding: go on until the deadline
+    const int ready = ::poll(&p, 1, static_cast<int>(std::max<int64_t>(0, left)));
+    if (ready < 0) {
+      if (errno == EINTR) return false;  // a signal: Python's handlers run first
+      throw std::system_error(errno, std::generic_category(), "polling the bus socket");
     }
+    if (ready == 0) {
+      if (left <= 0) return false;
+      continue;  // (poll's own rounding: on to the deadline)
+    }
+    if (p.revents & POLLNVAL) throw std::system_error(EBADF, std::generic_category(), "polling the bus socket");
     sockaddr_in from{};
     socklen_t from_len = sizeof(from);
     const ssize_t n = ::recvfrom(cfg_.fd, buffer_.data(), buffer_.size(), MSG_DONTWAIT,
                                  reinterpret_cast<sockaddr*>(&from), &from_len);
     if (n < 0) {
-      if ((errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) && steady::now() < deadline) continue;
-      return false;  // (Python's own read names the socket's error)
+      if (errno == EINTR) return false;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) continue;
+      throw std::system_error(errno, std::generic_category(), "reading the bus socket");
     }
     if (on_datagram(s, buffer_.data(), static_cast<size_t>(n)) == Verdict::Consumed) continue;
     out.data.assign(buffer_.begin(), buffer_.begin() + n);
@@ -94,15 +92,12 @@ QuietFrames::Verdict QuietFrames::on_datagram(QuietState& s, const uint8_t* d, s
 }
 
 // The happy path of LockstepParticipant._on_clock and _check_clock (py_skills/skillbus/
-// lockstep.py); whatever else a clock is goes to Python, which records it.
+// lockstep.py); whatever else a clock is goes to Python, which records it. A clock is
+// verified only when the core acts on it (acks a quiet frame, answers a resend): each
+// message is verified once, by whoever handles it, with the bus's one replay window.
 QuietFrames::Verdict QuietFrames::on_clock(QuietState& s, const uint8_t* d, size_t n) {
   size_t payload = n;
-  if (opener_) {
-    std::string identity, why;
-    auth::Reason reason{};
-    if (!opener_->open(cfg_.clock_channel, d, n, payload, identity, reason, why))
-      return Verdict::Consumed;  // dropped and counted, as Python would (stats())
-  }
+  if (cfg_.opener && !auth::unverified_payload_size(d, n, payload)) return Verdict::ForPython;  // unsigned
   skillbus_msgs::lockstep_clock_t c{};
   if (!decode_msg(d, payload, c)) return Verdict::ForPython;
   if (std::find(c.participants.begin(), c.participants.end(), cfg_.name) == c.participants.end())
@@ -110,17 +105,18 @@ QuietFrames::Verdict QuietFrames::on_clock(QuietState& s, const uint8_t* d, size
   if (s.master.empty() || c.header.sender != s.master || c.stop) return Verdict::ForPython;
   const int64_t frame = c.header.frame;
   if (frame == s.last_acked && !s.last_ack.empty()) {  // the master resends: our ack was lost, or is late
+    if (!verified(d, n)) return Verdict::Consumed;
     ++s.resends;
     send_ack(s.last_ack);
     return Verdict::Consumed;
   }
-  if (frame <= s.last_acked) return Verdict::Consumed;  // an old resend
   if (frame != s.last_acked + 1 || c.header.sim_time_ns < s.last_sim_time) return Verdict::ForPython;
   for (const auto& count : c.counts) {
     if (count.count < 0 || count.frame < 0 || count.frame > frame) return Verdict::ForPython;
     if (count.count > 0 && count.sender != cfg_.name && subscribed_.count(count.channel))
       return Verdict::ForPython;  // a message for us: the frame has work
   }
+  if (!verified(d, n)) return Verdict::Consumed;
   skillbus_msgs::lockstep_ack_t a{};
   a.header.frame = frame;
   a.header.sim_time_ns = c.header.sim_time_ns;
@@ -138,6 +134,20 @@ QuietFrames::Verdict QuietFrames::on_clock(QuietState& s, const uint8_t* d, size
   s.running = h.finish();
   ++s.acked;
   return Verdict::Consumed;
+}
+
+bool QuietFrames::verified(const uint8_t* d, size_t n) {
+  if (!cfg_.opener) return true;  // an open bus
+  size_t payload = 0;
+  std::string identity, why;
+  auth::Reason reason{};
+  std::lock_guard<std::mutex> lock(cfg_.opener->mutex);
+  if (!cfg_.opener->opener.open(cfg_.clock_channel, d, n, payload, identity, reason, why)) {
+    ++rejected_[auth::reason_name(reason)];  // dropped and counted, as Python would
+    return false;
+  }
+  ++accepted_;
+  return true;
 }
 
 void QuietFrames::send_ack(const Bytes& ack) {

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
@@ -22,6 +23,7 @@
 #include "skillbus/auth.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/digest.hpp"
+#include "shared_opener.hpp"
 
 typedef struct _lcm_t lcm_t;
 
@@ -33,9 +35,9 @@ struct QuietConfig {
   std::string ack_channel;       // SB_LOCKSTEP_ACK (with the namespace)
   std::string ack_url;           // the LCM URL acks go out on (lane 1)
   std::string name;              // the participant
-  std::vector<auth::Key> keys;   // empty: an open bus (nothing signed or verified)
+  std::shared_ptr<SharedOpener> opener;  // the bus's; null: an open bus (nothing verified)
+  auth::Key signing_key;         // empty: an open bus (nothing signed)
   std::string identity;          // the bus identity acks are signed with
-  std::string policy_text;       // "" : no policy (anyone with the key)
 };
 
 // What Python and the core hand each other around a wait: Python's participant state.
@@ -65,22 +67,29 @@ class QuietFrames {
   void set_subscribed(std::set<std::string> channels) { subscribed_ = std::move(channels); }
 
   // Waits at most timeout_ms for a datagram this core does not consume, acking quiet
-  // frames meanwhile. True with `out` filled: Python's to handle. False: timed out.
+  // frames meanwhile. True with `out` filled: Python's to handle. False: the time is up,
+  // or a signal came (Python runs its handlers, then waits again). A socket error throws
+  // std::system_error.
   bool wait(QuietState& s, int timeout_ms, Datagram& out);
 
-  const auth::Stats* stats() const { return opener_ ? &opener_->stats() : nullptr; }
+  // Clocks this core dropped, by reason, and accepted (cumulative): the bus adds them to
+  // its own counts.
+  const std::map<std::string, uint64_t>& rejected() const { return rejected_; }
+  uint64_t accepted() const { return accepted_; }
   uint64_t lost_sends() const { return lost_sends_; }
 
  private:
   enum class Verdict { Consumed, ForPython };
   Verdict on_datagram(QuietState& s, const uint8_t* d, size_t n);
   Verdict on_clock(QuietState& s, const uint8_t* d, size_t n);
+  bool verified(const uint8_t* d, size_t n);  // with the bus's opener; counted
   void send_ack(const Bytes& ack);
 
   QuietConfig cfg_;
   std::set<std::string> subscribed_;
-  std::unique_ptr<auth::Opener> opener_;
   std::unique_ptr<auth::Sealer> sealer_;
+  std::map<std::string, uint64_t> rejected_;
+  uint64_t accepted_ = 0;
   lcm_t* lcm_ = nullptr;
   Digest empty_frame_{};  // SHA-256 of nothing: what a frame without publications hashes to
   uint64_t lost_sends_ = 0;

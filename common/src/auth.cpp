@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 
 #include "skillbus/log.hpp"
@@ -85,6 +86,8 @@ class KeyedMac {
 
 const KeyedMac& keyed(const Key& key) {
   static std::map<Key, std::unique_ptr<KeyedMac>> cache;  // (a process has one or two keys)
+  static std::mutex mutex;  // (skillbus_native verifies without Python's lock on one thread)
+  std::lock_guard<std::mutex> lock(mutex);
   auto& slot = cache[key];
   if (!slot) slot = std::make_unique<KeyedMac>(key);
   return *slot;
@@ -276,6 +279,16 @@ uint64_t Stats::total_rejected() const {
 
 Opener::Opener(std::vector<Key> keys, std::shared_ptr<const Policy> policy)
     : keys_(std::move(keys)), policy_(std::move(policy)) {}
+
+bool unverified_payload_size(const uint8_t* data, size_t size, size_t& payload_size) {
+  if (size < 6 || std::memcmp(data + size - 4, kMagic, 4) != 0) return false;
+  const size_t body = size_t(data[size - 6]) | (size_t(data[size - 5]) << 8);
+  if (body < 1 + kFixed + kMacSize || body > size - 6) return false;
+  const size_t start = size - 6 - body;
+  if (1 + size_t(data[start]) + kFixed + kMacSize != body) return false;
+  payload_size = start;
+  return true;
+}
 
 bool Opener::open(const std::string& channel, const uint8_t* data, size_t size, size_t& payload_size,
                   std::string& identity, Reason& reason, std::string& why) {

@@ -282,6 +282,46 @@ class Opener:
                 break
 
 
+class NativeOpener:
+    """Opener's interface (open, stats) over skillbus_native.Opener: the C++ twin of the
+    same rules (common/src/auth.cpp), at a fifth of the Python one's cost."""
+
+    def __init__(self, lib, keys: list[bytes], policy_text: str | None) -> None:
+        self.core = lib.Opener(list(keys), policy_text)  # (shared with skillbus.quiet_frames)
+        self._open = self.core.open
+        self.stats: collections.Counter = collections.Counter()
+
+    def open(self, channel: str, data: bytes) -> Opened:
+        ok, got, identity, why = self._open(channel, data)
+        if ok:
+            self.stats["ok"] += 1
+            return Opened(got, identity)
+        self.stats[got] += 1
+        raise Rejected(got, why, identity)
+
+
+def bus_sealer(key: bytes, identity: str):
+    """The sealer a bus signs with: skillbus_native's when built (skillbus.native), else
+    Sealer; both write the same trailer."""
+    from skillbus import native
+    lib = native.module()
+    why = identity_problem(identity)
+    if lib is None or why:
+        return Sealer(key, identity)  # (which names a bad identity)
+    return lib.Sealer(key, identity.encode("utf-8", "surrogateescape"))
+
+
+def bus_opener(keys: list[bytes], policy=None):
+    """The opener a bus verifies with: skillbus_native's when built and the policy is a
+    skillbus.policy.Policy (or none), else Opener; both apply the same rules."""
+    from skillbus import native
+    from skillbus.policy import Policy
+    lib = native.module()
+    if lib is None or not (policy is None or isinstance(policy, Policy)):
+        return Opener(keys, policy=policy)
+    return NativeOpener(lib, keys, None if policy is None else policy.text())
+
+
 def strip(data: bytes) -> bytes:
     """The payload of a message with or without a trailer, unverified: for reading logs
     (lcm-logger keeps what was on the wire), never for acting on a message."""

@@ -413,6 +413,10 @@ class LcmBus(Bus):
             h(m[0], m[1])
         return True
 
+    def subscribers(self, channel: str) -> int:
+        """How many subscriptions here hear `channel` (read on the caller's thread)."""
+        return len(self._by_channel.get(channel, ()))
+
     def lane0_socket(self) -> int | None:
         """The file descriptor of the lane-0 socket this bus reads on the caller's thread,
         when it reads only that one (else None): what skillbus.quiet_frames waits on."""
@@ -534,8 +538,8 @@ class AuthenticatedBus(Bus):
         from skillbus import auth
         self.inner, self.identity, self._rules = inner, identity, rules
         self.keys = list(keys)
-        self._sealer = auth.Sealer(keys[0], identity)
-        self._opener = auth.Opener(keys, policy=rules)
+        self._sealer = auth.bus_sealer(keys[0], identity)
+        self._opener = auth.bus_opener(keys, rules)
         self._rejected_type = auth.Rejected
         self._last_log: dict[tuple[str, str], float] = {}
         self._quiet: collections.Counter[tuple[str, str]] = collections.Counter()
@@ -616,9 +620,11 @@ class AuthenticatedBus(Bus):
         finally:
             self._verified.clear()
 
-    def note_rejected(self, reason: str, channel: str, count: int) -> None:
-        """Counts (and logs, as its own) `count` messages on `channel` dropped for `reason`
-        by someone who verified them for this bus (skillbus.quiet_frames)."""
+    def note_verified(self, what: str, channel: str, count: int) -> None:
+        """Counts `count` messages on `channel` verified for this bus by someone else
+        (skillbus.quiet_frames): "ok", or the reason they were dropped (logged as the bus
+        logs its own)."""
         from skillbus import auth
-        self._opener.stats[reason] += count
-        self._note(auth.Rejected(reason, f"{count} message(s) on {channel}"))
+        self._opener.stats[what] += count
+        if what != "ok":
+            self._note(auth.Rejected(what, f"{count} message(s) on {channel}"))

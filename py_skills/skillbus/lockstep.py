@@ -356,7 +356,7 @@ class LockstepParticipant:
             self._quiet = quiet_frames.for_bus(self.bus, self.name, clock_channel(), self._ack_channel)
             if self._quiet is not None:
                 self._quiet.set_subscribed(set(self.handlers))
-        return self._quiet
+        return self._quiet if self._quiet is not None and self._quiet.usable() else None
 
     def _wait_for_clock(self, timeout: float) -> int:
         """Handles the bus for at most `timeout` while the next clock is awaited; the
@@ -371,16 +371,19 @@ class LockstepParticipant:
             self._last_acked = self._current = last_acked
             self._last_sim_time, self._last_ack, self._running = sim_time, last_ack, running
             self.outbox.begin_frame(last_acked, sim_time)
+            self.inbox.take([], last_acked)  # (as each frame's take: what is older is stale)
         if resends:
             self._master_heard = time.monotonic()
-        q.note_rejected()
+        q.note_counts()
         if datagram is not None:
             q.feed(datagram, sender)
         return acked
 
     def quiet_core_rejected(self) -> dict[str, int]:
         """Clocks the quiet-frame core dropped, by reason (counted in the bus's too)."""
-        return dict(self._quiet.core.rejected()) if self._quiet is not None else {}
+        if self._quiet is None:
+            return {}
+        return {k: v for k, v in self._quiet.core.counts().items() if k != "ok"}
 
     # -- loops -------------------------------------------------------------
     def _send_ack(self, frame: int, sim_time_ns: int, error: str) -> None:

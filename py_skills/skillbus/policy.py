@@ -99,6 +99,14 @@ class Policy:
 
     __call__ = allows
 
+    def text(self) -> str:
+        """The rules in the file's format, in order (for the C++ reader of the same rules).
+
+        >>> Policy.parse("# who\\nSB_A* b a  # x\\n* *\\n").text()
+        'SB_A* a b\\n* *\\n'
+        """
+        return "".join(f"{r.pattern} {' '.join(sorted(r.identities))}\n" for r in self.rules)
+
 
 def from_env() -> Policy | None:
     path = os.environ.get(POLICY_ENV)

@@ -10,40 +10,37 @@ else, which Python then handles on its usual path.
 
 It takes over only what it can do exactly as Python does: the udpm:// bus read on the
 caller's thread (skillbus.udpm), signed with the deployment's key or open. Elsewhere
-(dds://, a test's wrapping bus, the module not built, ``SKILLBUS_QUIET_FRAMES=0``)
+(dds://, a test's wrapping bus, the module not built, ``SKILLBUS_NATIVE=0``)
 ``for_bus`` answers None and the participant waits in Python.
 """
 
 from __future__ import annotations
 
 import logging
-import os
 from typing import Any
 
+from skillbus import native
+from skillbus.auth import NativeOpener
 from skillbus.bus import AuthenticatedBus, Bus, LcmBus
 
 log = logging.getLogger("lockstep")
-
-ENV = "SKILLBUS_QUIET_FRAMES"
-
-
-def _native() -> Any:
-    try:
-        import skillbus_native  # built by CMake into the build tree (common/python)
-    except ImportError as e:
-        log.info("quiet lockstep frames go through Python: skillbus_native is not built (%s; make build)", e)
-        return None
-    return skillbus_native
 
 
 class QuietFrames:
     """The native core for one participant on one bus, and the way back into the bus for
     the datagrams it returns."""
 
-    def __init__(self, core: Any, lcm_bus: LcmBus, auth_bus: AuthenticatedBus | None, clock_channel: str) -> None:
+    def __init__(self, core: Any, lcm_bus: LcmBus, auth_bus: AuthenticatedBus | None, clock_channel: str,
+                 fd: int) -> None:
         self.core, self._lcm, self._auth = core, lcm_bus, auth_bus
-        self._clock_channel = clock_channel
-        self._rejected: dict[str, int] = {}
+        self._clock_channel, self._fd = clock_channel, fd
+        self._counts: dict[str, int] = {}
+        self._lost_sends = 0
+
+    def usable(self) -> bool:
+        """Still the bus it was made for: the same one socket read, and the participant
+        the only one here hearing the clock (the core consumes the clocks it acks)."""
+        return self._lcm.lane0_socket() == self._fd and self._lcm.subscribers(self._clock_channel) == 1
 
     def set_subscribed(self, channels: set[str]) -> None:
         self.core.set_subscribed(sorted(channels))
@@ -52,23 +49,26 @@ class QuietFrames:
         """A datagram the core returned, to the bus's handlers (verified when signed)."""
         (self._auth or self._lcm).feed_datagram(datagram, sender)
 
-    def note_rejected(self) -> None:
-        """Clocks the core dropped (forged, stale, replayed, forbidden), counted with the
-        bus's own."""
+    def note_counts(self) -> None:
+        """What the core verified, dropped (forged, stale, replayed, forbidden clocks) and
+        could not send, counted and logged with the bus's own."""
+        lost = self.core.lost_sends()
+        if lost > self._lost_sends:
+            self._lcm.lost_sends += lost - self._lost_sends
+            self._lost_sends = lost
+            log.warning("sending on SB_LOCKSTEP_ACK failed: ack lost (%d in all from the quiet-frame core)", lost)
         if self._auth is None:
             return
-        for reason, total in self.core.rejected().items():
-            new = total - self._rejected.get(reason, 0)
+        for what, total in self.core.counts().items():
+            new = total - self._counts.get(what, 0)
             if new > 0:
-                self._auth.note_rejected(reason, self._clock_channel, new)
-                self._rejected[reason] = total
+                self._counts[what] = total
+                self._auth.note_verified(what, self._clock_channel, new)
 
 
 def for_bus(bus: Bus, name: str, clock_channel: str, ack_channel: str) -> QuietFrames | None:
     """The quiet-frame core for participant `name` on `bus`, or None where it cannot act
     exactly as Python would (see the module's doc)."""
-    if os.environ.get(ENV, "1") == "0":
-        return None
     auth_bus = bus if type(bus) is AuthenticatedBus else None
     lcm_bus = auth_bus.inner if auth_bus is not None else bus
     if type(lcm_bus) is not LcmBus:
@@ -76,20 +76,19 @@ def for_bus(bus: Bus, name: str, clock_channel: str, ack_channel: str) -> QuietF
     fd = lcm_bus.lane0_socket()
     if fd is None:
         return None
-    native = _native()
-    if native is None:
+    lib = native.module()
+    if lib is None:
         return None
-    keys: list[bytes] = []
-    identity, policy_text = "", ""
+    opener, key, identity = None, None, b""
     if auth_bus is not None:
-        keys, identity = auth_bus.keys, auth_bus.identity
-        rules = auth_bus._rules
-        if rules is not None:
-            policy_text = "\n".join(f"{r.pattern} {' '.join(sorted(r.identities))}" for r in rules.rules) or "#"
+        if not isinstance(auth_bus._opener, NativeOpener) or auth_bus.refused(ack_channel):
+            return None  # (a rule only Python can run; acks the policy forbids: Python names why)
+        opener, key = auth_bus._opener.core, auth_bus.keys[0]
+        identity = auth_bus.identity.encode("utf-8", "surrogateescape")
     try:
-        core = native.QuietFrames(fd, clock_channel, ack_channel, lcm_bus.lane1_url, name, keys, identity,
-                                  policy_text)
-    except RuntimeError as e:
+        core = lib.QuietFrames(fd, clock_channel, ack_channel, lcm_bus.lane1_url, name, opener, key, identity)
+    except (RuntimeError, ValueError, UnicodeError) as e:
         log.info("quiet lockstep frames go through Python: %s", e)
         return None
-    return QuietFrames(core, lcm_bus, auth_bus, clock_channel)
+    q = QuietFrames(core, lcm_bus, auth_bus, clock_channel, fd)
+    return q if q.usable() else None

@@ -1,7 +1,8 @@
 """Forges lockstep clocks inside a test's sandbox (test_quiet_frames.py).
 
-    clock_forger.py unsigned MASTER NAMES SECONDS   clocks for frames 1.. listing NAMES,
-                                                    from MASTER, without a trailer
+    clock_forger.py unsigned MASTER NAMES SECONDS   for every genuine clock heard, clocks
+                                                    for its frame and the next, listing
+                                                    NAMES, from MASTER, without a trailer
     clock_forger.py wrong-key MASTER NAMES SECONDS  the same, signed with a key of its own
     clock_forger.py replay MASTER NAMES SECONDS     every genuine clock heard, sent again
                                                     as it was on the wire
@@ -11,6 +12,7 @@ Each runs for SECONDS, then prints one JSON line: {"sent": N}.
 
 from __future__ import annotations
 
+import collections
 import json
 import sys
 import tempfile
@@ -19,6 +21,7 @@ from pathlib import Path
 
 from skillbus import auth
 from skillbus.bus import channel, open_raw_bus
+from skillbus.lockstep_wire import decode_clock
 from skillbus.msgs import header_t, lockstep_clock_t
 
 
@@ -51,17 +54,35 @@ def main() -> int:
             bus.handle(0.01)
             heard.clear()
     else:
+        # A watcher of the bus: for every genuine clock heard, a forged one for the same
+        # frame (what a resend would be) and for the next (what the next clock would be).
         sealer = None
         if mode == "wrong-key":
             path = auth.create_key_file(Path(tempfile.mkdtemp()) / "other.key")
             sealer = auth.Sealer(auth.load_keys(path)[0], master)
-        frame = 1
+        frames: list[int] = []
+        mine: collections.Counter[bytes] = collections.Counter()  # (what it sent comes back to it)
+
+        def heard(_c: str, data: bytes) -> None:
+            if mine[bytes(data)] > 0:
+                mine[bytes(data)] -= 1
+                return
+            try:
+                frames.append(decode_clock(auth.strip(data)).header.frame)
+            except ValueError:
+                pass  # (a forged one of its own, cut by strip)
+
+        bus.subscribe(ch, heard)
         while time.monotonic() < end:
-            data = clock(master, names, frame)
-            bus.publish(ch, sealer.seal(ch, data) if sealer else data)
-            sent += 1
-            frame = frame % 3000 + 1
-            time.sleep(0.0005)
+            bus.handle(0.01)
+            for f in frames:
+                for forged in (f, f + 1):
+                    data = clock(master, names, forged)
+                    data = sealer.seal(ch, data) if sealer else data
+                    mine[data] += 1
+                    bus.publish(ch, data)
+                    sent += 1
+            frames.clear()
     print(json.dumps({"sent": sent}), flush=True)
     return 0
 

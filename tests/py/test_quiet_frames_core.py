@@ -8,10 +8,11 @@ import socket
 import pytest
 
 import skillbus_native
-from skillbus import auth, quiet_frames
-from skillbus.bus import DropEveryNthBus, LcmBus
+from skillbus import auth, native, quiet_frames
+from skillbus.bus import AuthenticatedBus, DropEveryNthBus, LcmBus
 from skillbus.lockstep_wire import AckEncoder
 from skillbus.msgs import channel_count_t, header_t, lockstep_clock_t
+from skillbus.policy import Policy
 
 CLOCK, ACK, NAME = "SB_LOCKSTEP_CLOCK", "SB_LOCKSTEP_ACK", "p1"
 KEY = bytes(range(32))
@@ -42,13 +43,15 @@ def datagram(channel: str, payload: bytes) -> bytes:
 class Rig:
     """A core on a loopback socket, and Python's participant state around it."""
 
-    def __init__(self, keys=(), policy=""):
+    def __init__(self, keys=()):
         self.rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.rx.bind(("127.0.0.1", 0))
         self.rx.setblocking(False)
         self.tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.core = skillbus_native.QuietFrames(self.rx.fileno(), CLOCK, ACK, "memq://", NAME, list(keys),
-                                                "tester", policy)
+        # The bus's opener, shared with the core (as skillbus.quiet_frames shares it).
+        self.opener = skillbus_native.Opener(list(keys), None) if keys else None
+        self.core = skillbus_native.QuietFrames(self.rx.fileno(), CLOCK, ACK, "memq://", NAME, self.opener,
+                                                keys[0] if keys else None, b"tester")
         self.core.set_subscribed(["SB_HEARD"])
         self.sealer = auth.Sealer(KEY, "clock") if keys else None
         self.last_acked, self.sim_time, self.last_ack, self.running = 0, 0, b"ack0", bytes(32)
@@ -114,6 +117,7 @@ def test_a_clock_with_work_or_anything_odd_goes_to_python_untouched(rig, why, pa
     assert d is not None, why
     assert d[:4] == b"LC02" and d[8:8 + len(CLOCK)] == CLOCK.encode() and sender[0] == "127.0.0.1"
     opened = auth.Opener([KEY]).open(CLOCK, d[9 + len(CLOCK):]).payload if rig.sealer else d[9 + len(CLOCK):]
+    assert rig.core.counts().get("ok", 0) == 0  # (not the core's to verify: Python verifies it once)
     assert opened == payload, why
 
 
@@ -129,13 +133,14 @@ def test_other_channels_and_fragments_go_to_python_in_order(rig):
     assert d[:4] == b"LC03"
 
 
-def test_a_resent_clock_is_answered_with_the_last_ack_and_an_old_one_ignored(rig):
+def test_a_resent_clock_is_answered_with_the_last_ack_and_an_old_one_left_to_python(rig):
     rig.send(CLOCK, clock(1))
     assert rig.wait()[2] == 1
     rig.send(CLOCK, clock(1))  # the master did not get it: resent
-    rig.send(CLOCK, clock(0))
+    rig.send(CLOCK, clock(0))  # older still: Python verifies it (and ignores it)
     d, _, acked, resends = rig.wait(0.1)
-    assert d is None and acked == 0 and resends == 1 and rig.last_acked == 1
+    assert acked == 0 and resends == 1 and rig.last_acked == 1
+    assert d is not None and b"SB_LOCKSTEP_CLOCK\0" in d
 
 
 def test_the_wait_ends_at_its_timeout(rig):
@@ -154,15 +159,74 @@ def test_forged_and_replayed_clocks_are_dropped_and_counted():
         genuine = datagram(CLOCK, r.sealer.seal(CLOCK, clock(1)))
         r.tx.sendto(genuine, r.rx.getsockname())
         r.tx.sendto(genuine, r.rx.getsockname())  # replayed
-        acked = 0
+        acked, to_python = 0, []
         for _ in range(5):
             d, _, n, _ = r.wait(0.1)
-            assert d is None
+            if d is not None:
+                to_python.append(d)
             acked += n
-        assert acked == 1
-        assert r.core.rejected() == {"unsigned": 1, "bad_mac": 1, "replayed": 1}
+        assert acked == 1 and to_python == [datagram(CLOCK, clock(1))]
+        # The unsigned one Python drops (it is not the core's to verify: see the next test).
+        assert r.core.counts() == {"ok": 1, "bad_mac": 1, "replayed": 1}
     finally:
         r.close()
+
+
+def test_what_python_verified_is_a_replay_to_the_core_and_the_reverse():
+    r = Rig(keys=[KEY])
+    try:
+        seen_by_python = r.sealer.seal(CLOCK, clock(1))
+        assert r.opener.open(CLOCK, seen_by_python)[0]  # Python's path took it (a frame with work)
+        r.tx.sendto(datagram(CLOCK, seen_by_python), r.rx.getsockname())  # replayed, a quiet frame now
+        d, _, acked, _ = r.wait(0.1)
+        assert d is None and acked == 0 and r.core.counts() == {"ok": 0, "replayed": 1}
+        acked_by_core = r.sealer.seal(CLOCK, clock(1))
+        r.tx.sendto(datagram(CLOCK, acked_by_core), r.rx.getsockname())
+        assert r.wait()[2] == 1
+        ok, reason, _, _ = r.opener.open(CLOCK, acked_by_core)
+        assert not ok and reason == "replayed"
+        # An unsigned clock the core leaves to Python, which counts it.
+        r.tx.sendto(datagram(CLOCK, clock(2)), r.rx.getsockname())
+        d, _, acked, _ = r.wait()
+        assert d is not None and acked == 0
+    finally:
+        r.close()
+
+
+def test_a_flood_of_forged_clocks_does_not_hold_the_wait_past_its_timeout():
+    import threading
+    import time
+    r = Rig(keys=[KEY])
+    stop = threading.Event()
+    forger = auth.Sealer(bytes(32), "clock")
+    forged = datagram(CLOCK, forger.seal(CLOCK, clock(1)))  # a quiet frame's clock: the core verifies it
+
+    def flood():
+        while not stop.is_set():
+            r.tx.sendto(forged, r.rx.getsockname())
+
+    t = threading.Thread(target=flood)
+    t.start()
+    try:
+        time.sleep(0.05)
+        start = time.monotonic()
+        assert r.wait(0.05)[:3] == (None, None, 0)
+        assert time.monotonic() - start < 0.5
+        assert r.core.counts()["bad_mac"] > 0
+    finally:
+        stop.set()
+        t.join(5)
+        r.close()
+
+
+def test_a_socket_error_is_an_oserror_not_a_timeout():
+    r = Rig()
+    r.rx.close()  # (the fd the core reads is gone)
+    try:
+        with pytest.raises(OSError):
+            r.wait(0.05)
+    finally:
+        r.tx.close()
 
 
 @pytest.mark.parametrize("size", [16, 32, 64, 65, 100, 200])
@@ -174,29 +238,53 @@ def test_cpp_verifies_what_python_signs_with_keys_of_any_length(size):
     try:
         r.sealer = auth.Sealer(key, "clock")
         r.send(CLOCK, clock(1))
-        assert r.wait()[2] == 1 and r.core.rejected() == {}
+        assert r.wait()[2] == 1 and r.core.counts() == {"ok": 1}
         r.sealer = auth.Sealer(key[:-1] + bytes([key[-1] ^ 1]), "clock")  # one bit off
         r.send(CLOCK, clock(2))
-        assert r.wait(0.05)[2] == 0 and r.core.rejected() == {"bad_mac": 1}
+        assert r.wait(0.05)[2] == 0 and r.core.counts() == {"ok": 1, "bad_mac": 1}
     finally:
         r.close()
 
 
-def test_a_policy_that_forbids_its_acks_leaves_the_participant_to_python():
+def test_bad_arguments_are_refused():
     rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
-        with pytest.raises(RuntimeError, match="does not let tester send on SB_LOCKSTEP_ACK"):
-            skillbus_native.QuietFrames(rx.fileno(), CLOCK, ACK, "memq://", NAME, [KEY], "tester",
-                                        "SB_LOCKSTEP_ACK someone_else\n")
         with pytest.raises(RuntimeError, match="no socket"):
-            skillbus_native.QuietFrames(-1, CLOCK, ACK, "memq://", NAME, [], "", "")
+            skillbus_native.QuietFrames(-1, CLOCK, ACK, "memq://", NAME, None, None, b"")
+        with pytest.raises(TypeError, match="a skillbus_native.Opener or None"):
+            skillbus_native.QuietFrames(rx.fileno(), CLOCK, ACK, "memq://", NAME, "opener", KEY, b"x")
+        core = skillbus_native.QuietFrames(rx.fileno(), CLOCK, ACK, "memq://", NAME, None, None, b"")
+        with pytest.raises(RuntimeError, match="initialised once"):
+            core.__init__(rx.fileno(), CLOCK, ACK, "memq://", NAME, None, None, b"")
     finally:
         rx.close()
 
 
-def test_only_a_bus_read_on_the_callers_thread_gets_the_core(monkeypatch):
-    memq = LcmBus("memq://")  # LCM's own dispatch, no socket of ours
-    assert quiet_frames.for_bus(memq, NAME, CLOCK, ACK) is None
-    assert quiet_frames.for_bus(DropEveryNthBus(memq, 3), NAME, CLOCK, ACK) is None  # a test's wrapper
-    monkeypatch.setenv(quiet_frames.ENV, "0")
-    assert quiet_frames.for_bus(memq, NAME, CLOCK, ACK) is None
+@pytest.fixture
+def socket_bus(monkeypatch):
+    """A memq:// LcmBus that reports a socket of its own, as a udpm:// one read on the
+    caller's thread does (a udpm:// bus would join a multicast group on this host)."""
+    rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    monkeypatch.setattr(LcmBus, "lane0_socket", lambda self: rx.fileno())
+    bus = LcmBus("memq://")
+    bus._by_channel[CLOCK] = {1: lambda c, d: None}  # (the participant's clock subscription)
+    yield bus
+    rx.close()
+
+
+def test_a_bus_read_on_the_callers_thread_gets_the_core_and_nothing_else(socket_bus, monkeypatch):
+    assert quiet_frames.for_bus(socket_bus, NAME, CLOCK, ACK) is not None
+    signed = AuthenticatedBus(socket_bus, [KEY], "tester", Policy.parse("* *\n"))
+    assert quiet_frames.for_bus(signed, NAME, CLOCK, ACK) is not None
+    # Not: a test's wrapping bus; a policy that forbids its acks (Python names why at the
+    # first ack); a rule only Python can run; a second subscriber to the clock; switched off.
+    assert quiet_frames.for_bus(DropEveryNthBus(socket_bus, 3), NAME, CLOCK, ACK) is None
+    assert quiet_frames.for_bus(AuthenticatedBus(socket_bus, [KEY], "tester", Policy.parse("SB_* other\n")),
+                                NAME, CLOCK, ACK) is None
+    assert quiet_frames.for_bus(AuthenticatedBus(socket_bus, [KEY], "tester", lambda i, c: True),
+                                NAME, CLOCK, ACK) is None
+    socket_bus._by_channel[CLOCK][2] = lambda c, d: None
+    assert quiet_frames.for_bus(socket_bus, NAME, CLOCK, ACK) is None
+    del socket_bus._by_channel[CLOCK][2]
+    monkeypatch.setenv(native.ENV, "0")
+    assert quiet_frames.for_bus(socket_bus, NAME, CLOCK, ACK) is None

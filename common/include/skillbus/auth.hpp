@@ -67,6 +67,10 @@ class Sealer {
   uint64_t counter_ = 0;
 };
 
+// The size of the payload in front of a well-formed trailer, unverified: for deciding who
+// is to verify and act on a message, never for acting on it. False without one.
+bool unverified_payload_size(const uint8_t* data, size_t size, size_t& payload_size);
+
 enum class Reason { Unsigned, BadMac, Stale, Replayed, Forbidden };
 const char* reason_name(Reason r);
 
