@@ -43,6 +43,7 @@ std::vector<ScriptStep> load_script(const std::string& path) {
           Waypoint w;
           w.t_ns = static_cast<int64_t>(std::llround(p.at(0).get<double>() * 1e9));
           w.q = p.at(1).get<std::vector<double>>();
+          if (p.size() > 2) w.qd = p.at(2).get<std::vector<double>>();  // [t, q, qd]: velocities given
           st.arm.points.push_back(std::move(w));
         }
         out.push_back(std::move(st));

@@ -206,7 +206,13 @@ void SimServer::record(size_t robot, const ArmCommand* arm, const GripperCommand
   if (!bus_name.empty()) step["robot"] = bus_name;
   if (arm) {
     nlohmann::json pts = nlohmann::json::array();
-    for (const auto& w : arm->points) pts.push_back({static_cast<double>(w.t_ns) * 1e-9, w.q});
+    // [t, q], or [t, q, qd] when the command gave velocities (the follower derives them
+    // otherwise): a replay must follow the same trajectory.
+    for (const auto& w : arm->points) {
+      nlohmann::json pt = {static_cast<double>(w.t_ns) * 1e-9, w.q};
+      if (!w.qd.empty()) pt.push_back(w.qd);
+      pts.push_back(std::move(pt));
+    }
     step["arm"] = {{"id", arm->id}, {"joints", arm->joints}, {"points", pts}};
   } else if (attach) {
     step["attach"] = {{"id", attach->id}, {"attach", attach->attach}, {"object", attach->object}};

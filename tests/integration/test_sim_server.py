@@ -247,6 +247,35 @@ def test_pipelined_stepping_and_its_recorded_commands_replay_to_the_same_physics
     assert last_json(alone.stdout())["state_digest"] == r["sim"]["state_digest"]
 
 
+def test_recorded_commands_with_velocities_replay_to_the_same_physics(sandbox, tmp_path):
+    """A trajectory that gives its velocities (the motion service's do) is recorded with
+    them: the follower would derive others, and the replay would follow another path (the
+    demo's recordings replayed to another state when the velocities were dropped)."""
+    pts = [[1.0, [0.4, 0.0, 1.2, 0.3, 1.2, -0.4], [0.0] * 6],  # (a stop at each point: not what is derived)
+           [2.0, [0.8, -0.2, 0.9, 0.6, 1.0, 0.4], [0.0] * 6],
+           [3.0, [0.2, 0.1, 1.4, -0.2, 1.5, 0.0], [0.0] * 6]]
+    recorded = tmp_path / "applied.json"
+    r = run_script_session(sandbox, {"record_every": 10, "steps": [arm(0.5, "sweep", pts)]}, 4.0, tmp_path / "run",
+                           sim_args=("--pipeline", "--record-script", str(recorded)))
+    assert r["sim"]["ok"] and r["sim"]["commands_accepted"] == 1
+    (step,) = json.loads(recorded.read_text())["steps"]
+    assert [p[2] for p in step["arm"]["points"]] == [[0.0] * 6] * 3
+    alone = sandbox.start("alone", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                    "--script", str(recorded), "--duration-s", "4"])
+    assert sandbox.wait(alone, 120) == 0
+    assert last_json(alone.stdout())["state_digest"] == r["sim"]["state_digest"]
+    # Without the velocities the same positions make another trajectory: what the recording
+    # would have replayed before.
+    derived = tmp_path / "derived.json"
+    for p in step["arm"]["points"]:
+        del p[2]
+    derived.write_text(json.dumps({"steps": [step]}))
+    other = sandbox.start("derived", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                      "--script", str(derived), "--duration-s", "4"])
+    assert sandbox.wait(other, 120) == 0
+    assert last_json(other.stdout())["state_digest"] != r["sim"]["state_digest"]
+
+
 def test_an_ack_timeout_for_someone_who_is_no_participant_stops_the_start_naming_it(sandbox):
     # Before, the lockstep master refused it only when the session began: an uncaught
     # exception that terminated sim_server.

@@ -48,14 +48,15 @@ def objects_channel() -> str:
     return channel("SB_ROBOT_OBJECTS")
 
 
-def traj_point(t: float, positions: Sequence[float]) -> joint_traj_point_t:
-    """A trajectory point due `t` seconds after the command's start (no velocities: the
+def traj_point(t: float, positions: Sequence[float], velocities: Sequence[float] = ()) -> joint_traj_point_t:
+    """A trajectory point due `t` seconds after the command's start (without velocities the
     follower derives them)."""
     p = joint_traj_point_t()
     p.time_from_start_ns = int(round(t * 1e9))
     p.positions = [float(x) for x in positions]
     p.num_positions = len(p.positions)
-    p.velocities, p.num_velocities = [], 0
+    p.velocities = [float(x) for x in velocities]
+    p.num_velocities = len(p.velocities)
     return p
 
 

@@ -99,8 +99,8 @@ class ScriptPlayer:
             step = self.steps.pop(0)
             if "arm" in step:
                 a = step["arm"]
-                self.p.publish(robot.arm_cmd_channel(), robot.arm_command(a.get("id", ""), a["joints"],
-                                                                          [(t, q) for t, q in a["points"]]))
+                points = [robot.traj_point(*p) for p in a["points"]]  # [t, q] or [t, q, qd]
+                self.p.publish(robot.arm_cmd_channel(), robot.arm_command(a.get("id", ""), a["joints"], points))
             if "gripper" in step:
                 g = step["gripper"]
                 self.p.publish(gripper_channel(), gripper_command(g.get("id", ""), g["width"], g.get("speed", 0.1),
