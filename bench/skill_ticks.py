@@ -70,10 +70,13 @@ def py_trees_figure() -> float:
 NO_KEY = {"SKILLBUS_KEY_FILE": "none"}
 
 
-def tick_round_trip(ticks: int, signed: bool) -> tuple[dict, dict]:
+def tick_round_trip(ticks: int, signed: bool, native: bool = True) -> tuple[dict, dict]:
     """The raw LCM round trip (LCM's Python module: no key) and the tick, with the
-    deployment's key (as the system runs) or without one (like for like with LCM)."""
+    deployment's key (as the system runs) or without one (like for like with LCM); with
+    `native` False the skill process signs and verifies in Python (SKILLBUS_NATIVE=0)."""
     env = {} if signed else dict(NO_KEY)
+    if not native:
+        env["SKILLBUS_NATIVE"] = "0"
     with Sandbox() as box:
         pong = box.start("pong", [sys.executable, HERE / "pingpong.py", "lcm", "pong"], env=NO_KEY)
         ping = box.start("ping", [sys.executable, HERE / "pingpong.py", "lcm", "ping", str(ticks), "200"], env=NO_KEY)
@@ -178,8 +181,11 @@ def main() -> int:
     print(f"    py_trees               {c:10.1f}   ratio py_trees/ours {c / a:6.1f}  (target >= 50)")
     raw, bare = tick_round_trip(2000, signed=False)
     _, rtt = tick_round_trip(2000, signed=True)
+    _, py_auth = tick_round_trip(2000, signed=True, native=False)
     print("(b) one Python primitive tick through the manager, us (median / p99)")
     print(f"    manager -> skill process -> manager, signed (as deployed)  {rtt['median_us']:8.1f} / {rtt['p99_us']:8.1f}")
+    print(f"    the same, signed and verified in Python (SKILLBUS_NATIVE=0) {py_auth['median_us']:7.1f} / "
+          f"{py_auth['p99_us']:8.1f}")
     print(f"    the same without a key                                    {bare['median_us']:8.1f} / {bare['p99_us']:8.1f}")
     print(f"    raw Python LCM round trip (200 B; LCM signs nothing)       {raw['median_us']:8.1f} / {raw['p99_us']:8.1f}")
     for name, t in (("without a key", bare), ("signed", rtt)):
