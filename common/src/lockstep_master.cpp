@@ -59,6 +59,8 @@ LockstepMaster::LockstepMaster(Bus& bus, MasterConfig config)
     const auto it = cfg_.ack_timeout_of.find(p);
     ack_timeouts_.push_back(it == cfg_.ack_timeout_of.end() ? cfg_.ack_timeout : it->second);
   }
+  alive_at_.assign(expected_.size(), {});
+  pid_of_.assign(expected_.size(), 0);
   subs_.push_back(bus_.subscribe(join_channel(), [this](const std::string& ch, const uint8_t* d, size_t n) {
     on_join(d, n, ch);
   }));
@@ -117,6 +119,14 @@ void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) 
   }
   if (joined_.insert(j.participant).second)
     SB_INFO(kLog, "participant '" << j.participant << "' (" << j.kind << ", pid " << j.pid << ") joined");
+  // While a frame's acks are awaited, a join from the process that joined is a participant
+  // at work on the frame that heard its clock again: alive, so its ack timeout runs from
+  // now. A join from another process of that name is a restart (the one that joined may be
+  // dead): no sign of life.
+  const auto i = static_cast<size_t>(std::lower_bound(expected_.begin(), expected_.end(), j.participant) -
+                                     expected_.begin());
+  if (pid_of_[i] == 0) pid_of_[i] = j.pid;
+  if (awaiting_frame_ >= 0 && j.pid == pid_of_[i]) alive_at_[i] = steady::now();
 }
 
 void LockstepMaster::on_ack(const uint8_t* d, size_t n, const std::string& ch) {
@@ -205,8 +215,9 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
     std::chrono::milliseconds late_after{0};
     for (size_t i = 0; i < expected_.size(); ++i)
       if (!acks_.count(expected_[i])) {
-        deadline = std::min(deadline, start + ack_timeouts_[i]);
-        if (now - start >= ack_timeouts_[i]) {
+        const auto since = std::max(start, alive_at_[i]);  // the clock, or its last sign of life
+        deadline = std::min(deadline, since + ack_timeouts_[i]);
+        if (now - since >= ack_timeouts_[i]) {
           late.push_back(expected_[i]);
           late_after = ack_timeouts_[i];
         }

@@ -81,6 +81,13 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());  // our ack was lost, or not yet counted
     return;
   }
+  if (c.header.frame == current_ && current_ == last_acked_ + 1) {
+    // The master resends the clock of the frame this participant works on (a long one:
+    // an expansion, a plan): it is told so by a join, a sign of life, or it would take
+    // the participant for dead after its ack timeout.
+    if (!join_.empty()) bus_.publish(join_channel(), join_.data(), join_.size());
+    return;
+  }
   if (c.header.frame <= last_acked_ || c.header.frame == current_) return;  // resend of the frame in hand
   if (c.header.frame != last_acked_ + 1)
     return bad_.record(ch, "a clock for frame " + std::to_string(c.header.frame) + " while frame " +
@@ -129,6 +136,7 @@ RunResult LockstepParticipant::run_lockstep() {
   j.participant = cfg_.name;
   j.kind = cfg_.kind;
   j.pid = ::getpid();
+  join_ = encode_msg(j);
   auto last_event = steady::now();
   auto next_join = last_event;
   while (!have_clock_ && !stop_seen_) {

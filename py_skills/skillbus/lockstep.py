@@ -224,6 +224,7 @@ class LockstepParticipant:
         self.after_frame: list[Callable[[int], None]] = []  # run after each frame's ack
         self._quiet: QuietFrames | None = None  # (skillbus.quiet_frames; made at the first wait)
         self._quiet_made = False
+        self._join_bytes = b""  # our join, sent again as a sign of life while a frame takes long
         self.quiet_frames = 0  # frames acked by that core
         if not wall_clock:
             self._subs.append(bus.subscribe(clock_channel(), self._on_clock))
@@ -318,6 +319,13 @@ class LockstepParticipant:
             self._master_heard = time.monotonic()
             self.bus.publish(self._ack_channel, self._last_ack)  # our ack was lost, or not yet counted
             return
+        if frame == self._current and frame == self._last_acked + 1:
+            # The master resends the clock of the frame this participant works on (a long
+            # one: a synchronous call that dispatches the bus): a join tells it we are
+            # alive, or it would take us for dead after its ack timeout.
+            if self._join_bytes:
+                self.bus.publish(self._join_channel, self._join_bytes)
+            return
         if frame <= self._last_acked or frame == self._current:
             return  # a resend of the clock of the frame we are working on
         if frame != self._last_acked + 1:
@@ -403,7 +411,7 @@ class LockstepParticipant:
         r = RunResult()
         join = lockstep_join_t()
         join.participant, join.kind, join.pid = self.name, self.kind, os.getpid()
-        join_bytes = join.encode()
+        join_bytes = self._join_bytes = join.encode()
         last_event = time.monotonic()
         next_join = last_event
         while self._next_clock is None and not self._stop_seen:

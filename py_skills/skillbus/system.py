@@ -19,11 +19,6 @@ from skillbus import paths
 
 PARTICIPANTS = ["wm", "skill_mgr", "skills", "gripper"]
 MAP_ACK_TIMEOUT_MS = 60_000  # how long the physics waits for the map's ack of a frame
-# A manager waits in its frame for a compound's expansion, up to its --expand-timeout-ms
-# (TaskPlan plans then: seconds, more on a busy machine); the physics waits that long for
-# its ack, and a little more, before it declares the manager dead.
-EXPAND_TIMEOUT_MS = 30_000
-MANAGER_ACK_TIMEOUT_MS = EXPAND_TIMEOUT_MS + 5_000
 TASK = ("ClearTable Gripper=skiros:Gripper-7 Arm=skiros:Arm-8 Table=skiros:Table-1 Bin=skiros:Bin-5")
 LIBRARIES = ["skillbus.skills.gripper", "skillbus.skills.manipulation", "skillbus.skills.planning"]
 
@@ -91,7 +86,6 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
     if lockstep:
         # With perception the occupancy map is a participant (its answers as of a frame).
         sim += ["--participants", ",".join(PARTICIPANTS + (["map"] if perception else [])), "--join-timeout-ms", "60000"]
-        sim += ["--ack-timeout-ms-of", f"skill_mgr={MANAGER_ACK_TIMEOUT_MS}"]
         if perception:
             # The map inserts a whole depth capture in one frame: about 2 s on an idle 2-core
             # machine, several on a busy one. The others are still declared dead after 5 s.
@@ -100,8 +94,7 @@ def programs(run_dir: Path, scene: Path | None = None, task: str | None = TASK, 
         sim += ["--wall-clock"]
     sim += list(extra_sim)
     clock = [] if lockstep else ["--wall-clock"]
-    mgr = [str(paths.binary("skill_mgr")), *clock, "--tick-timeout-ms", "2000", "--expand-timeout-ms",
-           str(EXPAND_TIMEOUT_MS)]
+    mgr = [str(paths.binary("skill_mgr")), *clock, "--tick-timeout-ms", "2000"]
     if task:
         mgr += ["--start", task]
         if lockstep and stop_after_task:  # the task's end ends the session (10 frames of grace), through lockstep
@@ -158,8 +151,6 @@ def robots_programs(run_dir: Path, robots: int = 2, lockstep: bool = True, stop_
     sim = [str(paths.binary("sim_server")), "--scene", str(scene), "--frame-ms", str(frame_ms)]
     if lockstep:
         sim += ["--pipeline", "--participants", ",".join(participants), "--join-timeout-ms", "60000"]
-        for r in names:
-            sim += ["--ack-timeout-ms-of", f"{r}_skill_mgr={MANAGER_ACK_TIMEOUT_MS}"]
         if stop_after_task:
             sim += ["--end-when-asked-by", ",".join(f"{r}_skill_mgr" for r in names)]
     else:
@@ -176,7 +167,7 @@ def robots_programs(run_dir: Path, robots: int = 2, lockstep: bool = True, stop_
         task = (f"ClearTable Gripper={ids[f'{r}_gripper']} Arm={ids[f'{r}_arm']} Table={ids[table]} "
                 f"Bin={ids[bin_]}")
         mgr = [str(paths.binary("skill_mgr")), *clock, "--robot", r, "--name", f"{r}_skill_mgr",
-               "--tick-timeout-ms", "2000", "--expand-timeout-ms", str(EXPAND_TIMEOUT_MS), "--start", task]
+               "--tick-timeout-ms", "2000", "--start", task]
         if lockstep and stop_after_task:
             mgr += ["--end-session-after-task", "10"]
         skills = [*py, "skills-process", "--robot", r, "--name", f"{r}_skills", "--world-model", "--arm",

@@ -200,6 +200,29 @@ def test_a_participant_allowed_longer_frames_is_waited_for_and_the_others_wait_w
         assert last_json(p.stdout())["frames"] == 60
 
 
+@pytest.mark.parametrize("slow", ["py1", "cpp1"])
+@pytest.mark.parametrize("at_frame", [0, 20])
+def test_a_participant_at_work_on_a_long_frame_says_it_is_alive_and_is_waited_for(sandbox, binary, tmp_path, slow,
+                                                                                   at_frame):
+    # One participant spends 3 s over a frame while it dispatches the bus (a skill manager
+    # waiting for an expansion that plans, at its first tick: frame 0), with no allowance:
+    # the master's ack timeout is 1 s. Hearing the clock of that frame again, it sends a
+    # join, a sign of life, and the master waits on. Before, the session ended with "no
+    # ack for frame 0 from participant(s) skill_mgr within 5.0 s" (a TaskPlan test under load).
+    with Sandbox(log_dir=tmp_path / "clean") as box:
+        clean = run_session(box, frames=60, n_python=2, n_cpp=1, timeout=60)
+    slow_args = ["--slow-at-frame", str(at_frame), *(["--slow-s", "3"] if slow.startswith("py") else ["--slow-ms", "3000"])]
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=60, clock_args=["--ack-timeout-ms", "1000"],
+                         part_args={slow: slow_args})
+    assert sandbox.wait(clock, 60) == 0, clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 60 and s["wall_time_s"] >= 3.0, s
+    assert s["digest"] == clean["digest"]
+    for n, p in parts.items():
+        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
+        assert last_json(p.stdout())["frames"] == 60
+
+
 def test_a_participant_without_the_longer_allowance_is_still_declared_dead_in_its_timeout(sandbox, binary):
     clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=10_000_000,
                          clock_args=["--ack-timeout-ms", "1500", "--ack-timeout-ms-of", "py1=60000"])

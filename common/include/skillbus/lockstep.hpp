@@ -108,6 +108,10 @@ class LockstepMaster {
   Sha256 session_;
   Digest session_digest_{};
   std::vector<std::chrono::milliseconds> ack_timeouts_;  // per participant, in expected_'s order
+  // Per participant, in expected_'s order: its last sign of life while a frame's acks are
+  // awaited (a join sent while it works on the frame: it is alive, however long it takes).
+  std::vector<std::chrono::steady_clock::time_point> alive_at_;
+  std::vector<int64_t> pid_of_;  // the pid each joined with: a join from another is a restart, no sign of life
   bool stop_requested_ = false;
   std::string stop_reason_;
   int64_t end_at_ = -1;  // a participant asked to end after this frame (lockstep_end_t)
@@ -186,6 +190,7 @@ class LockstepParticipant {
   std::string stop_reason_;
   int64_t last_acked_ = -1;
   int64_t current_ = -1;  // the frame being worked on (its clock may be resent meanwhile)
+  Bytes join_;            // its join, sent again as a sign of life while it works on a frame
   Bytes last_ack_;
   Sha256 running_;
   Digest running_digest_{};
