@@ -16,6 +16,9 @@ bool bytes_of(PyObject* o, Bytes& out, const char* what);
 // `o` (str) as UTF-8 (surrogateescape) into `out`; false with a TypeError otherwise.
 bool utf8_of(PyObject* o, std::string& out, const char* what);
 
+// `type` made ready and added to `module` as `name`; false with a Python error set.
+bool add_type(PyObject* module, PyTypeObject& type, const char* name);
+
 struct SharedOpener;
 // The opener of a skillbus_native.Opener object; null for anything else.
 std::shared_ptr<SharedOpener> opener_of(PyObject* o);

@@ -177,16 +177,6 @@ PyMethodDef opener_methods[] = {
 PyTypeObject sealer_type = {PyVarObject_HEAD_INIT(nullptr, 0)};
 PyTypeObject opener_type = {PyVarObject_HEAD_INIT(nullptr, 0)};
 
-bool add_type(PyObject* module, PyTypeObject& type, const char* name) {
-  if (PyType_Ready(&type) < 0) return false;
-  Py_INCREF(&type);
-  if (PyModule_AddObject(module, name, reinterpret_cast<PyObject*>(&type)) < 0) {
-    Py_DECREF(&type);
-    return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 std::shared_ptr<SharedOpener> opener_of(PyObject* o) {

@@ -195,13 +195,7 @@ bool add_quiet_frames(PyObject* module) {
   quiet_type.tp_init = quiet_init;
   quiet_type.tp_dealloc = quiet_dealloc;
   quiet_type.tp_methods = quiet_methods;
-  if (PyType_Ready(&quiet_type) < 0) return false;
-  Py_INCREF(&quiet_type);
-  if (PyModule_AddObject(module, "QuietFrames", reinterpret_cast<PyObject*>(&quiet_type)) < 0) {
-    Py_DECREF(&quiet_type);
-    return false;
-  }
-  return true;
+  return add_type(module, quiet_type, "QuietFrames");
 }
 
 }  // namespace skillbus::native

@@ -34,6 +34,16 @@ bool utf8_of(PyObject* o, std::string& out, const char* what) {
   return true;
 }
 
+bool add_type(PyObject* module, PyTypeObject& type, const char* name) {
+  if (PyType_Ready(&type) < 0) return false;
+  Py_INCREF(&type);
+  if (PyModule_AddObject(module, name, reinterpret_cast<PyObject*>(&type)) < 0) {
+    Py_DECREF(&type);
+    return false;
+  }
+  return true;
+}
+
 }  // namespace skillbus::native
 
 namespace {

@@ -554,6 +554,12 @@ class AuthenticatedBus(Bus):
         """Messages dropped, by reason (skillbus.auth.REASONS); "ok" counts the good ones."""
         return self._opener.stats
 
+    @property
+    def native_opener(self):
+        """The skillbus_native.Opener this bus verifies with, or None when Python verifies
+        (skillbus.quiet_frames shares it: one replay window)."""
+        return getattr(self._opener, "core", None)
+
     def refused(self, channel: str) -> str:
         """Why this process may not send on `channel` under the policy ("" when it may): a
         program checks the channels it answers on at start, not at its first answer."""

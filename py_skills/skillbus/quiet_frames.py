@@ -20,7 +20,6 @@ import logging
 from typing import Any
 
 from skillbus import native
-from skillbus.auth import NativeOpener
 from skillbus.bus import AuthenticatedBus, Bus, LcmBus
 
 log = logging.getLogger("lockstep")
@@ -81,9 +80,9 @@ def for_bus(bus: Bus, name: str, clock_channel: str, ack_channel: str) -> QuietF
         return None
     opener, key, identity = None, None, b""
     if auth_bus is not None:
-        if not isinstance(auth_bus._opener, NativeOpener) or auth_bus.refused(ack_channel):
+        opener, key = auth_bus.native_opener, auth_bus.keys[0]
+        if opener is None or auth_bus.refused(ack_channel):
             return None  # (a rule only Python can run; acks the policy forbids: Python names why)
-        opener, key = auth_bus._opener.core, auth_bus.keys[0]
         identity = auth_bus.identity.encode("utf-8", "surrogateescape")
     try:
         core = lib.QuietFrames(fd, clock_channel, ack_channel, lcm_bus.lane1_url, name, opener, key, identity)

@@ -177,6 +177,16 @@ def test_a_slow_participant_is_waited_for_and_no_frame_is_skipped_or_repeated(sa
         assert r["frames"] == 100 and r["received"] == clean["participant_results"][n]["received"]
 
 
+def assert_the_clean_runs_60_frames_after_a_3_s_frame(sandbox, clock, parts, clean):
+    assert sandbox.wait(clock, 60) == 0, clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 60 and s["wall_time_s"] >= 3.0, s
+    assert s["digest"] == clean["digest"]
+    for n, p in parts.items():
+        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
+        assert last_json(p.stdout())["frames"] == 60
+
+
 @pytest.mark.parametrize("slow", ["py1", "cpp1"])
 def test_a_participant_allowed_longer_frames_is_waited_for_and_the_others_wait_with_it(sandbox, binary, tmp_path, slow):
     # One participant spends 3 s over frame 20 (the map server inserting a depth capture on
@@ -191,13 +201,7 @@ def test_a_participant_allowed_longer_frames_is_waited_for_and_the_others_wait_w
     clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=60,
                          clock_args=["--ack-timeout-ms", "1000", "--ack-timeout-ms-of", f"{slow}=20000"],
                          part_args={n: waiting[n] + (slow_args if n == slow else []) for n in waiting})
-    assert sandbox.wait(clock, 60) == 0, clock.stderr()[-2000:]
-    s = last_json(clock.stdout())
-    assert s["ok"] and s["frames"] == 60 and s["wall_time_s"] >= 3.0, s
-    assert s["digest"] == clean["digest"]
-    for n, p in parts.items():
-        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
-        assert last_json(p.stdout())["frames"] == 60
+    assert_the_clean_runs_60_frames_after_a_3_s_frame(sandbox, clock, parts, clean)
 
 
 @pytest.mark.parametrize("slow", ["py1", "cpp1"])
@@ -214,13 +218,7 @@ def test_a_participant_at_work_on_a_long_frame_says_it_is_alive_and_is_waited_fo
     slow_args = ["--slow-at-frame", str(at_frame), *(["--slow-s", "3"] if slow.startswith("py") else ["--slow-ms", "3000"])]
     clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=60, clock_args=["--ack-timeout-ms", "1000"],
                          part_args={slow: slow_args})
-    assert sandbox.wait(clock, 60) == 0, clock.stderr()[-2000:]
-    s = last_json(clock.stdout())
-    assert s["ok"] and s["frames"] == 60 and s["wall_time_s"] >= 3.0, s
-    assert s["digest"] == clean["digest"]
-    for n, p in parts.items():
-        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
-        assert last_json(p.stdout())["frames"] == 60
+    assert_the_clean_runs_60_frames_after_a_3_s_frame(sandbox, clock, parts, clean)
 
 
 def test_a_participant_without_the_longer_allowance_is_still_declared_dead_in_its_timeout(sandbox, binary):
