@@ -71,3 +71,18 @@ def test_frames_that_do_not_divide_the_tick_period_fail_the_session_naming_both(
     why = "the clock's frames of 30 ms do not divide the skill manager's tick period of 40 ms"
     assert why in clock.stdout() + clock.stderr(), clock.stdout() + clock.stderr()[-2000:]
     assert why in mgr.stderr(), mgr.stderr()[-2000:]
+
+
+def test_a_skill_process_joins_lockstep_once_its_libraries_warm_ups_ended(tmp_path):
+    # A library's warm-up (TaskPlan imports its planner, seconds of CPU) still running
+    # during frames took a core and the interpreter's lock from each: the demo ran 11x real
+    # time instead of 15x. The process now joins after it; its first tick sees it ended.
+    with Sandbox(log_dir=tmp_path / "warm") as box:
+        clock = box.start("clock", [paths.binary("sb_clock"), "--frames", "100", "--participants",
+                                    "skill_mgr,warm", "--join-timeout-ms", "30000"])
+        mgr = box.start("skill_mgr", [mgr_binary(), "--start", "Warmed"])
+        box.start("warm", [sys.executable, "-m", "skillbus.cli", "skills-process", "--lockstep", "--name", "warm",
+                           "--library", "lockstep_warm"], env={"PYTHONPATH": str(LIBS)})
+        assert box.wait(clock, 60) == 0, clock.stdout() + clock.stderr()[-2000:]
+        assert box.wait(mgr, 30) == 0, mgr.stderr()[-2000:]
+        assert last_json(mgr.stdout())["tasks"] == {"1": "Success: the warm-up had ended"}, mgr.stdout()[-2000:]

@@ -31,11 +31,16 @@ from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
 from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
+from skillbus.skill import warm_up
 from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
 from skillbus.validate import BadValue, Rejects, finite, integer, one_of
 from skillbus.world.convert import check_element_msg
 
 log = logging.getLogger("skills-process")
+# How long a skill process under lockstep waits for its libraries' warm-ups before joining
+# (the planner's import: 2.5 s idle, several under load; the demo's master waits 60 s for
+# joins, a master's default 10 s).
+WARM_UP_TIMEOUT_S = 20.0
 TICK_ACTIONS = (skill_tick_t.START, skill_tick_t.EXECUTE, skill_tick_t.PREEMPT, skill_tick_t.END)
 VALUE_TYPES = (skill_value_t.STRING, skill_value_t.INT, skill_value_t.FLOAT, skill_value_t.BOOL, skill_value_t.ELEMENT,
                skill_value_t.JSON)
@@ -457,6 +462,12 @@ def main(args) -> int:
         return 1
     log.info("registered %d skill(s) with the manager (%d refused)", len(proc.classes), len(reply.errors))
     if participant is not None:
+        # A library's warm-up (TaskPlan's planner import) would take a core and the
+        # interpreter's lock from every frame it overlaps: done before joining.
+        left = warm_up.wait(WARM_UP_TIMEOUT_S)
+        if left:
+            log.warning("joining lockstep with warm-up %s still running after %.0f s: frames will be slower "
+                        "until it ends", ", ".join(left), WARM_UP_TIMEOUT_S)
         # Under lockstep the process follows the frames (its world-model replica changes
         # only at frame boundaries); RPC ticks are answered while it waits for a clock.
         r = participant.run()

@@ -12,9 +12,7 @@ cannot be reached, or is malformed, fails PlanSteps at its start naming why.
 
 from __future__ import annotations
 
-import threading
-
-from skillbus.skill import ParamTypes, RetryOnFail, SerialStar, SkillBase, SkillDescription
+from skillbus.skill import ParamTypes, RetryOnFail, SerialStar, SkillBase, SkillDescription, warm_up
 
 GOAL_HELP = ("facts to reach, separated by commas: (skiros:contain skiros:Bin-5 skiros:Cube-2), "
              "(not (skiros:contain skiros:Gripper-7 skiros:Cube-4))")
@@ -75,14 +73,11 @@ class plan_steps(SkillBase):
 
 
 def _warm_up() -> None:
-    """Imports the planner (Unified Planning takes about 2.5 s to import): in a thread when
-    this library loads, so that a skill process starts at once and its first plan does not
-    pay for the import."""
-    try:
-        from skillbus.planning import solve
-        solve._engine()
-    except Exception:  # (the first plan then imports it, and says what is wrong)
-        pass
+    """Imports the planner (Unified Planning takes about 2.5 s to import) when this library
+    loads, beside the process's start, so that its first plan does not pay for the import
+    (under lockstep the process joins once it is done: skillbus.skill.warm_up)."""
+    from skillbus.planning import solve
+    solve._engine()
 
 
-threading.Thread(target=_warm_up, name="planner-import", daemon=True).start()
+warm_up.in_background(_warm_up, "planner-import")
