@@ -79,3 +79,86 @@ def test_a_number_out_of_range_fails_as_it_does_in_the_generated_encoder():
         r.encode()
     with pytest.raises(type(generated.value)):
         encode_tick_reply(r)
+
+
+# -- replies made straight from a skill's Params (TickReply.of_params) ----------------------
+
+from skillbus.skill import Param, ParamTypes  # noqa: E402
+from skillbus.skill.tick_wire import element_bytes, value_bytes  # noqa: E402
+from skillbus.world.convert import element_msg  # noqa: E402
+from skillbus.world.element import Element  # noqa: E402
+
+SCALARS = [lambda rng: rng.randrange(-2**63, 2**63), lambda rng: rng.uniform(-1e9, 1e9), lambda rng: rng.choice(TEXT),
+           lambda rng: rng.random() < 0.5]
+
+
+def an_element(rng):
+    e = Element(rng.choice(TEXT) or "skiros:Cube", rng.choice(TEXT), rng.choice(TEXT))
+    for k in range(rng.randrange(4)):
+        make = rng.choice(SCALARS)
+        e.setProperty(f"skiros:P{k}", [make(rng) for _ in range(rng.randrange(1, 3))])
+    return e
+
+
+def values_of_one_type(rng, kind):
+    n = rng.randrange(0, 3) or 1
+    if kind < 4:
+        return [SCALARS[kind](rng) for _ in range(n)]
+    if kind == 4:
+        return [an_element(rng) for _ in range(n)]
+    if kind == 5:
+        return [[rng.choice(TEXT), rng.randrange(9)] for _ in range(n)]
+    return [{"k": rng.choice(TEXT), "n": rng.uniform(0, 1)} for _ in range(n)]
+
+
+def a_param(rng, i):
+    kind = rng.randrange(7)
+    values = values_of_one_type(rng, kind)
+    value = values if len(values) > 1 or kind == 5 else values[0]  # (a list parameter takes lists)
+    p = Param(f"P{i}", rng.choice(TEXT), value, ParamTypes(rng.randrange(3)),
+              options=[rng.choice(TEXT), rng.randrange(5)][:rng.randrange(3)])
+    if rng.random() < 0.3:  # values that differ from the defaults
+        p.setValues(values_of_one_type(rng, kind))
+    return p
+
+
+def params_reply(rng):
+    r = TickReply.of_params([a_param(rng, i) for i in range(rng.randrange(5))])
+    r.state, r.message, r.code = rng.randrange(-128, 128), rng.choice(TEXT), rng.randrange(-2**31, 2**31)
+    r.progress, r.wm_version = rng.uniform(0, 1), rng.randrange(-1, 2**40)
+    return r
+
+
+def test_a_reply_of_params_encodes_as_param_msg_then_the_generated_encoder():
+    rng = random.Random(7)
+    for _ in range(300):
+        r = params_reply(rng)
+        expected = skill_tick_reply_t.encode(r.as_message())
+        assert r.encode() == expected
+        assert skill_tick_reply_t.decode(r.encode()).num_params == len(r.skill_params)
+
+
+def test_a_value_that_cannot_be_sent_fails_naming_its_type_as_param_msg_does():
+    from skillbus.skill.convert import value_msg
+    with pytest.raises(TypeError) as slow:
+        value_msg(object())
+    with pytest.raises(TypeError, match=str(slow.value)):
+        value_bytes(object())
+    e = Element("skiros:Cube")
+    e.setProperty("skiros:Weird", [complex(1, 2)])
+    with pytest.raises(TypeError, match="property skiros:Weird: a value of type complex cannot be stored"):
+        element_bytes(e)
+    with pytest.raises(TypeError, match="property skiros:Weird: a value of type complex cannot be stored"):
+        element_msg(e)
+
+
+def test_a_reader_copy_encodes_what_it_holds_without_copying_its_properties():
+    src = Element("skiros:Cube", "red", "skiros:Cube-2")
+    src.setProperty("skiros:Size", 0.05)
+    src.setProperty("skiros:Name", ["a", "b"])
+    copy = Element._reader_copy(src, (("-1", "skiros:at", "skiros:Table-1"),))
+    copy.getProperty("skiros:Size").setValues(0.07)  # handed out, changed by the skill
+    got = element_bytes(copy)
+    assert "_properties" not in copy.__dict__  # (nothing copied to encode it)
+    assert got == wm_element_t.encode(element_msg(copy))[8:]  # (element_msg makes the copy)
+    assert src.getProperty("skiros:Size").value == 0.05

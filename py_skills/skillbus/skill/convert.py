@@ -13,8 +13,8 @@ from skillbus.skill.skill import SkillBase, SkillCore, SkillWrapper
 from skillbus.world.convert import element_from_msg, element_msg
 from skillbus.world.element import Element
 
-_TYPE_NAMES = {int: "int", float: "float", str: "str", bool: "bool", list: "list", dict: "dict", Element: "element"}
-_NAME_TYPES = {v: k for k, v in _TYPE_NAMES.items()}
+TYPE_NAMES = {int: "int", float: "float", str: "str", bool: "bool", list: "list", dict: "dict", Element: "element"}
+NAME_TYPES = {v: k for k, v in TYPE_NAMES.items()}
 
 
 def value_msg(v: Any) -> skill_value_t:
@@ -48,7 +48,7 @@ def value_from_msg(m: skill_value_t) -> Any:
 def param_msg(p: Param) -> skill_param_t:
     m = skill_param_t()
     m.key, m.description, m.param_type = p.key, p.description, int(p.paramType)
-    m.data_type = _TYPE_NAMES[p.dataType()]
+    m.data_type = TYPE_NAMES[p.dataType()]
     if p.dataTypeIs(Element) and p.getDefaultValues():
         m.concept = p.getDefaultValue().type
     m.values = [value_msg(v) for v in p.values]
@@ -64,7 +64,7 @@ def specify_msg(key: str, value: Any) -> skill_param_t:
     """A value fixed by a compound's `specify`."""
     m = skill_param_t()
     m.key = key
-    m.data_type = _TYPE_NAMES.get(type(value), "str")
+    m.data_type = TYPE_NAMES.get(type(value), "str")
     m.values = [value_msg(v) for v in (value if isinstance(value, list) and not isinstance(value, str) else [value])]
     m.num_values = len(m.values)
     return m

@@ -30,7 +30,7 @@ from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, reply_channel
 from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
-from skillbus.skill.convert import apply_param_msgs, description_msg, param_msg, tree_msg
+from skillbus.skill.convert import apply_param_msgs, description_msg, tree_msg
 from skillbus.skill import warm_up
 from skillbus.skill.skill import PrimitiveBase, SkillBase, SkillCore, State
 from skillbus.validate import BadValue, Rejects, finite, integer, one_of
@@ -206,13 +206,13 @@ class SkillProcess:
 
     # -- RPC methods ------------------------------------------------------------
     def _reply(self, skill: SkillCore | None, state: State, message: str, code: int = 0) -> skill_tick_reply_t:
-        r = TickReply()  # (a skill_tick_reply_t encoded by skillbus.skill.tick_wire: every tick sends one)
+        # Every tick sends one: skillbus.skill.tick_wire encodes the skill's parameters
+        # straight from its Params (as convert.param_msg and LCM's encoder would).
+        r = TickReply.of_params(skill.params.values() if skill is not None else ())
         r.state, r.message, r.code = int(state), message, code
         r.wm_version = self.wmi.version if self.wmi is not None else -1
         if skill is not None:
             r.progress = float(getattr(skill, "progress", 0.0))
-            r.params = [param_msg(p) for _, p in skill.params.items()]
-            r.num_params = len(r.params)
         return r
 
     def _frame_gate(self, method):

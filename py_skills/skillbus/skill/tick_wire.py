@@ -8,13 +8,25 @@ process (docs/skills.md). This writes exactly the bytes of the generated encoder
 same objects, with precompiled structs into one join; tests/py/test_tick_wire.py compares
 both on random replies. ``TickReply`` is a ``skill_tick_reply_t`` whose ``encode()`` is
 this one.
+
+A skill process's reply is made from the skill's own ``Param`` objects: building the
+messages (``convert.param_msg``: a ``skill_param_t``, ``skill_value_t``, ``wm_element_t``,
+... per value, each with every field set) cost as much again as encoding them. So
+``TickReply.of_params`` keeps the Params, and ``encode()`` writes their bytes straight
+from them (``encode_params``): the same bytes as ``param_msg`` then LCM's encoder, and the
+same errors (a value that cannot be sent is a TypeError naming it).
 """
 
 from __future__ import annotations
 
+import json
 import struct
+from typing import Any, Iterable
 
 from skillbus.msgs import skill_param_t, skill_tick_reply_t, skill_value_t, wm_element_t, wm_value_t
+from skillbus.skill.convert import TYPE_NAMES, param_msg
+from skillbus.skill.param import Param
+from skillbus.world.element import Element
 
 _FINGERPRINT = skill_tick_reply_t._get_packed_fingerprint()
 _U32 = struct.Struct(">I").pack
@@ -80,8 +92,110 @@ def encode_tick_reply(r: skill_tick_reply_t) -> bytes:
     return b"".join(out)
 
 
+# -- straight from the skill's Params ------------------------------------------------------
+
+def _text(s: str) -> bytes:
+    b = s.encode("utf-8")
+    return _U32(len(b) + 1) + b + b"\0"
+
+
+_EMPTY = _text("")
+_NO_NUMBERS = _QDB(0, 0.0, False)
+_NO_ELEMENT = _EMPTY * 3 + _I32(0)  # wm_element_t(): an empty id, type and label, no properties
+_SKILL = skill_value_t
+_WM = wm_value_t
+
+
+def _wm_value(v: Any, key: str) -> bytes:
+    """A property value as world/convert.value_msg makes it, encoded."""
+    if isinstance(v, bool):  # (before int: a bool is an int)
+        return _B(_WM.BOOL) + _EMPTY + _QDB(0, 0.0, v)
+    if isinstance(v, int):
+        return _B(_WM.INT) + _EMPTY + _QDB(v, 0.0, False)
+    if isinstance(v, float):
+        return _B(_WM.FLOAT) + _EMPTY + _QDB(0, v, False)
+    if isinstance(v, str):
+        return _B(_WM.STRING) + _text(v) + _NO_NUMBERS
+    raise TypeError(f"property {key}: a value of type {type(v).__name__} cannot be stored "
+                    f"(str, int, float or bool)")
+
+
+def element_bytes(e: Element) -> bytes:
+    """What world/convert.element_msg(e) encodes to (a reader copy is not copied for it)."""
+    props = e._wire_properties()
+    out = [_text(e.id), _text(e.type), _text(e.label), _I32(len(props))]
+    for p in props:
+        key, values = p._key, p._values
+        out.append(_text(key))
+        out.append(_I32(len(values)))
+        out += [_wm_value(v, key) for v in values]
+    return b"".join(out)
+
+
+def value_bytes(v: Any) -> bytes:
+    """What skill/convert.value_msg(v) encodes to."""
+    if isinstance(v, bool):
+        return _B(_SKILL.BOOL) + _EMPTY + _QDB(0, 0.0, v) + _NO_ELEMENT
+    if isinstance(v, int):
+        return _B(_SKILL.INT) + _EMPTY + _QDB(v, 0.0, False) + _NO_ELEMENT
+    if isinstance(v, float):
+        return _B(_SKILL.FLOAT) + _EMPTY + _QDB(0, v, False) + _NO_ELEMENT
+    if isinstance(v, str):
+        return _B(_SKILL.STRING) + _text(v) + _NO_NUMBERS + _NO_ELEMENT
+    if isinstance(v, Element):
+        return _B(_SKILL.ELEMENT) + _EMPTY + _NO_NUMBERS + element_bytes(v)
+    if isinstance(v, (list, dict)):
+        return _B(_SKILL.JSON) + _text(json.dumps(v, sort_keys=True)) + _NO_NUMBERS + _NO_ELEMENT
+    raise TypeError(f"a parameter value of type {type(v).__name__} cannot be sent")
+
+
+def param_bytes(p: Param) -> bytes:
+    """What skill/convert.param_msg(p) encodes to."""
+    defaults = p.getDefaultValues()
+    concept = p.getDefaultValue().type if p.dataTypeIs(Element) and defaults else ""
+    values = p.values
+    out = [_text(p.key), _text(p.description), _B(int(p.paramType)), _text(TYPE_NAMES[p.dataType()]),
+           _text(concept), _I32(len(values))]
+    out += [value_bytes(v) for v in values]
+    out.append(_I32(len(defaults)))
+    out += [value_bytes(v) for v in defaults]
+    options = [str(o) for o in p.options]
+    out.append(_I32(len(options)))
+    out += [_text(o) for o in options]
+    return b"".join(out)
+
+
 class TickReply(skill_tick_reply_t):
-    """A skill_tick_reply_t encoded by encode_tick_reply."""
+    """A skill_tick_reply_t encoded by encode_tick_reply, or, made by `of_params`, one
+    whose parameters are the skill's Params, encoded straight from them."""
+
+    __slots__ = ("skill_params",)
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.skill_params: list[Param] | None = None
+
+    @classmethod
+    def of_params(cls, params: Iterable[Param]) -> "TickReply":
+        """A reply carrying `params` (their values as they are when it is encoded); its
+        `params` field stays empty (`as_message` makes the messages)."""
+        r = cls()
+        r.skill_params = list(params)
+        return r
+
+    def as_message(self) -> skill_tick_reply_t:
+        """The reply as LCM's generated type, its parameters as convert.param_msg makes them."""
+        m = skill_tick_reply_t()
+        m.state, m.message, m.code, m.progress, m.wm_version = (self.state, self.message, self.code, self.progress,
+                                                                 self.wm_version)
+        m.params = [param_msg(p) for p in self.skill_params] if self.skill_params is not None else list(self.params)
+        m.num_params = len(m.params)
+        return m
 
     def encode(self) -> bytes:
-        return encode_tick_reply(self)
+        if self.skill_params is None:
+            return encode_tick_reply(self)
+        out = [_FINGERPRINT, _B(self.state), _text(self.message),
+               _IDQI(self.code, self.progress, self.wm_version, len(self.skill_params))]
+        out += [param_bytes(p) for p in self.skill_params]
+        return b"".join(out)

@@ -177,6 +177,16 @@ class Element:
     def properties(self) -> list[Property]:
         return list(self._properties.values())
 
+    def _wire_properties(self) -> list[Property]:
+        """The properties as ``properties`` lists them, to be read and never changed: a
+        reader copy's are not copied for it (those getProperty handed out are its own, the
+        rest still the replica's). Encoders use it: every tick sends the skill's elements."""
+        props = self._unread()
+        if props is None:
+            return list(self._properties.values())
+        handed = self.__dict__.get("_handed") or {}
+        return [handed.get(k) or p for k, p in props.items()]
+
     def _unread(self) -> dict[str, Property] | None:
         """A reader copy whose properties are not all copied yet: the replica's (to read,
         never to hand out); else None."""
