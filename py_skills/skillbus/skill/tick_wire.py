@@ -94,9 +94,24 @@ def encode_tick_reply(r: skill_tick_reply_t) -> bytes:
 
 # -- straight from the skill's Params ------------------------------------------------------
 
-def _text(s: str) -> bytes:
+def _encode_text(s: str) -> bytes:
     b = s.encode("utf-8")
     return _U32(len(b) + 1) + b + b"\0"
+
+
+# A string's bytes by its value: keys, descriptions, concepts, ids and labels come back
+# every tick. Pure (a str is immutable), bounded, and only for short strings.
+_TEXTS: dict[str, bytes] = {}
+_TEXTS_MAX, _TEXT_MAX_CHARS = 8192, 256
+
+
+def _text(s: str) -> bytes:
+    b = _TEXTS.get(s)
+    if b is None:
+        b = _encode_text(s)
+        if len(_TEXTS) < _TEXTS_MAX and len(s) <= _TEXT_MAX_CHARS and type(s) is str:
+            _TEXTS[s] = b
+    return b
 
 
 _EMPTY = _text("")
@@ -104,18 +119,26 @@ _NO_NUMBERS = _QDB(0, 0.0, False)
 _NO_ELEMENT = _EMPTY * 3 + _I32(0)  # wm_element_t(): an empty id, type and label, no properties
 _SKILL = skill_value_t
 _WM = wm_value_t
+# The bytes before a value's numbers: its type and an empty string.
+_WM_BOOL, _WM_INT, _WM_FLOAT = (_B(t) + _EMPTY for t in (_WM.BOOL, _WM.INT, _WM.FLOAT))
+_WM_STRING = _B(_WM.STRING)
+_SK_BOOL, _SK_INT, _SK_FLOAT = (_B(t) + _EMPTY for t in (_SKILL.BOOL, _SKILL.INT, _SKILL.FLOAT))
+_SK_STRING, _SK_JSON = _B(_SKILL.STRING), _B(_SKILL.JSON)
+_SK_ELEMENT = _B(_SKILL.ELEMENT) + _EMPTY + _NO_NUMBERS
+_TAIL = _NO_NUMBERS + _NO_ELEMENT
 
 
 def _wm_value(v: Any, key: str) -> bytes:
     """A property value as world/convert.value_msg makes it, encoded."""
+    t = type(v)  # (the exact types first: most values; then the subclasses, as value_msg's order)
+    if t is float or (t is not bool and t is not int and t is not str and isinstance(v, float)):
+        return _WM_FLOAT + _QDB(0, v, False)
     if isinstance(v, bool):  # (before int: a bool is an int)
-        return _B(_WM.BOOL) + _EMPTY + _QDB(0, 0.0, v)
+        return _WM_BOOL + _QDB(0, 0.0, v)
     if isinstance(v, int):
-        return _B(_WM.INT) + _EMPTY + _QDB(v, 0.0, False)
-    if isinstance(v, float):
-        return _B(_WM.FLOAT) + _EMPTY + _QDB(0, v, False)
+        return _WM_INT + _QDB(v, 0.0, False)
     if isinstance(v, str):
-        return _B(_WM.STRING) + _text(v) + _NO_NUMBERS
+        return _WM_STRING + _text(v) + _NO_NUMBERS
     raise TypeError(f"property {key}: a value of type {type(v).__name__} cannot be stored "
                     f"(str, int, float or bool)")
 
@@ -123,45 +146,48 @@ def _wm_value(v: Any, key: str) -> bytes:
 def element_bytes(e: Element) -> bytes:
     """What world/convert.element_msg(e) encodes to (a reader copy is not copied for it)."""
     props = e._wire_properties()
-    out = [_text(e.id), _text(e.type), _text(e.label), _I32(len(props))]
+    text, wm_value = _text, _wm_value
+    out = [text(e.id), text(e.type), text(e.label), _I32(len(props))]
     for p in props:
         key, values = p._key, p._values
-        out.append(_text(key))
+        out.append(text(key))
         out.append(_I32(len(values)))
-        out += [_wm_value(v, key) for v in values]
+        out += [wm_value(v, key) for v in values]
     return b"".join(out)
 
 
 def value_bytes(v: Any) -> bytes:
     """What skill/convert.value_msg(v) encodes to."""
-    if isinstance(v, bool):
-        return _B(_SKILL.BOOL) + _EMPTY + _QDB(0, 0.0, v) + _NO_ELEMENT
-    if isinstance(v, int):
-        return _B(_SKILL.INT) + _EMPTY + _QDB(v, 0.0, False) + _NO_ELEMENT
-    if isinstance(v, float):
-        return _B(_SKILL.FLOAT) + _EMPTY + _QDB(0, v, False) + _NO_ELEMENT
-    if isinstance(v, str):
-        return _B(_SKILL.STRING) + _text(v) + _NO_NUMBERS + _NO_ELEMENT
     if isinstance(v, Element):
-        return _B(_SKILL.ELEMENT) + _EMPTY + _NO_NUMBERS + element_bytes(v)
+        return _SK_ELEMENT + element_bytes(v)
+    if isinstance(v, bool):
+        return _SK_BOOL + _QDB(0, 0.0, v) + _NO_ELEMENT
+    if isinstance(v, int):
+        return _SK_INT + _QDB(v, 0.0, False) + _NO_ELEMENT
+    if isinstance(v, float):
+        return _SK_FLOAT + _QDB(0, v, False) + _NO_ELEMENT
+    if isinstance(v, str):
+        return _SK_STRING + _text(v) + _TAIL
     if isinstance(v, (list, dict)):
-        return _B(_SKILL.JSON) + _text(json.dumps(v, sort_keys=True)) + _NO_NUMBERS + _NO_ELEMENT
+        return _SK_JSON + _text(json.dumps(v, sort_keys=True)) + _TAIL
     raise TypeError(f"a parameter value of type {type(v).__name__} cannot be sent")
 
 
 def param_bytes(p: Param) -> bytes:
     """What skill/convert.param_msg(p) encodes to."""
-    defaults = p.getDefaultValues()
-    concept = p.getDefaultValue().type if p.dataTypeIs(Element) and defaults else ""
-    values = p.values
-    out = [_text(p.key), _text(p.description), _B(int(p.paramType)), _text(TYPE_NAMES[p.dataType()]),
-           _text(concept), _I32(len(values))]
+    text = _text
+    defaults = p._default
+    data_type = p._type
+    concept = defaults[0].type if data_type is Element and defaults else ""
+    values = p._values
+    out = [text(p._key), text(p.description), _B(p._param_type), text(TYPE_NAMES[data_type]), text(concept),
+           _I32(len(values))]
     out += [value_bytes(v) for v in values]
     out.append(_I32(len(defaults)))
     out += [value_bytes(v) for v in defaults]
-    options = [str(o) for o in p.options]
+    options = p.options
     out.append(_I32(len(options)))
-    out += [_text(o) for o in options]
+    out += [text(str(o)) for o in options]
     return b"".join(out)
 
 
@@ -195,7 +221,7 @@ class TickReply(skill_tick_reply_t):
     def encode(self) -> bytes:
         if self.skill_params is None:
             return encode_tick_reply(self)
-        out = [_FINGERPRINT, _B(self.state), _text(self.message),
+        out = [_FINGERPRINT, _B(self.state), _encode_text(self.message),
                _IDQI(self.code, self.progress, self.wm_version, len(self.skill_params))]
         out += [param_bytes(p) for p in self.skill_params]
         return b"".join(out)
