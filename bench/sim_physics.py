@@ -27,6 +27,9 @@ from skillbus.sim.scripts import CUBE, grasp_and_carry
 from skillbus.sim.session import run_script_session
 
 DURATION = 13.0
+# The grasp quality a faster physics must keep (the 2 ms step's figures when the target was
+# set, with room for the run-to-run spread; docs/benchmarks.md, "Physics server").
+MAX_SLIP_MM, MAX_PUT_DOWN_MM = 2.0, 2.0
 
 
 def slip(record) -> float:
@@ -78,6 +81,8 @@ def main() -> int:
                 "slip_mm": slip(rec) * 1000,
                 "put_down_error_mm": math.dist(end[:3], CUBE) * 1000,
                 "same_physics": solo["state_digest"] == with_p["sim"]["state_digest"],
+                # (the carry must touch nothing but the cube: a blow is not a grasp figure)
+                "obstacle_contact_steps": sum(solo.get("obstacle_contact_steps", {}).values()),
             })
             r = rows[-1]
             print(f"step {step_ms:.0f} ms {detector:6s}: {r['idle_us_per_step']:6.1f} µs/step at rest, "
@@ -85,10 +90,16 @@ def main() -> int:
                   f"{r['rtf_alone']:5.2f} alone, {r['rtf_one_participant']:5.2f} with one lockstep participant "
                   f"({r['rtf_one_participant'] / r['rtf_alone']:.2f}x); cube slip in the grasp {r['slip_mm']:.2f} mm, "
                   f"put down {r['put_down_error_mm']:.1f} mm from its start; alone == with participant: "
-                  f"{r['same_physics']}", flush=True)
+                  f"{r['same_physics']}; steps touching an obstacle: {r['obstacle_contact_steps']}", flush=True)
     r2 = next(r for r in rows if r["step_ms"] == 2.0 and r["detector"] == "bullet")  # (the demo's setting)
-    print(f"target: at most 100 µs a step while grasping in the demo scene (2 ms, Bullet): "
-          f"{'met' if r2['carry_us_per_step'] <= 100 else 'NOT met'} ({r2['carry_us_per_step']:.0f} µs)")
+    fast = r2["carry_us_per_step"] <= 100
+    held = r2["slip_mm"] <= MAX_SLIP_MM and r2["put_down_error_mm"] <= MAX_PUT_DOWN_MM
+    clear = r2["obstacle_contact_steps"] == 0
+    print(f"target: at most 100 µs a step while grasping in the demo scene (2 ms, Bullet), the grasp kept (slip at "
+          f"most {MAX_SLIP_MM} mm, put down within {MAX_PUT_DOWN_MM} mm) and the carry touching no obstacle: "
+          f"{'met' if fast and held and clear else 'NOT met'} ({r2['carry_us_per_step']:.0f} µs, slip "
+          f"{r2['slip_mm']:.2f} mm, put down {r2['put_down_error_mm']:.1f} mm, {r2['obstacle_contact_steps']} steps "
+          f"touching an obstacle)")
     print(json.dumps({"sim_physics": rows}))
     return 0
 

@@ -52,12 +52,14 @@ def sweep(record_every: int = 1) -> dict:
 
 def grasp_and_carry(record_every: int = 1) -> dict:
     """Grasp the green cube, lift it, swing it 1.2 rad around the base in 1.5 s (the
-    hardest motion of the demo for a grasp), bring it back and put it down."""
+    hardest motion of the demo for a grasp), bring it back and put it down. The swing goes
+    clockwise, away from the bin: the other way the cube would strike the demo scene's post
+    (which stands between the table and the bin), and the grasp figures would measure the blow."""
     x, y, z = CUBE
     up = top_down(x, y, z + 0.105)
     swung = list(up)
-    swung[0] += 1.2
-    swung[5] += 1.2  # the fingers keep their direction relative to the arm
+    swung[0] -= 1.2
+    swung[5] -= 1.2  # the fingers keep their direction relative to the arm
     return {"record_every": record_every, "steps": [
         arm(0.0, "above", [[2.0, up]]),
         arm(2.2, "down", [[1.5, top_down(x, y, z + 0.005)]]),
