@@ -258,3 +258,16 @@ def test_a_request_larger_than_a_receiver_takes_fails_at_once_naming_the_limit(t
     assert "bytes on SB_WM_REQ: over the 16777216 bytes (16 MiB) a receiver reassembles" in r["error"], r
     assert r["s"] < 2.0 and r["version"] >= 1, r
     assert server.returncode is None
+    # What the error and the docs advise: the scene in the server's folder, loaded by name.
+    (tmp_path / "data" / "scenes").mkdir(exist_ok=True)
+    (tmp_path / "data" / "scenes" / "big.ttl").write_text(
+        "@prefix skiros: <http://rvmi.aau.dk/ontologies/skiros.owl#> .\n"
+        "@prefix owl: <http://www.w3.org/2002/07/owl#> .\n@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .\n"
+        + "# padding\n" * (2 << 20) +
+        "skiros:Product-900 a skiros:Product, owl:NamedIndividual ; rdfs:label \"by-name\" .\n")
+    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface; "
+            "w = WorldModelInterface(open_bus(), 'big'); w.load_scene(name='big'); "
+            "print(json.dumps({'labels': sorted(e.label for e in w.get_elements())}))")
+    probe = sandbox.start("by-name", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:]
+    assert "by-name" in last_json(probe.stdout())["labels"], probe.stdout()[-2000:]

@@ -532,9 +532,16 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         """Abstract (concept-level) relation: may a `subject_type` `relation` an `object_type`?"""
         return self._call("may_relate", relation_msg(subject_type, relation, object_type), wm_value_t).b
 
-    def load_scene(self, path: str | None = None, turtle: str | None = None) -> str:
+    def load_scene(self, path: str | None = None, turtle: str | None = None, name: str | None = None) -> str:
+        """Replaces the world with a Turtle scene: the file at `path` here (its text is sent),
+        the `turtle` text, or, by `name`, the scene DATA/scenes/NAME.ttl on the server. A
+        text over 16 MiB cannot be sent (the bus refuses it, naming the limit): a scene that
+        large goes in the server's scenes folder and is loaded by name. Returns the
+        server's report (what it skipped or noted)."""
         req = wm_scene_t()
-        if path is not None:
+        if name is not None:
+            req.path = name  # (the server's field: a scene's name in its folder, never a path)
+        elif path is not None:
             with open(path, encoding="utf-8") as f:  # read here: the server may be on another host
                 req.turtle = f.read()
         else:
