@@ -271,3 +271,6 @@ def test_a_request_larger_than_a_receiver_takes_fails_at_once_naming_the_limit(t
     probe = sandbox.start("by-name", [sys.executable, "-c", code])
     assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:]
     assert "by-name" in last_json(probe.stdout())["labels"], probe.stdout()[-2000:]
+    cli = sandbox.start("cli", [sys.executable, "-m", "skillbus.cli", "wm", "load", "--on-server", "big"])
+    assert sandbox.wait(cli, 60) == 0, cli.stderr()[-2000:]
+    assert "loaded big: version" in cli.stdout(), cli.stdout()

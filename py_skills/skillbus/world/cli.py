@@ -25,7 +25,10 @@ def add_parser(sub) -> None:
     q.add_argument("--label", default="")
     q.add_argument("--json", action="store_true")
     ld = wsub.add_parser("load", help="replace the world with a Turtle scene")
-    ld.add_argument("file")
+    ld.add_argument("file", help="a Turtle file here (its text is sent: at most 16 MiB), or with --on-server the "
+                                 "name of a scene in the server's DATA/scenes")
+    ld.add_argument("--on-server", action="store_true",
+                    help="FILE names DATA/scenes/FILE.ttl on the server (any size; a name, never a path)")
     sv = wsub.add_parser("save", help="write the world as a Turtle scene")
     sv.add_argument("file")
     t = wsub.add_parser("tree", help="the containment tree with poses")
@@ -127,7 +130,7 @@ def main(args: argparse.Namespace) -> int:
                     print(f"{e.id}  ({e.type})  label={e.label!r}")
                 print(f"{len(found)} element(s) at version {wmi.version}")
         elif c == "load":
-            report = wmi.load_scene(args.file)
+            report = (wmi.load_scene(name=args.file) if args.on_server else wmi.load_scene(args.file))
             print(f"loaded {args.file}: version {wmi.version}, {len(wmi.get_elements())} elements"
                   + (f"\nnotes: {report}" if report else ""))
         elif c == "save":
