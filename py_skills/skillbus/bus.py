@@ -53,6 +53,15 @@ class Bus(abc.ABC):
     @abc.abstractmethod
     def publish(self, channel: str, data: bytes) -> None: ...
 
+    def caught_up_at(self) -> float:
+        """The monotonic time at which this bus last had nothing left to hand out: every
+        message that had arrived by then was dispatched. A wall-clock liveness check
+        measures a sender's silence up to here, not up to now: a process that was not
+        scheduled for a second, or is inside a long handler, has not heard a sender that
+        kept sending (its messages wait in the socket), and must not call it silent. A
+        bus that cannot tell says now."""
+        return time.monotonic()
+
     @abc.abstractmethod
     def subscribe(self, channel: str, handler: Handler,
                   queue_capacity: int = DEFAULT_QUEUE_CAPACITY) -> int: ...
@@ -293,6 +302,7 @@ class LcmBus(Bus):
         self._receivers: list[UdpmReceiver | None] = [None, None]
         self._by_channel: dict[str, dict[int, Handler]] = {}
         self._turn = 0  # the lane read first by the next handle(): neither starves the other
+        self._caught_up = time.monotonic()  # (caught_up_at: set each time every socket was read empty)
         self.lost_sends = 0  # messages the network refused to send
         self._lane(0)  # fail early, with a clear message
 
@@ -369,6 +379,9 @@ class LcmBus(Bus):
         else:
             self._lane(lane).unsubscribe(sub)
 
+    def caught_up_at(self) -> float:
+        return self._caught_up if self._direct else time.monotonic()  # (LCM's own thread: cannot tell)
+
     def handle(self, timeout: float) -> bool:
         if self._direct:
             return self._handle_direct(timeout)
@@ -398,9 +411,10 @@ class LcmBus(Bus):
                 while (m := r.read()) is not False:
                     if m is not None and self._dispatch(m):
                         return True
+            now = self._caught_up = time.monotonic()  # (every socket read empty)
             if deadline is None:
-                deadline = time.monotonic() + timeout
-            left = deadline - time.monotonic()
+                deadline = now + timeout
+            left = deadline - now
             if left <= 0:
                 return False
             select.select(receivers, [], [], left)
@@ -474,6 +488,9 @@ class DropEveryNthBus(Bus):
 
     def handle(self, timeout: float) -> bool:
         return self.inner.handle(timeout)
+
+    def caught_up_at(self) -> float:
+        return self.inner.caught_up_at()
 
 
 class DropEveryNthReceivedBus(DropEveryNthBus):
@@ -610,6 +627,9 @@ class AuthenticatedBus(Bus):
 
     def unsubscribe(self, subscription_id: int) -> None:
         self.inner.unsubscribe(subscription_id)
+
+    def caught_up_at(self) -> float:
+        return self.inner.caught_up_at()
 
     def handle(self, timeout: float) -> bool:
         self._verified.clear()

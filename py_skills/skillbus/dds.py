@@ -333,15 +333,19 @@ class DdsBus(Bus):
         while True:
             if self._take_one():
                 return True
+            now = self._caught_up = time.monotonic()  # (nothing left to take: caught_up_at)
             if deadline is None:
-                deadline = time.monotonic() + timeout
-            left = deadline - time.monotonic()
+                deadline = now + timeout
+            left = deadline - now
             if left <= 0:
                 return False
             if not self._readers:
                 time.sleep(left)
                 return False
             self._waitset.wait(duration(seconds=left))
+
+    def caught_up_at(self) -> float:
+        return getattr(self, "_caught_up", time.monotonic())
 
     def close(self) -> None:
         """Leaves the DDS domain (deletes the participant, its readers and writers)."""

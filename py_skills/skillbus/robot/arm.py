@@ -69,7 +69,10 @@ class Arm:
         heard = getattr(self, "_heard", None)
         if heard is None:
             return f"no robot arm state on {arm_state_channel()} yet (is the physics server or the arm's driver running?)"
-        quiet = time.monotonic() - heard
+        # Silent up to the last moment this process had read everything that had come: a
+        # process starved of the CPU under load heard nothing for a while, but the state
+        # kept coming into its socket (that called a live driver silent).
+        quiet = self.bus.caught_up_at() - heard
         if quiet > self.STALE_S:
             return (f"the robot arm's driver went silent: no state on {arm_state_channel()} for {quiet:.1f} s "
                     "(is the physics server or the arm's driver running?)")
