@@ -151,6 +151,10 @@ class RpcServer:
     def _send_chunk(self, answer: rpc_reply_t, chunk: int) -> None:
         """Part `chunk` of a remembered answer (its payload whole) on the reply channel."""
         payload = answer.payload
+        if len(payload) <= CHUNK_BYTES:  # (one chunk, most answers: sent as it is, not copied)
+            answer.chunk, answer.chunks, answer.payload_size = 0, 1, len(payload)
+            self.bus.publish(self.rep_channel, answer.encode())
+            return
         key = (answer.client_id, answer.request_id)
         if _chunks(len(payload)) > 1:
             sent = self._pulling.setdefault(key, set())
