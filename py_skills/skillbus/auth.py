@@ -41,6 +41,7 @@ import stat
 import struct
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 from pathlib import Path
 
 MAGIC = b"SBA1"
@@ -191,8 +192,9 @@ class _Window:
     heard: float = 0.0
 
 
-@dataclass
-class Opened:
+class Opened(NamedTuple):
+    """A verified message: its payload and who signed it. (A tuple: every message received
+    makes one.)"""
     payload: bytes
     identity: str
 

@@ -405,6 +405,7 @@ class LcmBus(Bus):
         if len(receivers) == 2 and self._turn:
             receivers.reverse()
         self._turn ^= 1
+        sockets = [r.sock for r in receivers]  # (select asks a socket for its descriptor in C)
         deadline = None
         while True:
             for r in receivers:
@@ -417,7 +418,7 @@ class LcmBus(Bus):
             left = deadline - now
             if left <= 0:
                 return False
-            select.select(receivers, [], [], left)
+            select.select(sockets, [], [], left)
 
     def _dispatch(self, m: tuple[str, bytes]) -> bool:
         handlers = self._by_channel.get(m[0])

@@ -55,7 +55,10 @@ def decode(msg_type, data: bytes):
         msg = msg_type._decode_one(buf)
         if buf.tell() != len(data):
             return None
-        if _ends_in_fixed_bytes(msg_type) and len(msg.encode()) != len(data):
+        ends_in_bytes = _ENDS_IN_BYTES.get(msg_type)  # (inline: every message decoded asks)
+        if ends_in_bytes is None:
+            ends_in_bytes = _ends_in_fixed_bytes(msg_type)
+        if ends_in_bytes and len(msg.encode()) != len(data):
             return None
         return msg
     except Exception:
