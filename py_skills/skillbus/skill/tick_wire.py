@@ -116,7 +116,8 @@ def _text(s: str) -> bytes:
 
 _EMPTY = _text("")
 _NO_NUMBERS = _QDB(0, 0.0, False)
-_NO_ELEMENT = _EMPTY * 3 + _I32(0)  # wm_element_t(): an empty id, type and label, no properties
+_NO_PROPERTIES = _I32(0)
+_NO_ELEMENT = _EMPTY * 3 + _NO_PROPERTIES  # wm_element_t(): an empty id, type and label, no properties
 _SKILL = skill_value_t
 _WM = wm_value_t
 # The bytes before a value's numbers: its type and an empty string.
@@ -145,9 +146,13 @@ def _wm_value(v: Any, key: str) -> bytes:
 
 def element_bytes(e: Element) -> bytes:
     """What world/convert.element_msg(e) encodes to (a reader copy is not copied for it)."""
-    props = e._wire_properties()
-    text, wm_value = _text, _wm_value
-    out = [text(e.id), text(e.type), text(e.label), _I32(len(props))]
+    d = e.__dict__
+    props = d["_properties"].values() if "_properties" in d else e._wire_properties()
+    text = _text
+    if not props:  # (abstract parameters' elements, most defaults: nothing but the names)
+        return text(e._id) + text(e._type) + text(e._label) + _NO_PROPERTIES
+    wm_value = _wm_value
+    out = [text(e._id), text(e._type), text(e._label), _I32(len(props))]
     for p in props:
         key, values = p._key, p._values
         out.append(text(key))
