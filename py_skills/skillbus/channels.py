@@ -84,11 +84,30 @@ def bad_characters(name: str) -> str:
     return f"channel name {name!r}: {what} (letters, digits, _ and /: DDS topics allow no more)"
 
 
+# Names already made, by (namespace, robot, name): processes name channels every frame (a
+# lockstep message's channel, a CAN link's announcement), and checking a name costs a
+# regular expression and an encoding (2.7 us a call). Keyed by the environment as it is
+# at each call, so a changed $SKILLBUS_NAMESPACE still counts. Bounded.
+_MADE: dict[tuple[str, str, str], str] = {}
+_MADE_MAX = 4096
+
+
 def robot_channel(name: str, robot: str) -> str:
     """`name` for an explicit robot ("" for none). Raises ValueError for a name longer
     than a channel may be, or with characters a DDS topic refuses, saying which part
     made it so."""
     prefix = os.environ.get("SKILLBUS_NAMESPACE", "")
+    key = (prefix, robot, name)
+    made = _MADE.get(key)
+    if made is not None:
+        return made
+    out = _make_channel(prefix, name, robot)
+    if len(_MADE) < _MADE_MAX:
+        _MADE[key] = out
+    return out
+
+
+def _make_channel(prefix: str, name: str, robot: str) -> str:
     mine = robot if robot and robot_scoped(name) else ""
     out = prefix + (f"{mine}/" if mine else "") + name
     why = bad_characters(out)

@@ -186,9 +186,10 @@ class GripperDevice:
         with self.lock:
             if self.state == c.OPERATION_ENABLED:
                 self.model.step(dt)
-                force = self.node.sdo[0x6073].raw
-                if (self.model.moving and self.model.in_contact and force > RATED_FORCE
-                        and self.model.blocked_for > BLOCKED_TIMEOUT_S):
+                # (the force limit read only when it can matter: an object-dictionary read
+                # costs python-canopen about 4 us, and this runs every frame)
+                if (self.model.moving and self.model.in_contact and self.model.blocked_for > BLOCKED_TIMEOUT_S
+                        and self.node.sdo[0x6073].raw > RATED_FORCE):
                     self._fault(c.EMCY_OVER_CURRENT)
                 elif self.model.following_error():
                     self._fault(c.EMCY_FOLLOWING_ERROR)
@@ -199,6 +200,7 @@ class GripperDevice:
     event_every = 1
     _since_sent = 0
     _last_sent: tuple | None = None
+    _last_written: tuple | None = None  # (statusword, width, grip state) in the dictionary and TPDO1
 
     def _publish_status(self, event: bool = True) -> None:
         """TPDO1 with the current state (event-driven, transmission type 255: at once
@@ -211,14 +213,19 @@ class GripperDevice:
             if self.controlword & c.CW_NEW_SET_POINT:
                 sw |= c.SW_SET_POINT_ACK
             tpdo = self.node.tpdo[1]
-            tpdo["Statusword"].raw = sw
-            tpdo["Position actual value"].raw = int(round(self.model.width))
-            tpdo["Grip state"].raw = grip
-            self.node.sdo[0x6041].raw = sw
-            self.node.sdo[0x6064].raw = int(round(self.model.width))
-            self.node.sdo[0x2000].raw = grip
-            operational = self.node.nmt.state == "OPERATIONAL"
             now = (sw, int(round(self.model.width)), grip)
+            if now != self._last_written:
+                # Written only when they change: each write costs python-canopen several
+                # microseconds (and its write callbacks), and at rest nothing changes for
+                # hundreds of frames. Only this method writes these entries.
+                tpdo["Statusword"].raw = sw
+                tpdo["Position actual value"].raw = now[1]
+                tpdo["Grip state"].raw = grip
+                self.node.sdo[0x6041].raw = sw
+                self.node.sdo[0x6064].raw = now[1]
+                self.node.sdo[0x2000].raw = grip
+                self._last_written = now
+            operational = self.node.nmt.state == "OPERATIONAL"
             self._since_sent += 1
             due = now != self._last_sent or self._since_sent >= self.event_every or event
             if operational and due:
