@@ -35,6 +35,7 @@ class DropNextBus : public Bus {
   void unsubscribe(int id) override { inner_->unsubscribe(id); }
   bool handle(std::chrono::milliseconds t) override { return inner_->handle(t); }
   std::string url() const override { return inner_->url(); }
+  std::chrono::steady_clock::time_point caught_up_at() const override { return inner_->caught_up_at(); }
   void arm(const std::string& ch) { armed_ = true; channel_ = ch; }
 
  private:

@@ -275,7 +275,8 @@ bool DdsBus::handle(std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     if (take_one()) return true;
-    const auto left = deadline - std::chrono::steady_clock::now();
+    caught_up_ = std::chrono::steady_clock::now();  // (nothing left to take)
+    const auto left = deadline - caught_up_;
     if (left <= std::chrono::steady_clock::duration::zero()) return false;
     const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(left).count();
     const dds_return_t r = dds_waitset_wait(waitset_, nullptr, 0, ns);

@@ -40,6 +40,7 @@ class DdsBus : public Bus {
   void unsubscribe(int subscription_id) override;
   bool handle(std::chrono::milliseconds timeout) override;
   std::string url() const override { return url_; }
+  std::chrono::steady_clock::time_point caught_up_at() const override { return caught_up_; }
   // Messages not sent because a matched reader took none for the writer's blocking time
   // (a stopped process, or a killed one until its lease ends): lost, as on LCM.
   long lost_sends() const { return lost_sends_; }
@@ -56,6 +57,7 @@ class DdsBus : public Bus {
   bool take_one();
 
   std::string url_;
+  std::chrono::steady_clock::time_point caught_up_ = std::chrono::steady_clock::now();  // nothing left to take
   DdsUrl parsed_;
   dds_entity_t participant_ = 0;
   dds_entity_t waitset_ = 0;

@@ -209,6 +209,7 @@ bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {
       }
     }
     const auto now = std::chrono::steady_clock::now();
+    caught_up_ = now;  // (every socket read empty)
     if (!waited) {
       deadline = now + timeout;
       waited = true;

@@ -32,6 +32,9 @@ class LcmBus : public Bus {
   void unsubscribe(int subscription_id) override;
   bool handle(std::chrono::milliseconds timeout) override;
   std::string url() const override { return url_; }
+  std::chrono::steady_clock::time_point caught_up_at() const override {
+    return direct_ ? caught_up_ : std::chrono::steady_clock::now();  // (LCM's own thread: cannot tell)
+  }
 
  private:
   struct Sub {
@@ -47,6 +50,7 @@ class LcmBus : public Bus {
   bool handle_direct(std::chrono::milliseconds timeout);
 
   std::string url_;
+  std::chrono::steady_clock::time_point caught_up_ = std::chrono::steady_clock::now();  // every socket read empty
   std::array<std::string, 2> lane_urls_;
   std::array<lcm_t*, 2> lanes_{nullptr, nullptr};
   std::array<int, 2> lane_subs_{0, 0};

@@ -42,13 +42,17 @@ void Liveness::announce() {
 
 void Liveness::drop_silent() {
   const auto now = steady::now();
+  // Silent up to the last moment the manager had read everything that had come: after
+  // the manager itself was not scheduled for seconds, the heartbeats wait in its socket
+  // (a stopped manager dropped every process's skills when it went on).
+  const auto heard_until = bus_.caught_up_at();
   for (const auto& process : registry_.processes()) {
     auto it = heard_from_.find(process);
     if (it == heard_from_.end()) {
       heard_from_[process] = now;  // registered before any heartbeat: count from now
       continue;
     }
-    if (now - it->second < timeout_) continue;
+    if (heard_until - it->second < timeout_) continue;
     const std::string why = "skill process " + process + " stopped answering (no heartbeat for " +
                             std::to_string(timeout_.count()) + " ms)";
     registry_.remove(process, why);

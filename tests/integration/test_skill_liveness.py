@@ -110,3 +110,25 @@ def test_a_task_stopped_before_it_began_still_ends_visibly(sandbox):
     assert sandbox.wait(p, 30) == 0, p.stderr()
     end = p.stdout().strip()
     assert end == "stopped before it started" or end.startswith("preempted"), end
+
+
+def test_a_manager_that_was_not_running_for_seconds_keeps_the_live_processes_skills(sandbox):
+    # The manager measured a process's silence up to now: stopped for longer than its
+    # liveness timeout (a loaded machine, a debugger), it went on to drop every process's
+    # skills while their heartbeats waited in its socket. It now measures up to the last
+    # moment it had read everything (Bus::caught_up_at); a process that really stops is
+    # still dropped (the test above).
+    mgr = sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock", "--liveness-ms", "1000"])
+    # Two processes: after the pause the manager reads its socket up to the first message
+    # it subscribed to, which refreshes one of them; the other was dropped.
+    proc = registered(sandbox, "proc1", "flow_skills")
+    other = registered(sandbox, "echoes", "safety_skills")
+    before = skills_listed(sandbox)
+    assert "Chain (chain, compound, process proc1)" in before and "process echoes" in before, before
+    sandbox.kill(mgr, signal.SIGSTOP)  # (its process group: the manager, whatever runs it)
+    time.sleep(2.5)  # over twice the liveness timeout; the process goes on beating
+    sandbox.kill(mgr, signal.SIGCONT)
+    time.sleep(1.0)
+    assert "stopped answering" not in mgr.stderr(), mgr.stderr()[-2000:]
+    assert skills_listed(sandbox) == before
+    assert proc.returncode is None and other.returncode is None

@@ -123,6 +123,7 @@ class AuthenticatedBus : public Bus {
     return handled;
   }
   std::string url() const override { return inner_->url(); }
+  std::chrono::steady_clock::time_point caught_up_at() const override { return inner_->caught_up_at(); }
   const Stats& stats() const { return opener_.stats(); }
   const std::string& identity() const { return identity_; }
 

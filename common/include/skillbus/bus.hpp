@@ -46,6 +46,12 @@ class Bus {
   // Returns true if at least one message was handled.
   virtual bool handle(std::chrono::milliseconds timeout) = 0;
   virtual std::string url() const = 0;
+  // The last moment this bus had nothing left to hand out: every message that had
+  // arrived by then was dispatched. A wall-clock liveness check measures a sender's
+  // silence up to here, not up to now: a process that was not scheduled for seconds (a
+  // loaded machine, a stopped debugger) has not heard senders that kept sending, and
+  // must not call them dead. A bus that cannot tell says now.
+  virtual std::chrono::steady_clock::time_point caught_up_at() const { return std::chrono::steady_clock::now(); }
 };
 
 // The URL from the argument, else $SKILLBUS_BUS_URL, else kDefaultBusUrl.

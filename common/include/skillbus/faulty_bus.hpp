@@ -23,6 +23,7 @@ class DropEveryNthBus : public Bus {
   void unsubscribe(int id) override { inner_->unsubscribe(id); }
   bool handle(std::chrono::milliseconds t) override { return inner_->handle(t); }
   std::string url() const override { return inner_->url(); }
+  std::chrono::steady_clock::time_point caught_up_at() const override { return inner_->caught_up_at(); }
   long dropped() const { return dropped_; }
 
  private:
