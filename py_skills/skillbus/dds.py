@@ -203,6 +203,7 @@ class DdsBus(Bus):
         from cyclonedds import domain
         self._envelope, self._core, self._take, self._write = Envelope, core, ddspy_take, ddspy_write
         self._url = url
+        self._caught_up = time.monotonic()  # (caught_up_at: set each time nothing was left to take)
         try:
             self._dp = domain.DomainParticipant(self.parsed.domain)
         except Exception as e:  # (cyclonedds raises DDSException)
@@ -345,7 +346,7 @@ class DdsBus(Bus):
             self._waitset.wait(duration(seconds=left))
 
     def caught_up_at(self) -> float:
-        return getattr(self, "_caught_up", time.monotonic())
+        return self._caught_up
 
     def close(self) -> None:
         """Leaves the DDS domain (deletes the participant, its readers and writers)."""

@@ -271,6 +271,22 @@ def test_a_request_larger_than_a_receiver_takes_fails_at_once_naming_the_limit(t
     probe = sandbox.start("by-name", [sys.executable, "-c", code])
     assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:]
     assert "by-name" in last_json(probe.stdout())["labels"], probe.stdout()[-2000:]
+    # A name that is a path, or names no scene, is refused naming it; the world stays.
+    code = ("import json; from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface\n"
+            "w = WorldModelInterface(open_bus(), 'bad'); out = {}\n"
+            "for name in ('../journal', '/etc/passwd', 'missing'):\n"
+            "    try:\n        w.load_scene(name=name); out[name] = 'loaded'\n"
+            "    except Exception as e:\n        out[name] = f'{type(e).__name__}: {e}'\n"
+            "out['labels'] = sorted(e.label for e in w.get_elements())\nprint(json.dumps(out))")
+    probe = sandbox.start("bad-names", [sys.executable, "-c", code])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:]
+    bad = last_json(probe.stdout())
+    for name in ("../journal", "/etc/passwd", "missing"):
+        assert bad[name].startswith("WorldModelError") and "scene" in bad[name], bad
+    assert "by-name" in bad["labels"], bad
     cli = sandbox.start("cli", [sys.executable, "-m", "skillbus.cli", "wm", "load", "--on-server", "big"])
     assert sandbox.wait(cli, 60) == 0, cli.stderr()[-2000:]
     assert "loaded big: version" in cli.stdout(), cli.stdout()
+    cli = sandbox.start("cli-bad", [sys.executable, "-m", "skillbus.cli", "wm", "load", "--on-server", "../big"])
+    assert sandbox.wait(cli, 60) != 0
+    assert "scene" in cli.stderr() and "Traceback" not in cli.stderr(), cli.stderr()[-2000:]

@@ -13,7 +13,7 @@ A skill process's reply is made from the skill's own ``Param`` objects: building
 messages (``convert.param_msg``: a ``skill_param_t``, ``skill_value_t``, ``wm_element_t``,
 ... per value, each with every field set) cost as much again as encoding them. So
 ``TickReply.of_params`` keeps the Params, and ``encode()`` writes their bytes straight
-from them (``encode_params``): the same bytes as ``param_msg`` then LCM's encoder, and the
+from them (``param_bytes``): the same bytes as ``param_msg`` then LCM's encoder, and the
 same errors (a value that cannot be sent is a TypeError naming it).
 """
 
@@ -36,9 +36,13 @@ _QDB = struct.Struct(">qdb").pack
 _IDQI = struct.Struct(">idqi").pack
 
 
-def _string(out: list, s: str) -> None:
+def _encode_text(s: str) -> bytes:
     b = s.encode("utf-8")
-    out += (_U32(len(b) + 1), b, b"\0")
+    return _U32(len(b) + 1) + b + b"\0"
+
+
+def _string(out: list, s: str) -> None:
+    out.append(_encode_text(s))
 
 
 def _element(out: list, e: wm_element_t) -> None:
@@ -93,11 +97,6 @@ def encode_tick_reply(r: skill_tick_reply_t) -> bytes:
 
 
 # -- straight from the skill's Params ------------------------------------------------------
-
-def _encode_text(s: str) -> bytes:
-    b = s.encode("utf-8")
-    return _U32(len(b) + 1) + b + b"\0"
-
 
 # A string's bytes by its value: keys, descriptions, concepts, ids and labels come back
 # every tick. Pure (a str is immutable), bounded, and only for short strings.
