@@ -200,7 +200,7 @@ class GripperDevice:
     event_every = 1
     _since_sent = 0
     _last_sent: tuple | None = None
-    _last_written: tuple | None = None  # (statusword, width, grip state) in the dictionary and TPDO1
+    _last_written: tuple | None = None  # (statusword, width, grip state) in the dictionary
 
     def _publish_status(self, event: bool = True) -> None:
         """TPDO1 with the current state (event-driven, transmission type 255: at once
@@ -215,12 +215,10 @@ class GripperDevice:
             tpdo = self.node.tpdo[1]
             now = (sw, int(round(self.model.width)), grip)
             if now != self._last_written:
-                # Written only when they change: each write costs python-canopen several
-                # microseconds (and its write callbacks), and at rest nothing changes for
-                # hundreds of frames. Only this method writes these entries.
-                tpdo["Statusword"].raw = sw
-                tpdo["Position actual value"].raw = now[1]
-                tpdo["Grip state"].raw = grip
+                # The dictionary's entries (what an SDO upload reads; read-only for others)
+                # only when they change: each write costs python-canopen several
+                # microseconds and its write callbacks, and at rest nothing changes for
+                # hundreds of frames.
                 self.node.sdo[0x6041].raw = sw
                 self.node.sdo[0x6064].raw = now[1]
                 self.node.sdo[0x2000].raw = grip
@@ -230,6 +228,12 @@ class GripperDevice:
             due = now != self._last_sent or self._since_sent >= self.event_every or event
             if operational and due:
                 self._last_sent, self._since_sent = now, 0
+                # TPDO1's contents before every send, changed or not: python-canopen takes a
+                # frame that arrives with TPDO1's COB-ID (a rogue node's) into the map's
+                # buffer, and it would go out as ours.
+                tpdo["Statusword"].raw = sw
+                tpdo["Position actual value"].raw = now[1]
+                tpdo["Grip state"].raw = grip
         if operational and due:
             tpdo.transmit()
 
