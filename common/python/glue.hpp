@@ -26,5 +26,6 @@ std::shared_ptr<SharedOpener> opener_of(PyObject* o);
 // Each adds its type(s) to the module; false with a Python error set.
 bool add_quiet_frames(PyObject* module);
 bool add_auth(PyObject* module);
+bool add_channel_filter(PyObject* module);
 
 }  // namespace skillbus::native

@@ -4,6 +4,8 @@
 //                interpreter (py_quiet_frames.cpp, quiet_frames.hpp)
 //   Sealer, Opener  bus authentication (py_auth.cpp: skillbus/auth.hpp's, for
 //                skillbus.auth)
+//   attach_channel_filter  the kernel filter of a udpm:// socket (py_channel_filter.cpp:
+//                skillbus/channel_filter.hpp's, for skillbus.bus)
 //
 // Python finds it through skillbus.native, which also honours SKILLBUS_NATIVE=0.
 #include "glue.hpp"
@@ -54,7 +56,8 @@ PyModuleDef module_def = {PyModuleDef_HEAD_INIT, "skillbus_native", "skillbus's 
 PyMODINIT_FUNC PyInit_skillbus_native() {
   PyObject* m = PyModule_Create(&module_def);
   if (!m) return nullptr;
-  if (!skillbus::native::add_quiet_frames(m) || !skillbus::native::add_auth(m)) {
+  if (!skillbus::native::add_quiet_frames(m) || !skillbus::native::add_auth(m) ||
+      !skillbus::native::add_channel_filter(m)) {
     Py_DECREF(m);
     return nullptr;
   }

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <regex>
 
+#include "skillbus/channel_filter.hpp"
 #include "skillbus/log.hpp"
 
 namespace skillbus {
@@ -156,6 +157,7 @@ int LcmBus::subscribe(const std::string& channel, Handler handler, int queue_cap
   if (direct_) {
     receiver(sub->lane);
     by_channel_[channel][id] = sub.get();
+    refilter(sub->lane);
   } else {
     sub->lcm_sub = lcm_subscribe(lane(sub->lane), channel.c_str(), &LcmBus::on_message, sub.get());
     if (!sub->lcm_sub) throw BusError("cannot subscribe to " + channel);
@@ -170,13 +172,35 @@ void LcmBus::unsubscribe(int id) {
   auto it = subs_.find(id);
   if (it == subs_.end()) return;
   if (it->second->lcm_sub) lcm_unsubscribe(lanes_[it->second->lane], it->second->lcm_sub);
+  bool gone = false;
   for (auto c = by_channel_.begin(); c != by_channel_.end(); ++c)
     if (c->second.erase(id)) {
-      if (c->second.empty()) by_channel_.erase(c);
+      if (c->second.empty()) {
+        by_channel_.erase(c);
+        gone = true;
+      }
       break;
     }
-  --lane_subs_[it->second->lane];
+  const int lane = it->second->lane;
+  --lane_subs_[lane];
   subs_.erase(it);
+  if (gone) refilter(lane);
+}
+
+void LcmBus::refilter(int lane) {
+  if (!direct_ || filter_refused_) return;
+  const int socket_lane = lane_urls_[lane].empty() ? 0 : lane;
+  if (!receivers_[socket_lane]) return;
+  std::vector<std::string> channels;
+  for (const auto& [channel, subs] : by_channel_)
+    if ((lane_urls_[1].empty() ? 0 : lcm_lane_of(channel)) == socket_lane) channels.push_back(channel);
+  std::string why;
+  if (!attach_channel_filter(receivers_[socket_lane]->fd(), channels, why)) {
+    filter_refused_ = true;  // every datagram wakes this process, as without filters
+    SB_WARN("bus", "no channel filter on " << lane_urls_[socket_lane] << ": " << why);
+    for (const auto& r : receivers_)
+      if (r) detach_channel_filter(r->fd());
+  }
 }
 
 bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {

@@ -48,6 +48,7 @@ class LcmBus : public Bus {
   lcm_t* lane(int i);  // opened on first use
   UdpmReceiver& receiver(int i);  // opened on first use
   bool handle_direct(std::chrono::milliseconds timeout);
+  void refilter(int lane);  // the lane's socket filter: its channels now (channel_filter.hpp)
 
   std::string url_;
   std::chrono::steady_clock::time_point caught_up_ = std::chrono::steady_clock::now();  // every socket read empty
@@ -60,6 +61,7 @@ class LcmBus : public Bus {
   std::array<std::unique_ptr<UdpmReceiver>, 2> receivers_;
   std::map<std::string, std::map<int, Sub*>> by_channel_;  // direct: subscriptions by channel
   int turn_ = 0;  // the lane read first by the next handle(): neither starves the other
+  bool filter_refused_ = false;  // the kernel refused a filter once: logged, not tried again
 
  public:
   // Datagrams that were no LCM message, and fragmented messages that lost a fragment.

@@ -29,7 +29,7 @@ from typing import Callable
 
 import lcm
 
-from skillbus import channels
+from skillbus import channels, native
 from skillbus.udpm import UdpmReceiver
 
 Handler = Callable[[str, bytes], None]
@@ -329,6 +329,25 @@ class LcmBus(Bus):
                                f"multicast route, e.g. `ip route add 224.0.0.0/4 dev lo`): {e}") from e
         return r
 
+    _filter_refused = False  # the kernel refused a filter once: logged, not tried again
+
+    def _refilter(self, lane: int) -> None:
+        """The lane's kernel filter (common/include/skillbus/channel_filter.hpp, through
+        skillbus_native): datagrams of channels nobody here subscribed to are dropped before
+        they wake the process. Without the native module every datagram wakes it, as before."""
+        r = self._receivers[lane]
+        lib = native.module()
+        if r is None or lib is None or self._filter_refused:
+            return
+        two = bool(self._lane_urls[1])
+        why = lib.attach_channel_filter(r.fileno(), [c for c in self._by_channel if (lane_of(c) if two else 0) == lane])
+        if why:
+            self._filter_refused = True
+            log.warning("no channel filter on %s: %s", self._lane_urls[lane], why)
+            for other in self._receivers:
+                if other is not None:
+                    lib.detach_channel_filter(other.fileno())
+
     @property
     def url(self) -> str:
         return self._url
@@ -355,7 +374,10 @@ class LcmBus(Bus):
         sid = self._next_id
         if self._direct:
             self._receiver(lane)
+            new = channel not in self._by_channel
             self._by_channel.setdefault(channel, {})[sid] = guarded(handler)
+            if new:
+                self._refilter(lane)
             sub: object = channel
         else:
             sub = self._lane(lane).subscribe(channel, guarded(handler))
@@ -376,6 +398,7 @@ class LcmBus(Bus):
             handlers.pop(subscription_id, None)
             if not handlers:
                 self._by_channel.pop(sub, None)  # type: ignore[call-overload]
+                self._refilter(lane)
         else:
             self._lane(lane).unsubscribe(sub)
 
