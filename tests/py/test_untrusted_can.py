@@ -249,17 +249,17 @@ def test_the_hub_drops_records_whose_length_byte_overflows_the_data(tmp_path):
     for bad in (classic_9, fd_65):
         with pytest.raises(ValueError, match="data bytes"):
             check_record(bad)
-    with hub_with_two_clients(tmp_path) as (hub, sender, receiver, sender_end):
+    with hub_with_two_clients(tmp_path) as (hub, sender, receiver, sender_end, receiver_end):
         for rec in (classic_9, fd_65, good):
             sender_end.send(rec)
         hub._read(sender)
-        assert hub.bad == 2 and hub.relayed == 1 and list(receiver.out) == [good]
+        assert hub.bad == 2 and hub.relayed == 1 and relayed_to(receiver, receiver_end) == [good]
 
 
 @contextlib.contextmanager
 def hub_with_two_clients(tmp_path):
     """A hub (not running: the test calls its handlers) with two clients on socket pairs:
-    (hub, sender, receiver, the sender's own end of its socket)."""
+    (hub, sender, receiver, the sender's own end of its socket, the receiver's)."""
     hub = Hub(tmp_path / "hub.sock")
     pairs = [socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET) for _ in range(2)]
     try:
@@ -268,11 +268,22 @@ def hub_with_two_clients(tmp_path):
             cl.sock.setblocking(False)
             hub.clients[cl.sock.fileno()] = cl
             hub.sel.register(cl.sock, 1, cl)
-        yield hub, sender, receiver, pairs[0][1]
+        yield hub, sender, receiver, pairs[0][1], pairs[1][1]
     finally:
         hub.close()
         for _, far in pairs:
             far.close()
+
+
+def relayed_to(client, far_end) -> list[bytes]:
+    """What the hub relayed to `client`: sent at once (read at its far end) or still queued."""
+    far_end.setblocking(False)
+    got = []
+    while True:
+        try:
+            got.append(far_end.recv(100))
+        except BlockingIOError:
+            return got + list(client.out)
 
 
 def test_records_sent_just_before_a_client_closes_are_relayed(tmp_path):
@@ -280,11 +291,11 @@ def test_records_sent_just_before_a_client_closes_are_relayed(tmp_path):
     test_gripper_can): its socket reports ECONNRESET once, before what it sent. The hub
     relays those records, then drops it."""
     rec = struct.pack("=IB3x8s", 0x185, 3, bytes(8))
-    with hub_with_two_clients(tmp_path) as (hub, sender, receiver, sender_end):
+    with hub_with_two_clients(tmp_path) as (hub, sender, receiver, sender_end, receiver_end):
         sender.sock.send(b"unread by the sender")  # (as the hub's JOINED, or a frame relayed to it)
         sender_end.send(rec)
         sender_end.send(rec)
         sender_end.close()
         hub._read(sender)
-        assert hub.relayed == 2 and list(receiver.out) == [rec, rec]
+        assert hub.relayed == 2 and relayed_to(receiver, receiver_end) == [rec, rec]
         assert sender.sock.fileno() == -1 and len(hub.clients) == 1  # and then it was dropped

@@ -78,6 +78,7 @@ class Client:
         self.echo = False
         self.last_progress = time.monotonic()  # when it last took a record
         self.gone = False  # its end is closed for reading: relay nothing more to it
+        self.events = selectors.EVENT_READ  # what the selector watches for it now
         self.reset = False  # it closed with records of ours unread (ECONNRESET, reported once)
 
 
@@ -111,11 +112,12 @@ class Hub:
 
     def _update(self, c: Client) -> None:
         events = (0 if self._paused() else selectors.EVENT_READ) | (selectors.EVENT_WRITE if c.out else 0)
+        events = events or selectors.EVENT_READ  # always notice a hang-up
+        if events == c.events:
+            return  # (a system call saved: this runs for every record relayed)
         try:
-            if events:
-                self.sel.modify(c.sock, events, c)
-            else:
-                self.sel.modify(c.sock, selectors.EVENT_READ, c)  # always notice a hang-up
+            self.sel.modify(c.sock, events, c)
+            c.events = events
         except KeyError:
             pass
 
@@ -171,7 +173,12 @@ class Hub:
             for other in list(self.clients.values()):
                 if not other.gone and (other is not c or c.echo):
                     other.out.append(rec)
-                    self._update(other)
+                    if len(other.out) == 1:
+                        # Sent at once while its socket takes it: a record then costs the hub
+                        # one wake-up, not a second one for the socket to become writable.
+                        self._write(other)
+                    else:
+                        self._update(other)
             self.relayed += 1
 
     def _write(self, c: Client) -> None:
