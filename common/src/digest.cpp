@@ -17,11 +17,13 @@ void Sha256::update(const void* data, size_t size) {
   EVP_DigestUpdate(static_cast<EVP_MD_CTX*>(ctx_), data, size);
 }
 
-void Sha256::update_str(const std::string& s) {
-  const uint32_t n = static_cast<uint32_t>(s.size());
+void Sha256::update_str(const std::string& s) { update_bytes(reinterpret_cast<const uint8_t*>(s.data()), s.size()); }
+
+void Sha256::update_bytes(const uint8_t* data, size_t size) {
+  const uint32_t n = static_cast<uint32_t>(size);
   const uint8_t len[4] = {uint8_t(n), uint8_t(n >> 8), uint8_t(n >> 16), uint8_t(n >> 24)};
   update(len, 4);
-  update(s.data(), s.size());
+  update(data, size);
 }
 
 void Sha256::update_i64(int64_t v) {

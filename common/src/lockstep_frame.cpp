@@ -37,6 +37,22 @@ void FrameOutbox::begin_frame(int64_t frame, int64_t sim_time_ns) {
   hash_.finish();  // reset
 }
 
+void FrameOutbox::stamp(Bytes& encoded, size_t old_size) {
+  constexpr size_t kFingerprint = 8;
+  skillbus_msgs::header_t h;
+  h.frame = frame_;
+  h.sim_time_ns = sim_time_ns_;
+  h.sender = sender_;
+  h.seq = seq_++;
+  const size_t size = static_cast<size_t>(h._getEncodedSizeNoHash());
+  if (encoded.size() < kFingerprint + old_size) throw BusError("FrameOutbox: a message shorter than its header");
+  if (size > old_size)
+    encoded.insert(encoded.begin() + kFingerprint, size - old_size, 0);
+  else if (size < old_size)
+    encoded.erase(encoded.begin() + kFingerprint, encoded.begin() + static_cast<std::ptrdiff_t>(kFingerprint + old_size - size));
+  h._encodeNoHash(encoded.data(), static_cast<int>(kFingerprint), static_cast<int>(size));
+}
+
 std::vector<ChannelCount> FrameOutbox::counts() const {
   std::vector<ChannelCount> out;
   for (const auto& [ch, n] : counts_) {

@@ -1,6 +1,6 @@
 #include "blackboard.hpp"
 
-#include <sstream>
+#include <cstdio>
 
 namespace skillbus::skills {
 
@@ -49,26 +49,43 @@ const Param* Scope::specified(const std::string& own) const {
   return parent_->specified(r == remap_.end() ? own : r->second);
 }
 
-std::string value_text(const skillbus_msgs::skill_value_t& v) {
+namespace {
+// A float as ostream's default writes it (6 significant digits, %g), without a stream:
+// progress formats every parameter of every primitive at every tick (docs/benchmarks.md).
+void append_float(std::string& out, double f) {
+  char buf[32];
+  const int n = std::snprintf(buf, sizeof(buf), "%g", f);
+  out.append(buf, n > 0 ? static_cast<size_t>(n) : 0);
+}
+
+void append_value(std::string& out, const skillbus_msgs::skill_value_t& v) {
   using skillbus_msgs::skill_value_t;
-  std::ostringstream os;
   switch (v.type) {
-    case skill_value_t::STRING: os << v.s; break;
-    case skill_value_t::INT: os << v.i; break;
-    case skill_value_t::FLOAT: os << v.f; break;
-    case skill_value_t::BOOL: os << (v.b ? "true" : "false"); break;
-    case skill_value_t::ELEMENT: os << (v.element.id.empty() ? v.element.type : v.element.id); break;
-    case skill_value_t::JSON: os << v.s; break;
-    default: os << "?";
+    case skill_value_t::STRING: out += v.s; break;
+    case skill_value_t::INT: out += std::to_string(v.i); break;
+    case skill_value_t::FLOAT: append_float(out, v.f); break;
+    case skill_value_t::BOOL: out += v.b ? "true" : "false"; break;
+    case skill_value_t::ELEMENT: out += v.element.id.empty() ? v.element.type : v.element.id; break;
+    case skill_value_t::JSON: out += v.s; break;
+    default: out += "?";
   }
-  return os.str();
+}
+}  // namespace
+
+std::string value_text(const skillbus_msgs::skill_value_t& v) {
+  std::string out;
+  append_value(out, v);
+  return out;
 }
 
 std::string params_text(const std::vector<Param>& params) {
   std::string out;
   for (const auto& p : params) {
     out += p.key + "=";
-    for (size_t i = 0; i < p.values.size(); ++i) out += (i ? "," : "") + value_text(p.values[i]);
+    for (size_t i = 0; i < p.values.size(); ++i) {
+      if (i) out += ",";
+      append_value(out, p.values[i]);
+    }
     out += "\n";
   }
   return out;

@@ -286,14 +286,14 @@ void Manager::publish_progress(const Task& t) {
     np.code = n.code();
     np.progress = n.progress();
     if (auto* prim = dynamic_cast<const RemotePrimitive*>(&n)) np.params = params_text(prim->last_params());
-    p.nodes.push_back(np);
     const int32_t me = np.id;
+    p.nodes.push_back(std::move(np));
     for (const auto& c : n.children()) walk(*c, me);
   };
   walk(*t.root, -1);
   p.num_nodes = static_cast<int32_t>(p.nodes.size());
   participant_.publish(channel("SB_SKILL_PROGRESS"), p);
-  remember(p);
+  remember(std::move(p));  // (a task's whole tree, every tick: moved, not copied)
 }
 
 void Manager::publish_end_without_tree(int64_t id, const std::string& type, const std::string& message) {
@@ -310,14 +310,17 @@ void Manager::publish_end_without_tree(int64_t id, const std::string& type, cons
   p.nodes = {root};
   p.num_nodes = 1;
   participant_.publish(channel("SB_SKILL_PROGRESS"), p);
-  remember(p);
+  remember(std::move(p));
 }
 
-void Manager::remember(const skill_progress_t& p) {
-  const bool was_finished = latest_.count(p.task) && finished(static_cast<State>(latest_[p.task].state));
-  latest_[p.task] = p;
-  if (!finished(static_cast<State>(p.state)) || was_finished) return;
-  finished_.push_back(p.task);
+void Manager::remember(skill_progress_t p) {
+  const int64_t task = p.task;
+  const bool now_finished = finished(static_cast<State>(p.state));
+  auto it = latest_.find(task);
+  const bool was_finished = it != latest_.end() && finished(static_cast<State>(it->second.state));
+  latest_[task] = std::move(p);
+  if (!now_finished || was_finished) return;
+  finished_.push_back(task);
   while (finished_.size() > kFinishedKept) {
     latest_.erase(finished_.front());
     finished_.pop_front();

@@ -79,7 +79,7 @@ class Manager {
   void publish_end_without_tree(int64_t id, const std::string& type, const std::string& message);
   // Keeps p as the task's latest progress (for SKILL.tasks); a finished task's is kept
   // among the last kFinishedKept.
-  void remember(const skillbus_msgs::skill_progress_t& p);
+  void remember(skillbus_msgs::skill_progress_t p);
   skillbus_msgs::skill_progress_list_t tasks_reply(int64_t task) const;
   RpcClient& client(const std::string& area);
 

@@ -95,3 +95,46 @@ TEST(Expectations, OnlySubscribedChannelsFromOthersWithMessages) {
   EXPECT_EQ(e[0].sender, "p");
   EXPECT_EQ(e[0].count, 2);
 }
+
+namespace {
+// Keeps what is published.
+class RecordingBus : public Bus {
+ public:
+  void publish(const std::string&, const void* data, size_t size) override {
+    sent.emplace_back(static_cast<const uint8_t*>(data), static_cast<const uint8_t*>(data) + size);
+  }
+  int subscribe(const std::string&, Handler, int) override { return 0; }
+  void unsubscribe(int) override {}
+  bool handle(std::chrono::milliseconds) override { return false; }
+  std::string url() const override { return "recording://"; }
+  std::vector<Bytes> sent;
+};
+}  // namespace
+
+// The outbox stamps a message by replacing its encoded header (it does not copy the
+// message): the bytes are those of the message with the frame's header set, whatever
+// header the message carried, and the message itself is left as it was.
+TEST(FrameOutbox, StampsTheEncodedHeaderWithoutTouchingTheMessage) {
+  RecordingBus bus;
+  FrameOutbox out(bus, "physics");
+  out.begin_frame(12, 240000000);
+  std::vector<Bytes> expected;
+  int32_t seq = 0;
+  for (const std::string old_sender : {"", "sim", "physics", "a-much-longer-sender-name"}) {
+    skillbus_msgs::test_sample_t m{};
+    m.header.frame = 99;
+    m.header.sender = old_sender;
+    m.header.seq = 5;
+    m.i64 = 1234567;
+    m.text = "payload after the header";
+    out.publish("SB_X", m);
+    EXPECT_EQ(m.header.sender, old_sender);  // untouched
+    skillbus_msgs::test_sample_t want = m;
+    want.header.frame = 12;
+    want.header.sim_time_ns = 240000000;
+    want.header.sender = "physics";
+    want.header.seq = seq++;
+    expected.push_back(encode_msg(want));
+  }
+  EXPECT_EQ(bus.sent, expected);
+}

@@ -18,6 +18,7 @@ class Sha256 {
   Sha256& operator=(const Sha256&) = delete;
   void update(const void* data, size_t size);
   void update_str(const std::string& s);  // length-prefixed (u32 little endian), then bytes
+  void update_bytes(const uint8_t* data, size_t size);  // as update_str
   void update_i64(int64_t v);             // 8 bytes little endian
   Digest finish();                        // and resets for the next use
 

@@ -49,18 +49,22 @@ class FrameOutbox {
   FrameOutbox(Bus& bus, std::string sender) : bus_(bus), sender_(std::move(sender)) {}
   void begin_frame(int64_t frame, int64_t sim_time_ns);
 
+  // Publishes `msg` stamped with this frame's header. The message is encoded as it is and
+  // its header's bytes (the first field, right after the fingerprint) replaced: it is not
+  // copied to be stamped (a task's progress, every tick, is a whole tree of strings).
   template <class T>
-  void publish(const std::string& ch, T msg) {
-    msg.header.frame = frame_;
-    msg.header.sim_time_ns = sim_time_ns_;
-    msg.header.sender = sender_;
-    msg.header.seq = seq_++;
-    const Bytes buf = encode_msg(msg);
+  void publish(const std::string& ch, const T& msg) {
+    Bytes buf = encode_msg(msg);
+    stamp(buf, static_cast<size_t>(msg.header._getEncodedSizeNoHash()));
     bus_.publish(ch, buf.data(), buf.size());
     ++counts_[ch];
     hash_.update_str(ch);
-    hash_.update_str(std::string(buf.begin(), buf.end()));
+    hash_.update_bytes(buf.data(), buf.size());
   }
+
+  // Replaces the `old_size` bytes of the header after the fingerprint with this frame's
+  // stamp (frame, sim time, sender, the next seq).
+  void stamp(Bytes& encoded, size_t old_size);
 
   std::vector<ChannelCount> counts() const;  // sorted by channel
   Digest finish_frame();                     // SHA-256 of this frame's publications
