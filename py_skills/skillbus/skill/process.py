@@ -25,8 +25,9 @@ from typing import Any
 
 from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t, skill_value_t
+from skillbus.skill.tick_decode import TickDecoder
 from skillbus.skill.tick_wire import TickReply
-from skillbus.rpc import RpcClient, RpcDefer, RpcError, RpcServer, reply_channel, request_channel
+from skillbus.rpc import RpcBadRequest, RpcClient, RpcDefer, RpcError, RpcServer, reply_channel, request_channel
 from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
@@ -53,15 +54,22 @@ def _no_constant(name: str):
     return reject
 
 
-def check_tick(t: skill_tick_t, actions=TICK_ACTIONS) -> None:
+def check_tick(t: skill_tick_t, actions=TICK_ACTIONS, params: bool = True) -> None:
     """Raises BadValue unless the manager's tick (or expand request) `t` is one to act on:
     a frame of -1 (wall clock) or later and a sim time not before 0 (skills take it as
     "now", the gripper's CAN sends are held until frame + 1), a known action, and
     parameter values a skill can use: a known value type, finite FLOATs (also inside JSON
-    lists and dicts and element properties), JSON that parses."""
+    lists and dicts and element properties), JSON that parses (`params` False: they were
+    checked before, the same bytes: skillbus.skill.tick_decode)."""
     integer(t.frame, "frame", -1)
     integer(t.sim_time_ns, "sim_time_ns", 0)
     one_of(t.action, "action", actions)
+    if params:
+        check_params(t)
+
+
+def check_params(t: skill_tick_t) -> None:
+    """The parameter values of `check_tick`."""
     for p in t.params:
         for i, v in enumerate(p.values):
             name = f"params.{p.key}[{i}]"
@@ -133,7 +141,8 @@ class SkillProcess:
         self.area = "SKPROC_" + name.upper()
         self.instances: dict[int, PrimitiveBase] = {}
         self.server = RpcServer(bus, self.area)
-        self.server.add_method("tick", self.on_tick, skill_tick_t, skill_tick_reply_t)
+        self._ticks = TickDecoder()
+        self.server.add_raw_method("tick", self._tick_raw)
         self.server.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
         for name in ("tick", "expand"):  # defer before decoding: a tick is decoded once
             self.server.methods[name] = self._frame_gate(self.server.methods[name])
@@ -226,13 +235,24 @@ class SkillProcess:
             return method(payload)
         return gated
 
-    def on_tick(self, t: skill_tick_t) -> skill_tick_reply_t:
+    def _tick_raw(self, payload: bytes) -> bytes:
+        """RPC "tick": the request decoded by skillbus.skill.tick_decode (parameters seen
+        before are not decoded again), answered by on_tick."""
+        decoded = self._ticks.decode(payload)
+        if decoded is None:
+            raise RpcBadRequest("payload of tick does not decode as skill_tick_t")
+        t, params_checked = decoded
+        return self.on_tick(t, params_checked, payload).encode()
+
+    def on_tick(self, t: skill_tick_t, params_checked: bool = False, payload: bytes | None = None) -> skill_tick_reply_t:
         try:
-            check_tick(t)
+            check_tick(t, params=not params_checked)
         except BadValue as e:  # answered (the manager must not wait for it), never run
             self.rejects.record(f"{self.area}.tick", e)
             return self._reply(None, State.Failure, f"skill process {self.name} refused the tick of {t.label!r}: {e}",
                                -1)
+        if payload is not None and not params_checked:
+            self._ticks.remember(payload, t)  # (sound parameters only)
         with context.ticking(t.frame, t.sim_time_ns):
             return self._tick(t)
 
