@@ -20,24 +20,30 @@ import sys
 import tempfile
 from pathlib import Path
 
-from skillbus import paths
+from skillbus import cpu_layout, paths
 from skillbus.netns import Sandbox, last_json
 from skillbus.system import programs, start
 
 
 def demo(box: Sandbox, run: Path, frame_ms: float) -> dict:
     script = run / "applied.json"
-    procs = start(box, programs(run, frame_ms=frame_ms, extra_sim=("--record-script", str(script))), run)
+    # Placed as `skillbus demo` places them: the physics server on a core of its own.
+    layout = cpu_layout.place(programs(run, frame_ms=frame_ms, extra_sim=("--record-script", str(script))))
+    procs = start(box, layout.programs, run)
     box.wait(procs["sim"], 900)
     box.wait(procs["skill_mgr"], 60)
     sim = last_json(procs["sim"].stdout())
     sim["task"] = last_json(procs["skill_mgr"].stdout())["tasks"].get("1", "?")
     sim["script"] = str(script)
+    sim["cores"] = layout.note
+    sim["physics_prefix"] = next(p.argv[:p.argv.index(str(paths.binary("sim_server")))] for p in layout.programs
+                                 if p.name == "sim")
     return sim
 
 
-def alone(box: Sandbox, script: str, frames: int, frame_ms: float) -> dict:
-    p = box.start("alone", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()), "--frame-ms",
+def alone(box: Sandbox, script: str, frames: int, frame_ms: float, prefix: list[str]) -> dict:
+    """The physics server alone, on the core the demo's had (`prefix`: its taskset)."""
+    p = box.start("alone", [*prefix, str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()), "--frame-ms",
                             str(frame_ms), "--script", script, "--frames", str(frames)])
     box.wait(p, 900)
     return last_json(p.stdout())
@@ -51,7 +57,7 @@ def main() -> int:
             run.mkdir()
             with Sandbox(log_dir=run / "logs") as box:
                 d = demo(box, run, frame_ms)
-                a = alone(box, d["script"], d["frames"], frame_ms)
+                a = alone(box, d["script"], d["frames"], frame_ms, d["physics_prefix"])
             fm = d.get("frame_ms", {})
             row = {"frame_ms": frame_ms, "task": d["task"], "sim_time_s": d["sim_time_s"],
                    "demo_wall_s": d["wall_time_s"], "demo_rtf": d["real_time_factor"],
@@ -63,7 +69,7 @@ def main() -> int:
             print(f"frames of {frame_ms:.0f} ms: ClearTable ({d['task']}) {d['sim_time_s']:.2f} s of sim time in "
                   f"{d['wall_time_s']:.2f} s: {d['real_time_factor']:.2f}x real time; the physics alone, same "
                   f"motions: {a['wall_time_s']:.2f} s, {a['real_time_factor']:.2f}x; the demo keeps "
-                  f"{100 * row['ratio']:.0f} % of it (same physics bit for bit: {row['same_physics']})")
+                  f"{100 * row['ratio']:.0f} % of it (same physics bit for bit: {row['same_physics']}; {d['cores']})")
             print(f"    per frame (ms): state {fm.get('state', 0):.2f}, physics {fm.get('physics', 0):.2f}, "
                   f"wait for acks {fm.get('ack_wait', 0):.2f}, total {fm.get('total', 0):.2f}; "
                   f"clock-to-ack by participant: {parts}", flush=True)

@@ -251,7 +251,7 @@ def scattered_scene(folder: Path, seed: int) -> Path:
 
 
 def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, perception: bool = False,
-        seed: int | None = None) -> dict[str, Any]:
+        seed: int | None = None, physics_core: str = "auto") -> dict[str, Any]:
     from skillbus import launch
     from skillbus.monitor import mark_log
     from skillbus.system import TWO_ARMS_REGIONS, Program, programs, robots_programs
@@ -268,6 +268,8 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
         raise ValueError("--seed: the two-arm scene's cubes stay where its file puts them")
     if seed is not None:
         check_seed(seed)
+    from skillbus import cpu_layout
+    cpu_layout.place([], physics_core)  # (a core that cannot be used is named before anything starts)
     if run_dir.exists():
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)
@@ -279,6 +281,10 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     # The run's LCM log, by skillbus record on either transport: lcm-logger drops messages
     # when its queue of 30 fills (a busy machine), and a replay then lacks them.
     progs.append(Program("logger", [sys.executable, "-m", "skillbus.cli", "record", str(run_dir / "demo.lcmlog")]))
+    layout = cpu_layout.place(progs, physics_core)  # (skillbus.cpu_layout: a core of its own for the physics)
+    progs = layout.programs
+    if layout.others is not None:
+        os.sched_setaffinity(0, layout.others)  # this process's live view, and supervisord, off the physics' core
     url = bus_url(bus)
     os.environ["SKILLBUS_BUS_URL"] = url  # (this process's own bus too: the live view)
     conf = launch.write_config(run_dir, progs, lockstep=True, bus_url=url)
@@ -309,7 +315,7 @@ def run(run_dir: Path, quiet: bool = False, bus: str = "lcm", robots: int = 1, p
     sim = _last_json(logs / "sim.out")
     mgrs = {m: _last_json(logs / f"{m}.out") for m in managers}
     result = {"sim": sim, "mgr": mgrs[managers[0]], "wall_launch_s": wall, "run_dir": str(run_dir), "bus": bus, "url": url,
-              "robots": robots, "seed": seed,
+              "robots": robots, "seed": seed, "cores": layout.note,
               "participants": {n: _last_json(logs / f"{n}.out") for n in participants if n not in managers}}
     result["world_model"] = world_model_after(run_dir)
     for view in watcher.views if watcher is not None else []:
@@ -359,6 +365,8 @@ def print_summary(r: dict[str, Any]) -> None:
     print(f"  wall time         {sim.get('wall_time_s', 0):.2f} s (the lockstep session; "
           f"{r['wall_launch_s']:.1f} s with launch and shutdown)")
     print(f"  real-time factor  {sim.get('real_time_factor', 0):.1f}x")
+    if r.get("cores"):
+        print(f"  cores             {r['cores']}")
     print(f"  closest objects   {100 * r.get('closest_m', 0):.1f} cm apart (centres; at least {100 * MIN_GAP:.0f})")
     print(f"  physics           {sim.get('physics_us_per_step', 0):.0f} us per step ({sim.get('steps', 0)} steps), "
           f"{sim.get('collision_detector', '?')} collision detector")
@@ -399,7 +407,8 @@ def main(args) -> int:
                                "--robots", str(getattr(args, "robots", 1))]
                               + (["--json"] if args.json else [])
                               + (["--perception"] if getattr(args, "perception", False) else [])
-                              + (["--seed", str(args.seed)] if getattr(args, "seed", None) is not None else []))
+                              + (["--seed", str(args.seed)] if getattr(args, "seed", None) is not None else [])
+                              + ["--physics-core", getattr(args, "physics_core", "auto")])
     # Ctrl-C and SIGTERM end the demo through its clean-up: the system is shut down.
     old = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -410,7 +419,7 @@ def main(args) -> int:
               flush=True)
         try:
             r = run(Path(args.run_dir), bus=bus, robots=robots, perception=getattr(args, "perception", False),
-                    seed=getattr(args, "seed", None))
+                    seed=getattr(args, "seed", None), physics_core=getattr(args, "physics_core", "auto"))
         except Interrupted as e:
             print(f"\ninterrupted ({e}): the system was shut down", file=sys.stderr)
             return 128 + e.signum

@@ -1,0 +1,79 @@
+"""A core of its own for the physics server under lockstep (`skillbus demo --physics-core`).
+
+Under lockstep the physics server steps while the participants work on the frame
+(`sim_server --pipeline`), and a frame ends when both are done. On a machine with few
+cores the participants, woken by every frame's clock, were scheduled onto the physics'
+core too and preempted its step: on 2 cores the step took 0.76 ms a frame in the demo
+against 0.70 ms with the other processes kept off its core, and the demo ran 7-11 %
+faster (docs/benchmarks.md). So the demo gives the physics server one core and every
+other program the others, with `taskset` in front of each command (visible in the run
+folder's supervisord.conf).
+
+It is a trade: a physics server held to one core cannot move when something else, outside
+the system, takes that core. `--physics-core off` leaves placement to the kernel;
+`--physics-core N` names the core. With one usable core there is nothing to split, and
+`auto` changes nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import shutil
+
+from skillbus.system import Program
+
+PHYSICS = "sim"  # the program that steps the physics (skillbus.system)
+
+
+class LayoutError(ValueError):
+    """A core that cannot be used, named with the ones that can."""
+
+
+def cpu_list(cpus: set[int] | list[int]) -> str:
+    """taskset's form: 0,2,3."""
+    return ",".join(str(c) for c in sorted(cpus))
+
+
+@dataclasses.dataclass
+class Layout:
+    programs: list[Program]
+    note: str                      # where each went, or why nothing changed
+    others: set[int] | None = None  # the cores of everything but the physics (None: unchanged)
+
+
+def place(progs: list[Program], choice: str = "auto", allowed: set[int] | None = None,
+          taskset: str | None = None) -> Layout:
+    """The programs with the physics server on a core of its own and the rest on the other
+    cores this process may use (`allowed`, default its own affinity). `choice`: "auto" (the
+    last usable core), "off", or a core's number."""
+    allowed = set(allowed if allowed is not None else os.sched_getaffinity(0))
+    choice = choice.strip().lower()
+    if choice == "off":
+        return Layout(progs, "placement left to the kernel (--physics-core off)")
+    if choice == "auto":
+        core = max(allowed)
+    else:
+        try:
+            core = int(choice)
+        except ValueError:
+            raise LayoutError(f"--physics-core {choice!r}: 'auto', 'off' or a core's number "
+                              f"(this process may use {cpu_list(allowed)})") from None
+        if core not in allowed:
+            raise LayoutError(f"--physics-core {core}: not a core this process may use ({cpu_list(allowed)})")
+    others = allowed - {core}
+    if not others:
+        if choice == "auto":
+            return Layout(progs, f"one usable core ({core}): the physics server shares it")
+        raise LayoutError(f"--physics-core {core}: the only core this process may use; the other programs need "
+                          f"one too (give --physics-core off)")
+    if not any(p.name == PHYSICS for p in progs):
+        return Layout(progs, "no physics server among the programs")
+    tool = taskset or shutil.which("taskset")
+    if tool is None:
+        if choice == "auto":
+            return Layout(progs, "taskset (util-linux) is not installed: placement left to the kernel")
+        raise LayoutError(f"--physics-core {core}: taskset (util-linux) is not installed")
+    out = [dataclasses.replace(p, argv=[tool, "--cpu-list", cpu_list({core} if p.name == PHYSICS else others),
+                                        *p.argv]) for p in progs]
+    return Layout(out, f"the physics server on core {core}, the other programs on {cpu_list(others)}", others)

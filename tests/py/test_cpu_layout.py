@@ -1,0 +1,66 @@
+"""skillbus.cpu_layout: the physics server on a core of its own, every other program on
+the rest, or nothing changed, saying why; a core that cannot be used is refused, naming
+the ones that can."""
+
+from __future__ import annotations
+
+import pytest
+
+from skillbus.cpu_layout import LayoutError, place
+from skillbus.system import Program
+
+PROGS = [Program("can_hub", ["hub"]), Program("sim", ["sim_server", "--pipeline"]), Program("wm", ["wm_server"]),
+         Program("skills", ["python", "-m", "skillbus.cli", "skills-process"], participant=True)]
+TASKSET = "/usr/bin/taskset"
+
+
+def prefixes(layout):
+    return {p.name: p.argv[:3] for p in layout.programs}
+
+
+def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest():
+    two = place(PROGS, "auto", {0, 1}, taskset=TASKSET)
+    assert prefixes(two) == {"can_hub": [TASKSET, "--cpu-list", "0"], "sim": [TASKSET, "--cpu-list", "1"],
+                             "wm": [TASKSET, "--cpu-list", "0"], "skills": [TASKSET, "--cpu-list", "0"]}
+    assert [p.argv[3:] for p in two.programs] == [p.argv for p in PROGS]  # the commands themselves unchanged
+    assert two.others == {0} and two.note == "the physics server on core 1, the other programs on 0"
+    four = place(PROGS, "auto", {0, 2, 5, 7}, taskset=TASKSET)
+    assert prefixes(four)["sim"][2] == "7" and prefixes(four)["wm"][2] == "0,2,5"
+    assert [p.participant for p in four.programs] == [p.participant for p in PROGS]
+
+
+def test_a_named_core():
+    layout = place(PROGS, " 0 ", {0, 1}, taskset=TASKSET)
+    assert prefixes(layout)["sim"][2] == "0" and prefixes(layout)["skills"][2] == "1"
+
+
+def test_nothing_changes_when_off_with_one_core_or_without_taskset():
+    for layout in (place(PROGS, "off", {0, 1}, taskset=TASKSET), place(PROGS, "auto", {3}, taskset=TASKSET)):
+        assert layout.programs == PROGS and layout.others is None
+    assert "left to the kernel" in place(PROGS, "OFF", {0, 1}).note
+    assert "one usable core (3)" in place(PROGS, "auto", {3}).note
+    assert place([p for p in PROGS if p.name != "sim"], "auto", {0, 1}, taskset=TASKSET).others is None
+
+
+@pytest.mark.parametrize("choice, why", [
+    ("2", r"--physics-core 2: not a core this process may use \(0,1\)"),
+    ("-1", r"not a core this process may use \(0,1\)"),
+    ("fast", r"--physics-core 'fast': 'auto', 'off' or a core's number \(this process may use 0,1\)"),
+    ("", r"'auto', 'off' or a core's number"),
+])
+def test_a_core_that_cannot_be_used_is_refused_naming_the_usable_ones(choice, why):
+    with pytest.raises(LayoutError, match=why):
+        place(PROGS, choice, {0, 1}, taskset=TASKSET)
+
+
+def test_the_only_usable_core_cannot_be_the_physics_own():
+    with pytest.raises(LayoutError, match="the only core this process may use.*--physics-core off"):
+        place(PROGS, "4", {4}, taskset=TASKSET)
+
+
+def test_without_taskset_auto_changes_nothing_and_a_named_core_is_refused(monkeypatch):
+    monkeypatch.setattr("skillbus.cpu_layout.shutil.which", lambda name: None)
+    layout = place(PROGS, "auto", {0, 1})
+    assert layout.programs == PROGS and "taskset (util-linux) is not installed" in layout.note
+    with pytest.raises(LayoutError, match="--physics-core 1: taskset"):
+        place(PROGS, "1", {0, 1})
