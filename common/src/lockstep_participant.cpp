@@ -213,9 +213,18 @@ RunResult LockstepParticipant::run_lockstep() {
 RunResult LockstepParticipant::run_wall_clock() {
   RunResult r;
   const auto start = steady::now();
+  auto anchor = start;  // frame 0's due time, moved on when the loop falls behind
   const auto period = std::chrono::nanoseconds(cfg_.wall_frame_period_ns);
   for (int64_t frame = 0; !stop_requested_ && (cfg_.wall_frames < 0 || frame < cfg_.wall_frames); ++frame) {
-    const auto due = start + frame * period;
+    auto due = anchor + frame * period;
+    // Behind by more than a frame (a long frame: an expansion, a planner, a stalled
+    // machine): the frames missed are not run back to back, which would tick skills many
+    // times in a few milliseconds with nobody else heard in between; the schedule starts
+    // again from now, at the frame period.
+    if (steady::now() - due > period) {
+      anchor += steady::now() - due;
+      due = anchor + frame * period;
+    }
     for (auto now = steady::now(); now < due; now = steady::now())
       bus_.handle(std::chrono::ceil<milliseconds>(due - now));
     const int64_t sim_time = frame * cfg_.wall_frame_period_ns;

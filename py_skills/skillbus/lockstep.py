@@ -486,8 +486,14 @@ class LockstepParticipant:
         start = time.monotonic()
         period = self.wall_frame_period_ns * 1e-9
         frame = 0
+        anchor = start  # frame 0's due time, moved on when the loop falls behind
         while not self._stop_requested and (self.wall_frames is None or frame < self.wall_frames):
-            due = start + frame * period
+            due = anchor + frame * period
+            # Behind by more than a frame (a long frame, a stalled machine): the missed
+            # frames are not run back to back; the schedule starts again from now.
+            if (late := time.monotonic() - due) > period:
+                anchor += late
+                due += late
             while (left := due - time.monotonic()) > 0:
                 self.bus.handle(left)
             sim_time = frame * self.wall_frame_period_ns

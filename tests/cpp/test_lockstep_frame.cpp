@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
+#include "skillbus/lockstep.hpp"
 #include "skillbus/lockstep_frame.hpp"
+
+#include <chrono>
+#include <thread>
 #include "skillbus_msgs/test_sample_t.hpp"
 
 using namespace skillbus;
@@ -137,4 +141,28 @@ TEST(FrameOutbox, StampsTheEncodedHeaderWithoutTouchingTheMessage) {
     expected.push_back(encode_msg(want));
   }
   EXPECT_EQ(bus.sent, expected);
+}
+
+// Wall-clock mode after a long frame: the frames it missed are not run back to back (a
+// skill manager ticked a skill five times in 3 ms after a planner's expansion, and a
+// process watching the world model could not see the robot between two shelves); the
+// schedule starts again from the late frame, at the frame period.
+TEST(WallClockParticipant, AfterALongFrameTheMissedFramesAreNotRunBackToBack) {
+  auto bus = open_bus("memq://");
+  ParticipantConfig cfg;
+  cfg.name = "p";
+  cfg.mode = ClockMode::WallClock;
+  cfg.wall_frame_period_ns = 20'000'000;
+  cfg.wall_frames = 8;
+  LockstepParticipant p(*bus, cfg);
+  std::vector<std::chrono::steady_clock::time_point> at;
+  p.on_frame = [&](int64_t frame, int64_t) {
+    at.push_back(std::chrono::steady_clock::now());
+    if (frame == 2) std::this_thread::sleep_for(std::chrono::milliseconds(200));  // ten frames' time
+  };
+  const RunResult r = p.run();
+  ASSERT_EQ(r.frames, 8);
+  ASSERT_EQ(at.size(), 8u);
+  for (size_t i = 4; i < at.size(); ++i)
+    EXPECT_GE(at[i] - at[i - 1], std::chrono::milliseconds(15)) << "frame " << i << " ran right after frame " << i - 1;
 }
