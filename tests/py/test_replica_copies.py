@@ -90,3 +90,49 @@ def test_with_relations_copies_the_callers_element_and_keeps_its_own_relations(w
     rels = {(r["src"], r["type"], r["dst"]) for r in w.getRelations()}
     assert rels == {("-1", "skiros:contain", "skiros:Table-1"), ("skiros:Table-1", "skiros:contain", "skiros:Cube-2")}
     assert not w.changed_since_loaded()
+
+
+def test_add_relations_completes_the_callers_element_itself(wmi):
+    mine = Element("skiros:Cube", "red", "skiros:Cube-2")
+    mine.setProperty("skiros:Size", 0.07)
+    mine.addRelation("skiros:Table-1", "skiros:contain", "skiros:Cube-2")  # (carried already: not twice)
+    assert wmi.add_relations(mine) is mine
+    assert mine.getRelations() == [{"src": "skiros:Table-1", "type": "skiros:contain", "dst": "skiros:Cube-2",
+                                    "state": True, "abstract": False}]
+    assert mine.loaded() is not None and not mine.changed_since_loaded()
+    unknown = Element("skiros:Cube", "", "skiros:Cube-99")  # not in the replica: loaded as it is
+    assert wmi.add_relations(unknown) is unknown and unknown.getRelations() == [] and unknown.loaded() is not None
+
+
+def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeypatch):
+    """A tick's element values are decoded afresh at every tick (skillbus.skill.convert):
+    completing them took a copy and remembered what they were loaded as twice."""
+    from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
+    from skillbus.skill.convert import apply_param_msgs, param_msg
+
+    class Hold(SkillDescription):
+        def createDescription(self):
+            self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+
+    class hold(PrimitiveBase):
+        def createDescription(self):
+            self.setDescription(Hold(), "hold")
+
+    sender = hold()
+    cube = Element("skiros:Cube", "red", "skiros:Cube-2")
+    cube.setProperty("skiros:Size", 0.07)
+    sender.params["Object"].setValue(cube)
+    msgs = [param_msg(sender.params["Object"])]
+    skill = hold()
+    skill.wmi = wmi
+    marks = []
+    real_mark = Element.mark_loaded
+    monkeypatch.setattr(Element, "mark_loaded", lambda e: (marks.append(e.id), real_mark(e))[1])
+    monkeypatch.setattr(Element, "clone", lambda e: pytest.fail("a tick's fresh element was copied"))
+    apply_param_msgs(skill, msgs)
+    got = skill.params["Object"].value
+    assert marks == ["skiros:Cube-2"]
+    assert got.getProperty("skiros:Size").value == 0.07 and got.loaded()[2]["skiros:Size"].value == 0.07
+    assert {(r["src"], r["type"], r["dst"]) for r in got.getRelations()} == {
+        ("skiros:Table-1", "skiros:contain", "skiros:Cube-2")}
+    assert not got.changed_since_loaded()

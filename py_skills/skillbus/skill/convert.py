@@ -79,10 +79,12 @@ def apply_param_msgs(skill: SkillCore, params: list[skill_param_t]) -> None:
         if skill.params.hasParam(m.key):
             p = skill.params[m.key]
             values = [value_from_msg(v) for v in m.values]
-            for i, v in enumerate(values):
+            for v in values:  # (each made afresh just now: completed in place, not copied)
                 if isinstance(v, Element) and not v.isAbstract():
-                    values[i] = skill.wmi.with_relations(v) if skill.wmi is not None else v
-                    values[i].mark_loaded()
+                    if skill.wmi is not None:
+                        skill.wmi.add_relations(v)
+                    else:
+                        v.mark_loaded()
             p._values = values  # from the blackboard, already checked by the manager
 
 

@@ -248,12 +248,20 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         self._fresh()
         if not e.id or e.id not in self._elements:
             return e
-        out = e.clone()
-        have = {(r["src"], r["type"], r["dst"]) for r in out._relations if r.get("state", True)}
-        out._relations += [{"src": s, "type": p, "dst": o, "state": True, "abstract": False}
-                           for (s, p, o) in self._relations_of(e.id) if (s, p, o) not in have]
-        out.mark_loaded()
-        return out
+        return self.add_relations(e.clone())
+
+    def add_relations(self, e: Element) -> Element:
+        """As with_relations, but into `e` itself, which is returned: for an element the
+        caller has just made and nobody else holds (a tick's parameter, decoded afresh),
+        which a copy would only duplicate. Marked as loaded either way (an element the
+        replica does not have: with what it carries)."""
+        self._fresh()
+        if e.id and e.id in self._elements:
+            have = {(r["src"], r["type"], r["dst"]) for r in e._relations if r.get("state", True)}
+            e._relations += [{"src": s, "type": p, "dst": o, "state": True, "abstract": False}
+                             for (s, p, o) in self._relations_of(e.id) if (s, p, o) not in have]
+        e.mark_loaded()
+        return e
 
     def get_element(self, eid: str) -> Element:
         self._fresh()
