@@ -81,6 +81,11 @@ class GripperDevice:
         self.node.rpdo[1].add_callback(self._on_rpdo)
         self.node.tpdo.read(from_od=True)
         network.subscribe(self.node.rpdo[1].cob_id, self._check_rpdo_length)
+        # The heartbeat's period (0x1017), read at every lockstep frame: kept here as it is
+        # written (a read through the dictionary costs python-canopen several microseconds).
+        # Registered last, so no later callback refuses a write this has already taken.
+        self._heartbeat_ms = self.node.sdo[0x1017].raw
+        self.node.add_write_callback(self._note_heartbeat_period)
 
     # -- CAN side --------------------------------------------------------------------
     def boot(self) -> None:
@@ -118,6 +123,10 @@ class GripperDevice:
         except BadValue as e:
             self.rejects.record(f"SDO 0x{index:04X}", e)
             raise canopen.SdoAbortedError(SDO_VALUE_RANGE) from None
+
+    def _note_heartbeat_period(self, index: int, subindex: int, od, data: bytes) -> None:
+        if index == 0x1017 and subindex == 0:
+            self._heartbeat_ms = od.decode_raw(data)
 
     def _on_rpdo(self, pdo) -> None:
         if len(pdo.data) != 6:
@@ -240,7 +249,7 @@ class GripperDevice:
 
     def heartbeat_if_due(self, sim_time_ns: int) -> None:
         """Lockstep: the heartbeat producer (0x1017 ms of sim time) from the frames."""
-        period_ms = self.node.sdo[0x1017].raw
+        period_ms = self._heartbeat_ms
         if period_ms <= 0 or self.node.nmt.state == "INITIALISING":
             return
         if self._next_heartbeat_ns is None or sim_time_ns >= self._next_heartbeat_ns:

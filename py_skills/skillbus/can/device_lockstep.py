@@ -47,10 +47,11 @@ def run(args) -> int:
         if s is None:
             bad[0] += 1
             return
-        if take_sim_state(dev, fingers, s, state_channel()):
+        if take_sim_state(dev, fingers, s, state_ch):
             last_state[0] = s
 
-    p.subscribe(state_channel(), on_state)
+    state_ch = state_channel()
+    p.subscribe(state_ch, on_state)
     last: list[int | None] = [None]
     last_state: list = [None]
 

@@ -83,7 +83,8 @@ class LockstepCanLink:
         self._stop = False
         self._reader = threading.Thread(target=self._read, name="can-lockstep-reader", daemon=True)
         self._reader.start()
-        participant.subscribe(sync_channel(), self._on_sync)
+        self._sync_channel = sync_channel()  # (named once: published on every frame with sends)
+        participant.subscribe(self._sync_channel, self._on_sync)
 
     # -- the python-can surface canopen uses ------------------------------------------------
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
@@ -208,7 +209,7 @@ class LockstepCanLink:
         if self._sent:
             s = can_sync_t()
             s.can_channel, s.frames = self.can_channel, self._sent
-            self.p.publish(sync_channel(), s)
+            self.p.publish(self._sync_channel, s)
             self.stats["sent"] += self._sent
         self._sent = 0
 
