@@ -134,8 +134,18 @@ void LockstepMaster::on_ack(const uint8_t* d, size_t n, const std::string& ch) {
   if (!decode_msg(d, n, a)) return bad_.record(ch, "not a lockstep_ack_t", n);
   if (a.header.frame != awaiting_frame_) return;  // a resent ack of an earlier frame
   if (!std::binary_search(expected_.begin(), expected_.end(), a.header.sender)) return;
-  if (!acks_.count(a.header.sender))
-    ack_seconds_[a.header.sender] += std::chrono::duration<double>(steady::now() - clock_sent_).count();
+  if (!acks_.count(a.header.sender)) {
+    const auto now = steady::now();
+    ack_seconds_[a.header.sender] += std::chrono::duration<double>(now - clock_sent_).count();
+    // An ack read before the bus first ran dry after on_clock_sent may have come during it
+    // (it waited in the socket): it held nothing up. (A bus that cannot tell says now.)
+    if (bus_.caught_up_at() > own_work_done_) {
+      held_seconds_[a.header.sender] += std::chrono::duration<double>(now - own_work_done_).count();
+      last_acker_ = a.header.sender;
+    } else {
+      held_seconds_.emplace(a.header.sender, 0.0);
+    }
+  }
   Ack& ack = acks_[a.header.sender];
   ack.counts = std::move(a.counts);
   std::copy(std::begin(a.digest), std::end(a.digest), ack.digest.begin());
@@ -205,7 +215,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   acks_.clear();
   awaiting_frame_ = frame;
   const auto start = steady::now();
-  clock_sent_ = start;
+  clock_sent_ = own_work_done_ = start;
   auto resend_at = start;
   while (acks_.size() < expected_.size()) {
     const auto now = steady::now();
@@ -234,6 +244,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
       if (first && on_clock_sent) {
         try {
           on_clock_sent(frame, sim_time);
+          own_work_done_ = steady::now();
         } catch (const std::exception& e) {
           error = "lockstep: master " + cfg_.name + " failed in frame " + std::to_string(frame) + ": " + e.what();
           return false;
@@ -247,6 +258,8 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   }
   awaiting_frame_ = -1;
   wait_seconds_ += std::chrono::duration<double>(steady::now() - start).count();
+  if (!last_acker_.empty()) ++ended_by_[last_acker_];
+  last_acker_.clear();
   for (const auto& [name, ack] : acks_)
     if (!ack.error.empty()) {
       error = "lockstep: participant " + name + " failed in frame " + std::to_string(frame) + ": " + ack.error;

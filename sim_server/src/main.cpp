@@ -69,8 +69,11 @@ int main(int argc, char** argv) {
   for (const auto& ob : state.objects)
     objects[ob.name] = {apps::rounded(ob.pose[0], 4), apps::rounded(ob.pose[1], 4), apps::rounded(ob.pose[2], 4)};
   // Where a frame's wall time went, in ms per frame: publishing the state, the physics
-  // (and commands), the wait for the participants' acks (the slowest of each frame), and
-  // each participant's own clock-to-ack time (its work plus the transport both ways).
+  // (and commands), the wait for the participants' acks (the slowest of each frame), each
+  // participant's clock-to-ack time as the master read it (no ack is read during the
+  // physics' step: one that came then counts until the step's end), and how long each
+  // participant's ack came after the step (held_: what it added to the frame), with the
+  // share of frames its ack was the last one of (ended_by).
   const double f = r.frames > 0 ? static_cast<double>(r.frames) : 1.0;
   apps::Summary frame_ms;
   frame_ms["state"] = apps::rounded(rep.frame_start_seconds * 1e3 / f, 3);
@@ -78,6 +81,9 @@ int main(int argc, char** argv) {
   frame_ms["ack_wait"] = apps::rounded(rep.ack_wait_seconds * 1e3 / f, 3);
   frame_ms["total"] = apps::rounded(r.wall_seconds * 1e3 / f, 3);
   for (const auto& [name, s] : rep.ack_seconds) frame_ms["ack_" + name] = apps::rounded(s * 1e3 / f, 3);
+  for (const auto& [name, s] : rep.held_seconds) frame_ms["held_" + name] = apps::rounded(s * 1e3 / f, 3);
+  apps::Summary ended_by = apps::Summary::object();
+  for (const auto& [name, n] : rep.ended_by) ended_by[name] = apps::rounded(static_cast<double>(n) / f, 3);
   const double rtf = r.wall_seconds > 0 ? r.sim_time_ns * 1e-9 / r.wall_seconds : 0.0;
 
   apps::Summary out;
@@ -111,6 +117,7 @@ int main(int argc, char** argv) {
   }
   out["objects"] = objects;
   out["frame_ms"] = frame_ms;
+  out["frames_ended_by"] = ended_by;  // the share of frames whose last ack was each participant's
   // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
   if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);

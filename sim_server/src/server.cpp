@@ -467,6 +467,8 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   rep.frame_end_seconds = end_s;
   rep.ack_wait_seconds = master.wait_seconds();
   rep.ack_seconds = master.ack_seconds();
+  rep.held_seconds = master.held_seconds();
+  rep.ended_by = master.ended_by();
   return rep;
 }
 

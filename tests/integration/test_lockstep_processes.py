@@ -171,6 +171,9 @@ def test_a_slow_participant_is_waited_for_and_no_frame_is_skipped_or_repeated(sa
     s = last_json(clock.stdout())
     assert s["ok"] and s["frames"] == 100 and s["wall_time_s"] >= 0.8
     assert s["digest"] == clean["digest"]
+    # The master says who held the frames up: the slow one, by its 0.8 s, and no one else.
+    assert s["held_ms"][slow] >= 800 and all(ms < 400 for n, ms in s["held_ms"].items() if n != slow), s["held_ms"]
+    assert s["frames_ended_by"][slow] >= 1 and sum(s["frames_ended_by"].values()) <= 100, s["frames_ended_by"]
     for n, p in parts.items():
         sandbox.wait(p, 15)
         r = last_json(p.stdout())

@@ -75,9 +75,16 @@ class LockstepMaster {
   const BadInputCounter& bad_input() const { return bad_; }
   const MasterConfig& config() const { return cfg_; }
   // Where frames' wall time went, for benchmarks (never behaviour): per participant the
-  // summed time from the clock going out to its ack arriving, and the summed time of the
-  // whole ack wait (the slowest participant of each frame).
+  // summed time from the clock going out to its ack being read, and the summed time of the
+  // whole ack wait (the slowest participant of each frame). While on_clock_sent runs (the
+  // physics' step) no ack is read, so an ack that came during it counts until its end:
+  // held_seconds is, per participant, only what its ack came after on_clock_sent returned
+  // (how long it held the frame up past the master's own work), and ended_by how many
+  // frames its ack was the last one of, among the frames whose acks were not all in when
+  // on_clock_sent returned.
   const std::map<std::string, double>& ack_seconds() const { return ack_seconds_; }
+  const std::map<std::string, double>& held_seconds() const { return held_seconds_; }
+  const std::map<std::string, int64_t>& ended_by() const { return ended_by_; }
   double wait_seconds() const { return wait_seconds_; }
 
  private:
@@ -117,7 +124,11 @@ class LockstepMaster {
   int64_t end_at_ = -1;  // a participant asked to end after this frame (lockstep_end_t)
   std::map<std::string, int64_t> end_asked_;  // with end_when_asked_by: who asked, for which frame
   std::chrono::steady_clock::time_point clock_sent_{};
+  std::chrono::steady_clock::time_point own_work_done_{};  // on_clock_sent returned (or the clock went out)
+  std::string last_acker_;
   std::map<std::string, double> ack_seconds_;
+  std::map<std::string, double> held_seconds_;
+  std::map<std::string, int64_t> ended_by_;
   double wait_seconds_ = 0;
 };
 

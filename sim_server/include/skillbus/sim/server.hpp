@@ -78,6 +78,8 @@ struct ServerReport {
   // Where the wall time went (seconds, summed over the run): for benchmarks.
   double frame_start_seconds = 0, frame_end_seconds = 0, ack_wait_seconds = 0;
   std::map<std::string, double> ack_seconds;
+  std::map<std::string, double> held_seconds;  // each participant's ack past the physics' step
+  std::map<std::string, int64_t> ended_by;     // frames whose last ack was each participant's
 };
 
 class SimServer {
