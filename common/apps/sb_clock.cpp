@@ -99,8 +99,9 @@ int main(int argc, char** argv) {
   out["digest"] = r.digest_hex();
   out["commands"] = commands;
   out["bad_input"] = master.bad_input().total();
-  // Per participant: ms its ack came after the clock went out, summed over the run (the
-  // master does no work of its own between), and the frames its ack was the last one of.
+  // Per participant: the ms its acks kept the master waiting after the clock went out (an
+  // ack already in when the master first read the bus counts nothing), summed over the
+  // run, and the frames its ack was the last one of (LockstepMaster::held_seconds).
   apps::Summary held = apps::Summary::object(), ended_by = apps::Summary::object();
   for (const auto& [name, s] : master.held_seconds()) held[name] = apps::rounded(s * 1e3, 3);
   for (const auto& [name, n] : master.ended_by()) ended_by[name] = n;

@@ -136,3 +136,28 @@ def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeyp
     assert {(r["src"], r["type"], r["dst"]) for r in got.getRelations()} == {
         ("skiros:Table-1", "skiros:contain", "skiros:Cube-2")}
     assert not got.changed_since_loaded()
+
+
+def test_without_a_world_model_client_a_ticks_element_is_marked_loaded_as_it_came(monkeypatch):
+    from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
+    from skillbus.skill.convert import apply_param_msgs, param_msg
+
+    class Hold(SkillDescription):
+        def createDescription(self):
+            self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+
+    class hold(PrimitiveBase):
+        def createDescription(self):
+            self.setDescription(Hold(), "hold")
+
+    sender = hold()
+    cube = Element("skiros:Cube", "red", "skiros:Cube-2")
+    cube.setProperty("skiros:Size", 0.07)
+    sender.params["Object"].setValue(cube)
+    skill = hold()  # (no wmi: a skill run outside a process)
+    monkeypatch.setattr(Element, "clone", lambda e: pytest.fail("a tick's fresh element was copied"))
+    apply_param_msgs(skill, [param_msg(sender.params["Object"])])
+    got = skill.params["Object"].value
+    assert got.loaded() is not None and not got.changed_since_loaded()
+    assert got.getProperty("skiros:Size").value == 0.07 and got.loaded()[2]["skiros:Size"].value == 0.07
+    assert got.getRelations() == []  # (a tick carries properties only; no replica to add relations)

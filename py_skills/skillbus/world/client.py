@@ -248,7 +248,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         self._fresh()
         if not e.id or e.id not in self._elements:
             return e
-        return self.add_relations(e.clone())
+        return self._complete(e.clone())
 
     def add_relations(self, e: Element) -> Element:
         """As with_relations, but into `e` itself, which is returned: for an element the
@@ -256,6 +256,10 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         which a copy would only duplicate. Marked as loaded either way (an element the
         replica does not have: with what it carries)."""
         self._fresh()
+        return self._complete(e)
+
+    def _complete(self, e: Element) -> Element:
+        """`e` with the replica's relations of its id that it lacks, marked as loaded."""
         if e.id and e.id in self._elements:
             have = {(r["src"], r["type"], r["dst"]) for r in e._relations if r.get("state", True)}
             e._relations += [{"src": s, "type": p, "dst": o, "state": True, "abstract": False}
