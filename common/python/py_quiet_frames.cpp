@@ -4,10 +4,19 @@
 //       opener: the bus's skillbus_native.Opener, or None on an open bus (then signing_key
 //       is None too); identity: bytes
 //     .set_subscribed(channels)
-//     .wait(timeout_s, master, last_acked, last_sim_time, last_ack, running)
+//     .set_latest_only(channels)       (subscribed channels whose handler keeps the newest)
+//     .wait(timeout_s, master, last_acked, last_sim_time, last_ack, running
+//           [, quiet_through_frame, quiet_before_ns])
 //         -> (datagram | None, (ip, port) | None, acked, last_acked, last_sim_time,
-//             last_ack, running, resends)
-//     .counts() -> {"ok": clocks it verified, reason: clocks it dropped}  (cumulative)
+//             last_ack, running, resends, handed)
+//         handed: [(kind, channel, payload)]: kind 0 the newest message of a channel in
+//         frames the core acked, 1 the clock of a frame it was collecting, 2 a message
+//         held for a frame Python takes (payloads verified)
+//     .hold(channel, payload, last_acked)   (a verified latest-only message Python held)
+//     .release() -> handed
+//     .counts() -> {"ok": messages it verified, reason: messages it dropped}  (cumulative)
+//     .verdicts() -> {(reason or "ok", channel): count}  (cumulative)
+//     .latest_stats() -> {"stale": n, "duplicates": n}  (cumulative)
 //     .lost_sends() -> int
 //
 // The Python side is skillbus.quiet_frames and LockstepParticipant (py_skills/skillbus/).
@@ -95,17 +104,66 @@ PyObject* quiet_set_subscribed(PyObject* self_obj, PyObject* channels) {
   Py_RETURN_NONE;
 }
 
+bool set_count(PyObject* dict, const char* key, uint64_t n) {
+  PyObject* v = PyLong_FromUnsignedLongLong(n);
+  const bool ok = v && PyDict_SetItemString(dict, key, v) == 0;
+  Py_XDECREF(v);
+  return ok;
+}
+
+PyObject* quiet_set_latest_only(PyObject* self_obj, PyObject* channels) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  std::set<std::string> out;
+  PyObject* it = PyObject_GetIter(channels);
+  if (!it) return nullptr;
+  while (PyObject* c = PyIter_Next(it)) {
+    std::string s;
+    const bool ok = utf8_of(c, s, "a channel");
+    Py_DECREF(c);
+    if (!ok) {
+      Py_DECREF(it);
+      return nullptr;
+    }
+    out.insert(std::move(s));
+  }
+  Py_DECREF(it);
+  if (PyErr_Occurred()) return nullptr;
+  core->set_latest_only(std::move(out));
+  Py_RETURN_NONE;
+}
+
+PyObject* handed_list(std::vector<Handed>& handed) {
+  PyObject* out = PyList_New(0);
+  if (!out) return nullptr;
+  for (auto& h : handed) {
+    PyObject* item = Py_BuildValue("(is#y#)", static_cast<int>(h.kind), h.channel.data(), Py_ssize_t(h.channel.size()),
+                                   reinterpret_cast<const char*>(h.payload.data()), Py_ssize_t(h.payload.size()));
+    if (!item || PyList_Append(out, item) < 0) {
+      Py_XDECREF(item);
+      Py_DECREF(out);
+      return nullptr;
+    }
+    Py_DECREF(item);
+  }
+  return out;
+}
+
 PyObject* quiet_wait(PyObject* self_obj, PyObject* args) {
   QuietFrames* core = core_of(self_obj);
   if (!core) return nullptr;
   double timeout_s;
   PyObject *master, *last_ack, *running;
   long long last_acked, last_sim_time;
-  if (!PyArg_ParseTuple(args, "dOLLSS", &timeout_s, &master, &last_acked, &last_sim_time, &last_ack, &running))
+  long long through_frame = INT64_MAX, before_ns = INT64_MAX;
+  if (!PyArg_ParseTuple(args, "dOLLSS|LL", &timeout_s, &master, &last_acked, &last_sim_time, &last_ack, &running,
+                        &through_frame, &before_ns))
     return nullptr;
   QuietState s;
   s.last_acked = last_acked;
   s.last_sim_time = last_sim_time;
+  s.quiet_through_frame = through_frame;
+  s.quiet_before_ns = before_ns;
   if (!utf8_of(master, s.master, "master") || !bytes_of(last_ack, s.last_ack, "last_ack")) return nullptr;
   if (PyBytes_GET_SIZE(running) != static_cast<Py_ssize_t>(s.running.size())) {
     PyErr_SetString(PyExc_ValueError, "running: a 32-byte digest needed");
@@ -115,12 +173,13 @@ PyObject* quiet_wait(PyObject* self_obj, PyObject* args) {
   // (a NaN, negative or huge timeout: none, or an hour; Python waits again)
   const int timeout_ms = timeout_s > 0 ? static_cast<int>(std::min(timeout_s, 3600.0) * 1000 + 0.999) : 0;
   Datagram d;
+  std::vector<Handed> handed;
   bool got = false;
   int os_error = 0;
   std::string error;
   Py_BEGIN_ALLOW_THREADS
   try {
-    got = core->wait(s, timeout_ms, d);
+    got = core->wait(s, timeout_ms, d, handed);
   } catch (const std::system_error& e) {
     os_error = e.code().value();
     error = e.what();
@@ -145,18 +204,71 @@ PyObject* quiet_wait(PyObject* self_obj, PyObject* args) {
     Py_INCREF(datagram);
     Py_INCREF(sender);
   }
-  return Py_BuildValue("(NNLLLy#y#L)", datagram, sender, static_cast<long long>(s.acked),
+  PyObject* handed_out = handed_list(handed);
+  if (!handed_out) {
+    Py_DECREF(datagram);
+    Py_DECREF(sender);
+    return nullptr;
+  }
+  return Py_BuildValue("(NNLLLy#y#LN)", datagram, sender, static_cast<long long>(s.acked),
                        static_cast<long long>(s.last_acked), static_cast<long long>(s.last_sim_time),
                        reinterpret_cast<const char*>(s.last_ack.data()), Py_ssize_t(s.last_ack.size()),
                        reinterpret_cast<const char*>(s.running.data()), Py_ssize_t(s.running.size()),
-                       static_cast<long long>(s.resends));
+                       static_cast<long long>(s.resends), handed_out);
 }
 
-bool set_count(PyObject* dict, const char* key, uint64_t n) {
-  PyObject* v = PyLong_FromUnsignedLongLong(n);
-  const bool ok = v && PyDict_SetItemString(dict, key, v) == 0;
-  Py_XDECREF(v);
-  return ok;
+PyObject* quiet_hold(PyObject* self_obj, PyObject* args) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  PyObject *channel, *payload;
+  long long last_acked;
+  if (!PyArg_ParseTuple(args, "OSL", &channel, &payload, &last_acked)) return nullptr;
+  std::string ch;
+  Bytes data;
+  if (!utf8_of(channel, ch, "channel") || !bytes_of(payload, data, "payload")) return nullptr;
+  try {
+    core->hold(ch, data, last_acked);
+  } catch (const std::exception& e) {
+    PyErr_SetString(PyExc_RuntimeError, e.what());
+    return nullptr;
+  }
+  Py_RETURN_NONE;
+}
+
+PyObject* quiet_release(PyObject* self_obj, PyObject*) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  std::vector<Handed> handed = core->release();
+  return handed_list(handed);
+}
+
+PyObject* quiet_verdicts(PyObject* self_obj, PyObject*) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  PyObject* out = PyDict_New();
+  if (!out) return nullptr;
+  for (const auto& [key, count] : core->verdicts()) {
+    PyObject* k = Py_BuildValue("(s#s#)", key.first.data(), Py_ssize_t(key.first.size()), key.second.data(),
+                                Py_ssize_t(key.second.size()));
+    PyObject* v = PyLong_FromUnsignedLongLong(count);
+    const bool ok = k && v && PyDict_SetItem(out, k, v) == 0;
+    Py_XDECREF(k);
+    Py_XDECREF(v);
+    if (!ok) {
+      Py_DECREF(out);
+      return nullptr;
+    }
+  }
+  return out;
+}
+
+PyObject* quiet_latest_stats(PyObject* self_obj, PyObject*) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  PyObject* out = PyDict_New();
+  if (!out) return nullptr;
+  if (!set_count(out, "stale", core->stale()) || !set_count(out, "duplicates", core->duplicates())) Py_CLEAR(out);
+  return out;
 }
 
 PyObject* quiet_counts(PyObject* self_obj, PyObject*) {
@@ -177,7 +289,12 @@ PyObject* quiet_lost_sends(PyObject* self_obj, PyObject*) {
 
 PyMethodDef quiet_methods[] = {
     {"set_subscribed", quiet_set_subscribed, METH_O, "The channels whose announced messages give a frame work."},
+    {"set_latest_only", quiet_set_latest_only, METH_O, "Subscribed channels whose handler keeps only the newest."},
     {"wait", quiet_wait, METH_VARARGS, "Acks quiet frames until a datagram for Python comes or the timeout."},
+    {"hold", quiet_hold, METH_VARARGS, "A verified latest-only message Python held, for the core's frames."},
+    {"release", quiet_release, METH_NOARGS, "Everything the core holds, back to Python."},
+    {"verdicts", quiet_verdicts, METH_NOARGS, "Messages verified and dropped, by (reason, channel)."},
+    {"latest_stats", quiet_latest_stats, METH_NOARGS, "Latest-only messages dropped as stale or duplicate."},
     {"counts", quiet_counts, METH_NOARGS, "Clocks verified ('ok') and dropped, by reason (cumulative)."},
     {"lost_sends", quiet_lost_sends, METH_NOARGS, "Acks the network refused to send."},
     {nullptr, nullptr, 0, nullptr}};

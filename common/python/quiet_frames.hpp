@@ -11,13 +11,28 @@
 // else: another channel's message, a clock with work in it, a stop, anything odd. Python
 // then handles that datagram on its own path, so every rule stays written once there:
 // the core only repeats the happy path.
+//
+// Latest-only channels: a participant whose handler for a channel only keeps the newest
+// message (a robot's state, published every frame) marks it so. A frame whose only
+// announced messages are on such channels is quiet too: the core waits for them as
+// Python's inbox would (every announced message, verified), keeps the newest per
+// channel, acks the frame, and hands the newest to Python when it next wakes. A
+// participant with a frame callback says how far its next frames would do nothing (the
+// horizon: a frame number and a sim time); frames past it go to Python.
+//
+// What the core verified is never handed back as a datagram (a second check would call
+// it a replay): it goes back as a payload, with the clock it was collecting, whenever
+// Python takes over a frame (a clock the core does not ack, a message it cannot place,
+// the wait's end while a frame is half collected, release()).
 #pragma once
 
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "skillbus/auth.hpp"
@@ -49,6 +64,20 @@ struct QuietState {
   Digest running{};        // the running digest of the participant's frames
   int64_t acked = 0;       // out: quiet frames acked by this wait
   int64_t resends = 0;     // out: clock resends answered (the master is alive)
+  // The horizon: frames after quiet_through_frame, or at or after quiet_before_ns of sim
+  // time, go to Python (its frame callback has work then). No callback: no horizon.
+  int64_t quiet_through_frame = INT64_MAX;
+  int64_t quiet_before_ns = INT64_MAX;
+};
+
+// A verified payload handed back to Python.
+struct Handed {
+  enum Kind { Latest = 0, Clock = 1, Message = 2 };
+  Kind kind;            // Latest: the newest of a channel's messages in frames the core acked
+                        // (for the handler); Clock: the clock of a frame the core was
+                        // collecting; Message: held for a frame Python takes (for its inbox)
+  std::string channel;
+  Bytes payload;
 };
 
 struct Datagram {
@@ -65,12 +94,27 @@ class QuietFrames {
   QuietFrames& operator=(const QuietFrames&) = delete;
 
   void set_subscribed(std::set<std::string> channels) { subscribed_ = std::move(channels); }
+  // Subscribed channels whose handler only keeps the newest message.
+  void set_latest_only(std::set<std::string> channels) { latest_only_ = std::move(channels); }
 
   // Waits at most timeout_ms for a datagram this core does not consume, acking quiet
   // frames meanwhile. True with `out` filled: Python's to handle. False: the time is up,
-  // or a signal came (Python runs its handlers, then waits again). A socket error throws
-  // std::system_error.
-  bool wait(QuietState& s, int timeout_ms, Datagram& out);
+  // a signal came (Python runs its handlers, then waits again), or the core hands Python
+  // a frame (`handed`, which every return may fill: Python handles it first). A socket
+  // error throws std::system_error.
+  bool wait(QuietState& s, int timeout_ms, Datagram& out, std::vector<Handed>& handed);
+
+  // Messages Python verified and holds for coming frames, on latest-only channels (its
+  // inbox's), given to the core before a wait. `last_acked` is Python's floor.
+  void hold(const std::string& channel, const Bytes& payload, int64_t last_acked);
+
+  // Everything the core holds, back to Python (which stops using the core).
+  std::vector<Handed> release();
+
+  uint64_t stale() const { return stale_; }            // latest-only messages of frames already done
+  uint64_t duplicates() const { return duplicates_; }  // ... with a (sender, frame, seq) held already
+  // Messages verified ("ok") and dropped, by reason and channel (cumulative).
+  const std::map<std::pair<std::string, std::string>, uint64_t>& verdicts() const { return verdicts_; }
 
   // Clocks this core dropped, by reason, and accepted (cumulative): the bus adds them to
   // its own counts.
@@ -79,14 +123,44 @@ class QuietFrames {
   uint64_t lost_sends() const { return lost_sends_; }
 
  private:
-  enum class Verdict { Consumed, ForPython };
+  // Consumed: done with it. ForPython: the raw datagram is Python's. HandOver: Python
+  // takes over the frame (what the core verified is in handed_).
+  enum class Verdict { Consumed, ForPython, HandOver };
   Verdict on_datagram(QuietState& s, const uint8_t* d, size_t n);
   Verdict on_clock(QuietState& s, const uint8_t* d, size_t n);
-  bool verified(const uint8_t* d, size_t n);  // with the bus's opener; counted
+  Verdict on_latest(QuietState& s, const std::string& channel, const uint8_t* d, size_t n);
+  Verdict place(QuietState& s, const std::string& channel, const uint8_t* payload, size_t n);
+  // With the bus's opener; counted. `payload_size` out: the message without its seal.
+  bool verified(const std::string& channel, const uint8_t* d, size_t n, size_t& payload_size);
+  void ack_quiet(QuietState& s, int64_t frame, int64_t sim_time_ns);
+  void complete_pending(QuietState& s);
+  void hand_newest();
+  void hand_all();
   void send_ack(const Bytes& ack);
 
+  // A clock whose announced messages (all on latest-only channels) are being collected.
+  struct Expected {
+    std::string channel, sender;
+    int64_t frame;
+    int32_t count;
+  };
+  struct Pending {
+    int64_t frame, sim_time_ns;
+    Bytes payload;  // the clock, verified
+    std::vector<Expected> expected;
+  };
+  using SlotKey = std::tuple<std::string, std::string, int64_t>;  // channel, sender, frame
+  using Order = std::tuple<int64_t, std::string, int32_t>;        // frame, sender, seq
+
   QuietConfig cfg_;
-  std::set<std::string> subscribed_;
+  std::set<std::string> subscribed_, latest_only_;
+  std::optional<Pending> pending_;
+  std::map<SlotKey, std::map<int32_t, Bytes>> held_;           // verified, for coming frames
+  size_t held_count_ = 0;
+  std::map<std::string, std::pair<Order, Bytes>> newest_;      // consumed, not yet handed
+  std::vector<Handed> handed_;                                 // the current wait's hand-over
+  uint64_t stale_ = 0, duplicates_ = 0;
+  std::map<std::pair<std::string, std::string>, uint64_t> verdicts_;
   std::unique_ptr<auth::Sealer> sealer_;
   std::map<std::string, uint64_t> rejected_;
   uint64_t accepted_ = 0;

@@ -79,6 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--bare", action="store_true", help="no demo traffic: only the lockstep protocol")
     p.add_argument("--listen", action="store_true", help="with --bare: hear (and fold) SB_DEMO_CMD, publish nothing")
     p.add_argument("--every", type=_at_least_one, default=1, help="test: publish SB_DEMO_CMD in every N-th frame only")
+    p.add_argument("--latest-every", type=_at_least_one, default=None,
+                   help="test: read only the newest SB_DEMO_STATE (latest-only) and act in every N-th frame")
     p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
     p.add_argument("--slow-at-frame", type=int, default=-1, help="test: take --slow-s seconds over this frame")
     p.add_argument("--slow-s", type=float, default=0.8, help="test: how long the slow frame takes (s)")

@@ -191,6 +191,9 @@ def expectations_for(announced: list[channel_count_t], subscribed: set[str], me:
 
 MessageHandler = Callable[[StampedMessage], None]
 FrameCallback = Callable[[int, int], None]
+# (last frame, sim time before which) the frame callback would do nothing, or None
+QuietHorizon = Callable[[], "tuple[int, int] | None"]
+NO_HORIZON = (2**63 - 1, 2**63 - 1)
 
 
 class LockstepParticipant:
@@ -208,7 +211,15 @@ class LockstepParticipant:
         self._acks = AckEncoder(name)
         self.inbox = FrameInbox(name, self.bad_input)
         self.handlers: dict[str, MessageHandler] = {}
+        self.latest_only: set[str] = set()  # channels whose handler keeps only the newest message
         self.on_frame: FrameCallback | None = None
+        # With on_frame: how far the next frames would do nothing in it, given no message
+        # that gives them work (skillbus.quiet_frames acks them without Python); None: every
+        # frame goes through Python. Asked before each wait.
+        self.quiet_horizon: QuietHorizon | None = None
+        self.previous_frame: tuple[int, int] = (-1, 0)  # (frame, sim time) acked before the current one
+        self._acked_sim_time = 0
+        self._latest_failure = ""  # a latest-only handler that failed between frames
         self._subs: list[int] = []
         self._next_clock: lockstep_clock_t | None = None
         self._ack_channel, self._join_channel = ack_channel(), join_channel()
@@ -221,23 +232,36 @@ class LockstepParticipant:
         self._running = bytes(32)
         self._stop_requested = False
         self._held: list[tuple[int, str, Any]] = []  # (due frame, channel, message): from ticks
-        self.after_frame: list[Callable[[int], None]] = []  # run after each frame's ack
+        # Run after each frame's ack. One with an idle() that answers True has nothing to do
+        # after the next frames, and does not keep them from the quiet-frame core.
+        self.after_frame: list[Callable[[int], None]] = []
         self._quiet: QuietFrames | None = None  # (skillbus.quiet_frames; made at the first wait)
         self._quiet_made = False
         self._join_bytes = b""  # our join, sent again as a sign of life while a frame takes long
         self.quiet_frames = 0  # frames acked by that core
+        self._quiet_stale = (0, 0)  # its stale and duplicate latest-only messages, counted
         if not wall_clock:
             self._subs.append(bus.subscribe(clock_channel(), self._on_clock))
 
     # -- API ---------------------------------------------------------------
-    def subscribe(self, ch: str, handler: MessageHandler) -> None:
-        """Lockstep subscription to an exact channel name."""
+    def subscribe(self, ch: str, handler: MessageHandler, latest_only: bool = False) -> None:
+        """Lockstep subscription to an exact channel name.
+
+        `latest_only`: the handler only keeps the newest message (a state published every
+        frame, read when a tick or a later frame needs it). It may then be given only the
+        newest of several frames' messages, when this participant next runs: frames whose
+        only messages are on such channels are acked without the interpreter
+        (skillbus.quiet_frames)."""
         first = ch not in self.handlers
         self.handlers[ch] = handler
+        if latest_only:
+            self.latest_only.add(ch)
+        else:
+            self.latest_only.discard(ch)
         if first:
             self._subs.append(self.bus.subscribe(ch, self._on_stamped))
-            if self._quiet is not None:
-                self._quiet.set_subscribed(set(self.handlers))
+        if self._quiet is not None:
+            self._quiet.set_subscribed(set(self.handlers), self.latest_only)
 
     def publish(self, ch: str, msg: Any) -> None:
         """Publishes for the current frame (from on_frame or a message handler).
@@ -261,6 +285,11 @@ class LockstepParticipant:
     @property
     def frame(self) -> int:
         return self.outbox.frame
+
+    @property
+    def acked_sim_time_ns(self) -> int:
+        """The sim time of the last frame acknowledged (0 before the first)."""
+        return self._acked_sim_time
 
     @property
     def completed_frame(self) -> int:
@@ -352,40 +381,95 @@ class LockstepParticipant:
             integer(n.frame, f"counts[{i}].frame", 0, c.header.frame)
 
     # -- waiting for the clock -----------------------------------------------
-    def _quiet_core(self) -> QuietFrames | None:
-        """skillbus.quiet_frames' core while this participant has nothing to do in a
-        frame but take the clock and ack: no on_frame, nothing to run after a frame,
-        nothing held for one (the messages it subscribed to the core checks per clock)."""
-        if self.on_frame is not None or self.after_frame or self._held or self._stop_requested \
-                or not self._master or not self._last_ack:
+    def _horizon(self) -> tuple[int, int] | None:
+        """How far the core may ack frames for this participant: everywhere without a
+        frame callback; with one, as far as its quiet_horizon says (None: not now)."""
+        if self.on_frame is None:
+            return NO_HORIZON
+        return self.quiet_horizon() if self.quiet_horizon is not None else None
+
+    def _quiet_core(self) -> tuple[QuietFrames, tuple[int, int]] | None:
+        """skillbus.quiet_frames' core, and its horizon, while this participant's next
+        frames may have nothing to do but take the clock and ack: nothing to run after a
+        frame, nothing held for one, a frame callback only with a horizon (the messages
+        it subscribed to the core checks per clock)."""
+        if self._held or self._stop_requested or not self._master or not self._last_ack:
+            return None
+        if any(not getattr(after, "idle", lambda: False)() for after in self.after_frame):
+            return None
+        horizon = self._horizon()
+        if horizon is None:
             return None
         if not self._quiet_made:
             self._quiet_made = True
             self._quiet = quiet_frames.for_bus(self.bus, self.name, clock_channel(), self._ack_channel)
             if self._quiet is not None:
-                self._quiet.set_subscribed(set(self.handlers))
-        return self._quiet if self._quiet is not None and self._quiet.usable() else None
+                self._quiet.set_subscribed(set(self.handlers), self.latest_only)
+        if self._quiet is None or not self._quiet.usable():
+            return None
+        return self._quiet, horizon
 
     def _wait_for_clock(self, timeout: float) -> int:
         """Handles the bus for at most `timeout` while the next clock is awaited; the
         number of quiet frames acked meanwhile without Python (0 on Python's path)."""
-        q = self._quiet_core()
-        if q is None:
+        found = self._quiet_core()
+        if found is None:
+            if self._quiet is not None:
+                self._take_back(self._quiet.core.release())  # (what it held is Python's again)
             self.bus.handle(timeout)
             return 0
-        datagram, sender, acked, last_acked, sim_time, last_ack, running, resends = q.core.wait(
-            timeout, self._master, self._last_acked, self._last_sim_time, self._last_ack, self._running)
+        q, (through_frame, before_ns) = found
+        try:  # what the inbox holds for coming frames on latest-only channels, the core's to place
+            for key in [k for k in self.inbox.held if k[0] in self.latest_only]:
+                slot = self.inbox.held[key]
+                for seq in list(slot):
+                    q.core.hold(key[0], slot[seq].data, self._last_acked)
+                    del slot[seq]
+                del self.inbox.held[key]
+        except RuntimeError as e:  # (more than a frame's traffic: Python's path, its inbox's rules)
+            self.log.warning("quiet frames: %s", e)
+            self._take_back(q.core.release())
+            self.bus.handle(timeout)
+            return 0
+        (datagram, sender, acked, last_acked, sim_time, last_ack, running, resends, handed) = q.core.wait(
+            timeout, self._master, self._last_acked, self._last_sim_time, self._last_ack, self._running,
+            through_frame, before_ns)
         if acked:
             self._last_acked = self._current = last_acked
             self._last_sim_time, self._last_ack, self._running = sim_time, last_ack, running
+            self._acked_sim_time = sim_time
             self.outbox.begin_frame(last_acked, sim_time)
             self.inbox.take([], last_acked)  # (as each frame's take: what is older is stale)
         if resends:
             self._master_heard = time.monotonic()
         q.note_counts()
+        if handed:
+            self._take_back(handed)
         if datagram is not None:
             q.feed(datagram, sender)
         return acked
+
+    def _take_back(self, handed: list[tuple[int, str, bytes]]) -> None:
+        """What the quiet-frame core hands back, verified: the newest message of a channel
+        in frames it acked (to the handler, as the frames would have), the clock of a
+        frame it was collecting and that frame's messages (on Python's usual path)."""
+        for kind, ch, payload in handed:
+            if kind == 0:
+                stamp = peek_stamp(payload)
+                try:
+                    self.handlers[ch](StampedMessage(ch, stamp, payload))  # type: ignore[arg-type]
+                except Exception as e:  # (failed between frames: the next frame fails, naming it)
+                    self.log.exception("handler of %s failed", ch)
+                    self._latest_failure = self._latest_failure or f"handler of {ch} failed: {type(e).__name__}: {e}"
+            elif kind == 1:
+                self._on_clock(ch, payload)
+            else:
+                self._on_stamped(ch, payload)
+        if self._quiet is not None:
+            stats = self._quiet.core.latest_stats()
+            self.inbox.stale += stats["stale"] - self._quiet_stale[0]
+            self.inbox.duplicates += stats["duplicates"] - self._quiet_stale[1]
+            self._quiet_stale = (stats["stale"], stats["duplicates"])
 
     def quiet_core_rejected(self) -> dict[str, int]:
         """Clocks the quiet-frame core dropped, by reason (counted in the bus's too)."""
@@ -397,7 +481,7 @@ class LockstepParticipant:
     def _send_ack(self, frame: int, sim_time_ns: int, error: str) -> None:
         digest = self.outbox.finish_frame()
         self._last_ack = self._acks.encode(frame, sim_time_ns, self.outbox.count_list(), digest, error)
-        self._last_acked = frame
+        self._last_acked, self._acked_sim_time = frame, sim_time_ns
         self.bus.publish(self._ack_channel, self._last_ack)
         self._running = hashlib.sha256(self._running + digest).digest()
 
@@ -459,7 +543,10 @@ class LockstepParticipant:
                 self._send_ack(frame, sim_time, err)
                 return self._fail(r, "lockstep: " + err)
             failure = ""
+            self.previous_frame = (self._last_acked, self._acked_sim_time)
             try:
+                if self._latest_failure:
+                    raise LockstepError(self._latest_failure)
                 self._publish_held(frame)
                 for m in self.inbox.take(expected, frame):
                     self.handlers[m.channel](m)

@@ -89,6 +89,47 @@ class Listener:
         self.received += 1
 
 
+class LatestReader:
+    """A participant that reads only the newest SB_DEMO_STATE (a latest-only subscription)
+    and acts in every N-th frame: it publishes SB_DEMO_CMD mixing that state with the
+    frame (tests: the frames between are acked by the quiet-frame core, which hands it the
+    newest state; the digest must be Python's own)."""
+
+    def __init__(self, participant: LockstepParticipant, every: int) -> None:
+        self.p, self.every = participant, every
+        self.state = self.received = 0
+        self.newest: StampedMessage | None = None
+        self.cmd_channel = channel("SB_DEMO_CMD")
+        participant.subscribe(channel("SB_DEMO_STATE"), self.keep, latest_only=True)
+        participant.on_frame = self.on_frame
+        participant.quiet_horizon = self.horizon
+        self.last_frame = -1
+
+    def keep(self, m: StampedMessage) -> None:
+        self.newest = m
+
+    def horizon(self) -> tuple[int, int] | None:
+        if self.last_frame < 0:
+            return None
+        nxt = (self.last_frame // self.every + 1) * self.every  # the next frame that acts
+        return (nxt - 1, 2**63 - 1) if nxt - 1 > self.last_frame else None
+
+    def on_frame(self, frame: int, sim_time_ns: int) -> None:
+        self.last_frame = frame
+        if frame % self.every or self.newest is None:
+            return
+        s = decode(test_sample_t, self.newest.data)
+        if s is None:
+            raise ValueError(f"SB_DEMO_STATE from {self.newest.stamp.sender} is not a test_sample_t")
+        self.state = demo_mix(self.state, s.i64 ^ self.newest.stamp.frame)
+        self.received += 1
+        out = test_sample_t()
+        out.blob = bytes(4)
+        out.i64 = to_int64(demo_mix(self.state, frame))
+        out.text = self.p.name
+        self.p.publish(self.cmd_channel, out)
+
+
 def main(args) -> int:
     bus = open_bus(args.url)
     if args.lose_acks_every:
@@ -96,8 +137,11 @@ def main(args) -> int:
     p = LockstepParticipant(bus, args.name, kind="python-demo", wall_clock=args.wall_clock,
                             wall_frames=args.frames, clock_timeout=args.clock_timeout,
                             message_timeout=args.message_timeout)
-    demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame, args.slow_s,
-                                                  args.every)
+    if args.latest_every:
+        demo = LatestReader(p, args.latest_every)
+    else:
+        demo = None if args.bare else DemoParticipant(p, args.drop_at_frame, args.slow_at_frame, args.slow_s,
+                                                      args.every)
     listener = Listener(p) if args.bare and args.listen else None
     r = p.run()
     received = demo.received if demo else listener.received if listener else 0

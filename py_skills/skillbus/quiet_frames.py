@@ -8,6 +8,13 @@ common/python/quiet_frames.hpp) reads its bus socket, acks quiet frames itself (
 bytes and running digest as Python) and returns at the first datagram that is anything
 else, which Python then handles on its usual path.
 
+Latest-only subscriptions (``LockstepParticipant.subscribe(..., latest_only=True)``: a
+handler that only keeps the newest message, like a robot state published every frame)
+do not give a frame work: the core collects and verifies the frame's messages on them as
+the inbox would, acks the frame, and hands Python the newest of each channel when it
+next wakes (``Handed``). A participant with a frame callback gives a horizon
+(``LockstepParticipant.quiet_horizon``): how far its next frames would do nothing.
+
 It takes over only what it can do exactly as Python does: the udpm:// bus read on the
 caller's thread (skillbus.udpm), signed with the deployment's key or open. Elsewhere
 (dds://, a test's wrapping bus, the module not built, ``SKILLBUS_NATIVE=0``)
@@ -33,7 +40,7 @@ class QuietFrames:
                  fd: int) -> None:
         self.core, self._lcm, self._auth = core, lcm_bus, auth_bus
         self._clock_channel, self._fd = clock_channel, fd
-        self._counts: dict[str, int] = {}
+        self._counts: dict[tuple[str, str], int] = {}
         self._lost_sends = 0
 
     def usable(self) -> bool:
@@ -41,16 +48,19 @@ class QuietFrames:
         the only one here hearing the clock (the core consumes the clocks it acks)."""
         return self._lcm.lane0_socket() == self._fd and self._lcm.subscribers(self._clock_channel) == 1
 
-    def set_subscribed(self, channels: set[str]) -> None:
+    def set_subscribed(self, channels: set[str], latest_only: set[str] = frozenset()) -> None:
+        """What gives a frame work; `latest_only` (of those) the core may collect itself,
+        where the participant is this bus's only subscriber (the core takes the datagrams)."""
         self.core.set_subscribed(sorted(channels))
+        self.core.set_latest_only(sorted(ch for ch in latest_only if self._lcm.subscribers(ch) == 1))
 
     def feed(self, datagram: bytes, sender: object) -> None:
         """A datagram the core returned, to the bus's handlers (verified when signed)."""
         (self._auth or self._lcm).feed_datagram(datagram, sender)
 
     def note_counts(self) -> None:
-        """What the core verified, dropped (forged, stale, replayed, forbidden clocks) and
-        could not send, counted and logged with the bus's own."""
+        """What the core verified, dropped (forged, stale, replayed, forbidden messages)
+        and could not send, counted and logged with the bus's own, by channel."""
         lost = self.core.lost_sends()
         if lost > self._lost_sends:
             self._lcm.lost_sends += lost - self._lost_sends
@@ -58,11 +68,11 @@ class QuietFrames:
             log.warning("sending on SB_LOCKSTEP_ACK failed: ack lost (%d in all from the quiet-frame core)", lost)
         if self._auth is None:
             return
-        for what, total in self.core.counts().items():
-            new = total - self._counts.get(what, 0)
+        for (what, channel), total in self.core.verdicts().items():
+            new = total - self._counts.get((what, channel), 0)
             if new > 0:
-                self._counts[what] = total
-                self._auth.note_verified(what, self._clock_channel, new)
+                self._counts[(what, channel)] = total
+                self._auth.note_verified(what, channel, new)
 
 
 def for_bus(bus: Bus, name: str, clock_channel: str, ack_channel: str) -> QuietFrames | None:

@@ -127,6 +127,11 @@ class RpcServer:
     def close(self) -> None:
         self.bus.unsubscribe(self._sub)
 
+    @property
+    def deferred(self) -> int:
+        """Requests deferred (RpcDefer), waiting for retry_deferred()."""
+        return len(self._deferred)
+
     def retry_deferred(self) -> None:
         """Runs the deferred requests again, oldest first (each may defer again)."""
         pending, self._deferred = self._deferred, collections.OrderedDict()

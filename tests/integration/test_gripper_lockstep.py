@@ -37,7 +37,7 @@ def grasp_scene(tmp: Path, object_width_ok: bool = True) -> tuple[Path, Path]:
     return f, ttl
 
 
-def session(box: Sandbox, tmp: Path, start: str, with_cube: bool = True) -> dict:
+def session(box: Sandbox, tmp: Path, start: str, with_cube: bool = True, device_env: dict | None = None) -> dict:
     scene, ttl = grasp_scene(tmp, with_cube)
     sock = tmp / "grip.sock"
     box.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", str(sock)])
@@ -45,7 +45,7 @@ def session(box: Sandbox, tmp: Path, start: str, with_cube: bool = True) -> dict
     sim = box.start("sim", [str(paths.binary("sim_server")), "--scene", str(scene), "--participants", PARTICIPANTS,
                             "--frames", str(FRAMES), "--join-timeout-ms", "30000"])
     device = box.start("gripper", [sys.executable, "-m", "skillbus.cli", "gripper-device", "--channel", str(sock),
-                                   "--node-id", "5", "--lockstep", "--name", "gripper"])
+                                   "--node-id", "5", "--lockstep", "--name", "gripper"], env=device_env)
     wm = box.start("wm", [paths.binary("wm_server"), "--data", str(tmp / "wm"),
                           "--scene", str(ttl)])
     mgr = box.start("skill_mgr", [str(mgr_binary()), "--start", start])
@@ -62,10 +62,14 @@ def session(box: Sandbox, tmp: Path, start: str, with_cube: bool = True) -> dict
 
 
 def test_grasp_closes_the_fingers_on_the_cube_and_the_world_model_knows(tmp_path):
+    # The second run's device takes every frame in Python (SKILLBUS_NATIVE=0); the first's
+    # frames at rest are acked by the quiet-frame core: the digests must not tell them apart.
     runs = []
-    for i in range(2):
+    for i, env in enumerate((None, {"SKILLBUS_NATIVE": "0"})):
         with Sandbox(log_dir=tmp_path / f"run{i}" / "logs") as box:
-            runs.append(session(box, tmp_path / f"run{i}", "Grasp Gripper=skiros:Gripper-7 Object=skiros:Cube-3"))
+            runs.append(session(box, tmp_path / f"run{i}", "Grasp Gripper=skiros:Gripper-7 Object=skiros:Cube-3",
+                                device_env=env))
+    assert runs[0]["device"]["quiet_frames"] > 0 and runs[1]["device"]["quiet_frames"] == 0
     for r in runs:
         assert r["sim"]["ok"], r["sim"]["error"]
         task = r["mgr"]["tasks"]["1"]

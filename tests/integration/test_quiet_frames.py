@@ -105,3 +105,27 @@ def test_forged_and_replayed_clocks_are_refused_and_counted_by_the_core(tmp_path
         assert r["rejected"].get(reason, 0) > 0, r
         if attack != "unsigned":  # (an unsigned clock is Python's to drop: the core verifies what it acts on)
             assert r["core_rejected"].get(reason, 0) > 0, r
+
+
+def test_latest_only_frames_are_acked_by_the_core_and_hand_python_the_newest_state(tmp_path, binary):
+    # py_latest reads SB_DEMO_STATE (published by the master every frame) latest-only and
+    # acts in every 10th frame: the nine frames between are the core's, which collects and
+    # verifies each frame's state and hands Python the newest. What py_latest publishes
+    # (and py_hear folds) must be what Python reading every state gives.
+    frames = 1500
+    parts = {"py_latest": ["--latest-every", "10"], "py_hear": ["--bare", "--listen"], "cpp_bare": ["--bare"]}
+    runs = {}
+    for label, env in (("python", WITHOUT_CORE), ("core", None)):
+        with Sandbox(log_dir=tmp_path / label) as box:
+            runs[label] = session(box, binary, frames, parts, env=env)
+    for master, results in runs.values():
+        assert master["ok"], master["error"]
+        assert all(r["ok"] and r["frames"] == frames for r in results.values()), results
+    assert outcome(*runs["core"]) == outcome(*runs["python"])
+    latest = runs["core"][1]["py_latest"]
+    assert runs["python"][1]["py_latest"]["quiet_frames"] == 0
+    assert latest["received"] == len(range(0, frames, 10))
+    # Frames 0 and 1 are Python's (no master known, then no frame acked); after that each
+    # tenth frame is Python's and the nine between the core's.
+    assert frames * 9 // 10 - 10 <= latest["quiet_frames"] <= frames * 9 // 10, latest
+    assert latest["bad_input"] == 0

@@ -61,9 +61,10 @@ class Rig:
             payload = self.sealer.seal(channel, payload)
         self.tx.sendto(datagram(channel, payload), self.rx.getsockname())
 
-    def wait(self, timeout=0.2):
-        out = self.core.wait(timeout, "clock", self.last_acked, self.sim_time, self.last_ack, self.running)
-        d, sender, acked, self.last_acked, self.sim_time, self.last_ack, self.running, resends = out
+    def wait(self, timeout=0.2, horizon=None):
+        more = horizon or ()
+        out = self.core.wait(timeout, "clock", self.last_acked, self.sim_time, self.last_ack, self.running, *more)
+        d, sender, acked, self.last_acked, self.sim_time, self.last_ack, self.running, resends, self.handed = out
         return d, sender, acked, resends
 
     def close(self):
@@ -288,3 +289,139 @@ def test_a_bus_read_on_the_callers_thread_gets_the_core_and_nothing_else(socket_
     del socket_bus._by_channel[CLOCK][2]
     monkeypatch.setenv(native.ENV, "0")
     assert quiet_frames.for_bus(socket_bus, NAME, CLOCK, ACK) is None
+
+
+# -- latest-only channels ------------------------------------------------------------------
+
+STATE = "SB_STATE"
+
+
+def stamped(frame, seq=0, sender="sim", body=b"") -> bytes:
+    """A lockstep message: a fingerprint, then its header_t (what peek_stamp reads)."""
+    import io
+    h = header_t()
+    h.frame, h.sim_time_ns, h.sender, h.seq = frame, frame * 10_000_000, sender, seq
+    buf = io.BytesIO()
+    h._encode_one(buf)
+    return bytes(8) + buf.getvalue() + body
+
+
+def latest_rig(rig):
+    rig.core.set_subscribed(["SB_HEARD", STATE])
+    rig.core.set_latest_only([STATE])
+    return rig
+
+
+def test_a_frame_whose_messages_are_all_latest_only_is_acked_and_hands_back_the_newest(rig):
+    latest_rig(rig)
+    # Frame 1's clock announces two states of frame 0; frame 2's one of frame 1, which
+    # comes after its clock.
+    rig.send(STATE, stamped(0, 0, body=b"a"))
+    rig.send(STATE, stamped(0, 1, body=b"b"))
+    rig.send(CLOCK, clock(1, counts=[count("sim", STATE, 0, 2)]))
+    rig.send(CLOCK, clock(2, counts=[count("sim", STATE, 1, 1)]))
+    rig.send(STATE, stamped(1, 0, body=b"c"))
+    acked, handed = 0, []
+    for _ in range(10):
+        d, _, n, _ = rig.wait()
+        assert d is None
+        acked += n
+        handed += rig.handed
+        if acked == 2:
+            break
+    assert acked == 2 and rig.last_acked == 2
+    assert rig.last_ack == AckEncoder(NAME).encode(2, 20_000_000, [], hashlib.sha256().digest(), "")
+    assert rig.running == python_running(bytes(32), 2)
+    # Only the newest, once: what a handler that keeps the newest would end with.
+    assert handed == [(0, STATE, stamped(1, 0, body=b"c"))]
+    if rig.sealer:
+        assert rig.core.verdicts() == {("ok", CLOCK): 2, ("ok", STATE): 3}
+
+
+def test_a_frame_with_a_message_that_does_not_come_is_handed_to_python_with_its_clock(rig):
+    latest_rig(rig)
+    rig.send(STATE, stamped(0, 0, body=b"a"))
+    rig.send(CLOCK, clock(1, counts=[count("sim", STATE, 0, 2)]))  # the second state is lost
+    d, _, acked, _ = rig.wait(0.1)
+    assert d is None and acked == 0 and rig.last_acked == 0
+    # Python takes the frame: the clock and what came of its messages, verified (Python's
+    # inbox then waits for the rest and names the loss).
+    assert sorted(rig.handed) == [(1, CLOCK, clock(1, counts=[count("sim", STATE, 0, 2)])),
+                                  (2, STATE, stamped(0, 0, body=b"a"))]
+    assert rig.wait(0.05)[:3] == (None, None, 0) and rig.handed == []
+
+
+def test_a_frame_past_the_horizon_goes_to_python_with_what_the_core_held_for_it(rig):
+    latest_rig(rig)
+    rig.send(STATE, stamped(0))
+    rig.send(CLOCK, clock(1, counts=[count("sim", STATE, 0)]))
+    d, _, acked, _ = rig.wait(horizon=(1, 2**63 - 1))
+    assert d is None and acked == 1
+    rig.send(STATE, stamped(1, body=b"x"))
+    rig.send(CLOCK, clock(2, counts=[count("sim", STATE, 1)]))
+    d, _, acked, _ = rig.wait(horizon=(1, 2**63 - 1))  # (frame 2 is past it)
+    assert acked == 0 and d is not None and CLOCK.encode() in d
+    assert (2, STATE, stamped(1, body=b"x")) in rig.handed
+    # a sim-time horizon too
+    rig.last_acked, rig.sim_time = 1, 10_000_000
+    rig.send(CLOCK, clock(2))
+    d, _, acked, _ = rig.wait(horizon=(100, 20_000_000))
+    assert acked == 0 and d is not None
+
+
+def test_a_message_for_python_while_a_frame_is_collected_hands_python_the_frame(rig):
+    latest_rig(rig)
+    rig.send(CLOCK, clock(1, counts=[count("sim", STATE, 0)]))
+    rig.send("SB_HEARD", b"tick")  # (a skill process's tick, say) before the state
+    d, _, acked, _ = rig.wait()
+    assert acked == 0 and b"SB_HEARD\0" in d
+    assert [h[0] for h in rig.handed] == [1]  # its clock: Python collects the state itself
+
+
+def test_own_stale_duplicate_and_unstamped_latest_messages(rig):
+    latest_rig(rig)
+    rig.last_acked = 5
+    rig.send(STATE, stamped(3))           # older than the floor: stale
+    rig.send(STATE, stamped(5, sender=NAME))  # its own: ignored
+    rig.send(STATE, stamped(5))
+    rig.send(STATE, stamped(5))           # the same (sender, frame, seq) again: a duplicate
+    rig.send(STATE, b"no stamp at all")   # Python's to record: handed back, the frame Python's
+    d, _, acked, _ = rig.wait()
+    assert d is None and acked == 0
+    assert (2, STATE, b"no stamp at all") in rig.handed and (2, STATE, stamped(5)) in rig.handed
+    assert rig.core.latest_stats() == {"stale": 1, "duplicates": 1}
+
+
+def test_forged_latest_messages_are_dropped_counted_and_do_not_complete_a_frame():
+    r = latest_rig(Rig(keys=[KEY]))
+    try:
+        other = auth.Sealer(bytes(32), "sim")
+        r.tx.sendto(datagram(STATE, other.seal(STATE, stamped(0))), r.rx.getsockname())  # another key
+        r.tx.sendto(datagram(STATE, stamped(0)), r.rx.getsockname())  # unsigned
+        r.send(CLOCK, clock(1, counts=[count("sim", STATE, 0)]))
+        d, _, acked, _ = r.wait(0.1)
+        assert acked == 0 and [h[0] for h in r.handed] == [1]  # not completed: Python's, by timeout
+        verdicts = r.core.verdicts()
+        assert verdicts[("bad_mac", STATE)] == 1 and verdicts[("unsigned", STATE)] == 1
+        r.last_acked = 0
+        r.send(STATE, stamped(0, body=b"genuine"))
+        r.send(CLOCK, clock(1, counts=[count("sim", STATE, 0)]))
+        for _ in range(5):
+            if r.wait(0.1)[2]:
+                break
+        assert r.last_acked == 1 and r.handed == [(0, STATE, stamped(0, body=b"genuine"))]
+    finally:
+        r.close()
+
+
+def test_held_messages_go_back_on_release_and_python_held_ones_complete_a_frame(rig):
+    latest_rig(rig)
+    rig.core.hold(STATE, stamped(0, body=b"from the inbox"), 0)  # what Python's inbox held
+    rig.send(CLOCK, clock(1, counts=[count("sim", STATE, 0)]))
+    assert rig.wait()[2] == 1
+    assert rig.handed == [(0, STATE, stamped(0, body=b"from the inbox"))]
+    rig.core.hold(STATE, stamped(1, body=b"next"), 1)
+    assert rig.core.release() == [(2, STATE, stamped(1, body=b"next"))]
+    assert rig.core.release() == []
+    with pytest.raises(TypeError):
+        rig.core.hold(STATE, "not bytes", 0)

@@ -33,7 +33,7 @@ class Bus:  # records what the interfaces do with the bus (wall clock)
     def __init__(self):
         self.subscribed, self.published, self.handlers = [], [], {}
 
-    def subscribe(self, ch, handler):
+    def subscribe(self, ch, handler, latest_only=False):
         self.subscribed.append(ch)
         self.handlers[ch] = handler
         return len(self.subscribed)
@@ -54,7 +54,7 @@ class Participant:  # records what they do under lockstep
     def __init__(self, bus):
         self.bus, self.subscribed, self.published, self.handlers = bus, [], [], {}
 
-    def subscribe(self, ch, handler):
+    def subscribe(self, ch, handler, latest_only=False):
         self.subscribed.append(ch)
         self.handlers[ch] = handler
 

@@ -247,6 +247,30 @@ class GripperDevice:
             tpdo.transmit()
 
 
+    def quiet_horizon(self, frame: int) -> tuple[int, int] | None:
+        """Lockstep, after `frame`'s step with the fingers at rest: how far the next frames
+        would do nothing but count towards TPDO1's event timer, given no CAN frame and no
+        move (the last frame before the timer's TPDO, the sim time of the next
+        heartbeat); None when the next frame may do something."""
+        with self.lock:
+            if self.model.moving:
+                return None
+            quiet = self.event_every - self._since_sent - 1
+        if quiet < 1:
+            return None
+        heartbeat = 2**63 - 1
+        if self._heartbeat_ms > 0 and self.node.nmt.state != "INITIALISING":
+            if self._next_heartbeat_ns is None:
+                return None
+            heartbeat = self._next_heartbeat_ns
+        return frame + quiet, heartbeat
+
+    def frames_passed(self, n: int) -> None:
+        """`n` frames acked within quiet_horizon without a step: at rest each would only
+        have counted towards the event timer."""
+        with self.lock:
+            self._since_sent += n
+
     def heartbeat_if_due(self, sim_time_ns: int) -> None:
         """Lockstep: the heartbeat producer (0x1017 ms of sim time) from the frames."""
         period_ms = self._heartbeat_ms

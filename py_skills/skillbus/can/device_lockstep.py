@@ -40,7 +40,7 @@ def run(args) -> int:
     def take_state() -> None:
         # Decoded only while the fingers move or were just told to: at rest nothing in
         # the state can change what the device reports (it is the only one moving them).
-        if raw[0] is None or not (fingers.moving or not fingers.acknowledged or last_state[0] is None):
+        if raw[0] is None or at_rest():
             return
         s = decode(sim_state_t, raw[0])
         raw[0] = None
@@ -51,25 +51,51 @@ def run(args) -> int:
             last_state[0] = s
 
     state_ch = state_channel()
-    p.subscribe(state_ch, on_state)
+    # Only the newest state is read (take_state): frames at rest whose only message is
+    # the state are acked without the interpreter (quiet_horizon below).
+    p.subscribe(state_ch, on_state, latest_only=True)
     last: list[int | None] = [None]
+    last_frame: list[int | None] = [None]
     last_state: list = [None]
+
+    def at_rest() -> bool:
+        return not (fingers.moving or not fingers.acknowledged or last_state[0] is None)
+
+    def catch_up(frame: int, sim_time_ns: int) -> None:
+        """Frames acked within the horizon, at rest: what their steps would have done, before
+        this frame's CAN frames (an RPDO's TPDO restarts the event timer)."""
+        before, before_ns = p.previous_frame
+        if last_frame[0] is not None and before > last_frame[0]:
+            dev.frames_passed(before - last_frame[0])
+            last[0], last_frame[0] = before_ns, before
 
     def on_frame(frame: int, sim_time_ns: int) -> None:
         if last[0] is None:
             dev.boot()  # boot-up in the first frame: nothing but SDO goes out before the run
         dt = (sim_time_ns - last[0]) * 1e-9 if last[0] is not None else 0.0
-        last[0] = sim_time_ns
+        last[0], last_frame[0] = sim_time_ns, frame
         take_state()
         dev.step(dt)
         dev.heartbeat_if_due(sim_time_ns)
 
-    p.on_frame = link.wrap(on_frame)
+    def quiet_horizon() -> tuple[int, int] | None:
+        if last_frame[0] is None or not at_rest() or not link.idle():
+            return None
+        return dev.quiet_horizon(last_frame[0])
+
+    framed = link.wrap(on_frame)
+
+    def frame_of_device(frame: int, sim_time_ns: int) -> None:
+        catch_up(frame, sim_time_ns)
+        framed(frame, sim_time_ns)
+
+    p.on_frame = frame_of_device
+    p.quiet_horizon = quiet_horizon
     print(json.dumps({"node": args.node_id, "channel": args.channel, "lockstep": args.name}), flush=True)
     r = p.run()
     p.close()
     link.shutdown()
     print(json.dumps(summary(dev, bad[0] + link.rejects.total + p.bad_input.total, ok=r.ok, error=r.error,
-                             frames=r.frames, digest=r.digest_hex, can_sent=link.stats["sent"],
+                             frames=r.frames, quiet_frames=p.quiet_frames, digest=r.digest_hex, can_sent=link.stats["sent"],
                              can_received=link.stats["received"], can_rejected=link.rejects.summary())), flush=True)
     return 0 if r.ok else 1

@@ -366,6 +366,20 @@ class GripperDriver:
                 log.error("gripper node %d: %s", self.node.id, msg)
         self.poll()
 
+    def quiet_horizon(self) -> tuple[int, int] | None:
+        """Lockstep: how far the next frames' advance() would change nothing, given no CAN
+        frame (which comes with a frame that has work): (no frame limit, the sim time at
+        which the heartbeat would count as lost), or None while the start-up or a
+        recovery runs. The sim time is a millisecond early: the loss itself is judged on
+        floating-point seconds by the frame that Python runs."""
+        with self._lock:
+            if self._startup is not None or self._recovery_asked or self._last_heartbeat is None:
+                return None
+            if self._hb_fault is not None:
+                return (2**63 - 1, 2**63 - 1)  # lost already: only a heartbeat (a CAN frame) changes that
+            lost_at = self._last_heartbeat + 3 * self.heartbeat_ms / 1000.0
+        return (2**63 - 1, max(0, int(lost_at * 1e9) - 1_000_000))
+
     def snapshot(self, frame: int) -> None:
         """Lockstep: keep the status of this frame for the ticks of the next one."""
         self._snapshots[frame] = self._copy()

@@ -47,8 +47,14 @@ def setup(spec: str, interface: str = "skillbus_vcan", participant: Any = None, 
     from skillbus.can.lockstep_link import LockstepCanLink, sdo_ids
     _link = LockstepCanLink(participant, can.Bus(interface=interface, channel=channel), channel, network,
                             sdo_ids(node_id))
-    frame_time = {"t": 0.0}
-    _driver = GripperDriver(network, node_id, clock=lambda: frame_time["t"], **driver_args)
+    frame_ns = [0]
+
+    def clock() -> float:
+        # The sim time of the last frame whose on_frame ran or, acked by the quiet-frame
+        # core, would have run (skillbus.quiet_frames): the same value either way.
+        return max(frame_ns[0], participant.acked_sim_time_ns) * 1e-9
+
+    _driver = GripperDriver(network, node_id, clock=clock, **driver_args)
     # By SDO, before the run (the device answers SDO outside the frames); the device may
     # still be starting, so try again until sdo_timeout.
     _driver.node.sdo.RESPONSE_TIMEOUT = 0.5
@@ -58,16 +64,25 @@ def setup(spec: str, interface: str = "skillbus_vcan", participant: Any = None, 
     except WaitTimeout as e:
         raise GripperError(f"{e.what}: not within {sdo_timeout:g} s: {e.__cause__}") from None
     _driver.begin_startup()
-    inner = participant.on_frame
+    inner, inner_horizon = participant.on_frame, participant.quiet_horizon
 
     def on_frame(frame: int, sim_time_ns: int) -> None:
-        frame_time["t"] = sim_time_ns * 1e-9
+        frame_ns[0] = sim_time_ns
         _driver.advance()
-        _driver.snapshot(frame)
+        _driver.snapshot(frame)  # (ticks read the newest snapshot before their frame: one at rest stays true)
         if inner is not None:
             inner(frame, sim_time_ns)
 
+    def quiet_horizon() -> tuple[int, int] | None:
+        """Frames with nothing for the link and the driver (and whatever ran before)."""
+        mine = _driver.quiet_horizon() if _link.idle() else None
+        if mine is None or inner is None:
+            return mine
+        theirs = inner_horizon() if inner_horizon is not None else None
+        return None if theirs is None else (min(mine[0], theirs[0]), min(mine[1], theirs[1]))
+
     participant.on_frame = _link.wrap(on_frame)
+    participant.quiet_horizon = quiet_horizon
     log.info("gripper on %s node %d (lockstep)", channel, node_id)
     return _driver
 

@@ -204,6 +204,11 @@ class LockstepCanLink:
             self.real.send(msg)
             self._sent += 1
 
+    def idle(self) -> bool:
+        """Nothing announced or held for the next frame: its begin and end would do nothing
+        unless a CAN sync announces frames (a message that gives that frame work)."""
+        return not self._expected and not self._held and not self._sent
+
     def end_frame(self) -> None:
         """Announces this frame's sends (call last in on_frame)."""
         if self._sent:

@@ -48,7 +48,9 @@ class Arm:
         self.bad = 0  # messages not used: not decodable, or values not sane (by kind: rejects)
         self.rejects = Rejects("arm")
         if participant is not None:
-            participant.subscribe(arm_state_channel(), lambda m: self._on_state(m.data))
+            # (only the newest state is read: frames with nothing else for this process are
+            # acked without the interpreter, skillbus.quiet_frames)
+            participant.subscribe(arm_state_channel(), lambda m: self._on_state(m.data), latest_only=True)
             participant.subscribe(reply_channel(), lambda m: self._on_reply(m.data))
         else:
             bus.subscribe(arm_state_channel(), lambda ch, d: self._on_state(d))

@@ -25,7 +25,7 @@ class LatestReading(Generic[M]):
         self.bad = 0  # messages not used: not decodable, or values not sane (by kind: rejects)
         self.rejects = Rejects(kind)
         if participant is not None:
-            participant.subscribe(channel, lambda m: self._on(m.data))
+            participant.subscribe(channel, lambda m: self._on(m.data), latest_only=True)
         else:
             bus.subscribe(channel, lambda ch, d: self._on(d))
 

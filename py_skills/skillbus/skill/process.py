@@ -118,6 +118,20 @@ def load_libraries(modules: list[str], wmi: Any = None) -> tuple[dict[str, Skill
     return found, errors
 
 
+class _RetryDeferred:
+    """After each of the process's frames: the ticks it deferred until then. With none
+    deferred it is idle, and keeps no frame from the quiet-frame core."""
+
+    def __init__(self, server: RpcServer) -> None:
+        self.server = server
+
+    def __call__(self, frame: int) -> None:
+        self.server.retry_deferred()
+
+    def idle(self) -> bool:
+        return not self.server.deferred
+
+
 class SkillProcess:
     def __init__(self, bus: Bus, name: str, libraries: list[str], wmi: Any = None, participant: Any = None) -> None:
         self.bus, self.name, self.wmi, self.participant = bus, name, wmi, participant
@@ -150,7 +164,7 @@ class SkillProcess:
             # A tick of frame n is answered only after this process has finished its own
             # frame n, so the skill always sees the world-model replica and the devices as
             # they were at the end of frame n, however the tick and the clock raced.
-            participant.after_frame.append(lambda frame: self.server.retry_deferred())
+            participant.after_frame.append(_RetryDeferred(self.server))
         self.incarnation = time.time_ns()  # identity of this run of the process, not behaviour
         self.rejects = Rejects(f"skills-process {name}")  # ticks and expansions refused (check_tick)
 
@@ -491,8 +505,8 @@ def main(args) -> int:
         # Under lockstep the process follows the frames (its world-model replica changes
         # only at frame boundaries); RPC ticks are answered while it waits for a clock.
         r = participant.run()
-        print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "digest": r.digest_hex,
-                          **bad_input(proc, wmi, participant)}), flush=True)
+        print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "quiet_frames": participant.quiet_frames,
+                          "digest": r.digest_hex, **bad_input(proc, wmi, participant)}), flush=True)
         return 0 if r.ok else 1
     Liveness(bus, proc, url=args.url).serve_forever()
 
