@@ -1,21 +1,25 @@
 #include "skillbus/digest.hpp"
 
-#include <openssl/evp.h>
+// The low-level SHA-256 (as auth.cpp's MAC): OpenSSL 3's EVP digests fetch the algorithm
+// at every init, and a lockstep participant finishes a digest or two every frame (the
+// fetch was most of a skill manager's ack).
+#define OPENSSL_SUPPRESS_DEPRECATED
+#include <openssl/sha.h>
 
 #include <stdexcept>
 
 namespace skillbus {
 
-Sha256::Sha256() : ctx_(EVP_MD_CTX_new()) {
-  if (!ctx_ || EVP_DigestInit_ex(static_cast<EVP_MD_CTX*>(ctx_), EVP_sha256(), nullptr) != 1)
+Sha256::Sha256() : ctx_(new SHA256_CTX) {
+  if (SHA256_Init(static_cast<SHA256_CTX*>(ctx_)) != 1) {
+    delete static_cast<SHA256_CTX*>(ctx_);
     throw std::runtime_error("OpenSSL SHA-256 unavailable");
+  }
 }
 
-Sha256::~Sha256() { EVP_MD_CTX_free(static_cast<EVP_MD_CTX*>(ctx_)); }
+Sha256::~Sha256() { delete static_cast<SHA256_CTX*>(ctx_); }
 
-void Sha256::update(const void* data, size_t size) {
-  EVP_DigestUpdate(static_cast<EVP_MD_CTX*>(ctx_), data, size);
-}
+void Sha256::update(const void* data, size_t size) { SHA256_Update(static_cast<SHA256_CTX*>(ctx_), data, size); }
 
 void Sha256::update_str(const std::string& s) { update_bytes(reinterpret_cast<const uint8_t*>(s.data()), s.size()); }
 
@@ -34,10 +38,9 @@ void Sha256::update_i64(int64_t v) {
 
 Digest Sha256::finish() {
   Digest d{};
-  unsigned int n = 0;
-  auto* ctx = static_cast<EVP_MD_CTX*>(ctx_);
-  EVP_DigestFinal_ex(ctx, d.data(), &n);
-  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+  auto* ctx = static_cast<SHA256_CTX*>(ctx_);
+  SHA256_Final(d.data(), ctx);
+  SHA256_Init(ctx);
   return d;
 }
 

@@ -78,7 +78,7 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     // The master resends the clock while a participant is still at work on the frame: it
     // is alive, so this one waits on (a frame may take a slow participant long).
     master_heard_ = steady::now();
-    bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());  // our ack was lost, or not yet counted
+    bus_.publish(ack_channel_, last_ack_.data(), last_ack_.size());  // our ack was lost, or not yet counted
     return;
   }
   if (c.header.frame == current_ && current_ == last_acked_ + 1) {
@@ -112,7 +112,7 @@ void LockstepParticipant::send_ack(int64_t frame, int64_t sim_time, const std::s
   a.error = error;
   last_ack_ = encode_msg(a);
   last_acked_ = frame;
-  bus_.publish(ack_channel(), last_ack_.data(), last_ack_.size());
+  bus_.publish(ack_channel_, last_ack_.data(), last_ack_.size());
   running_.update(running_digest_.data(), running_digest_.size());
   running_.update(d.data(), d.size());
   running_digest_ = running_.finish();

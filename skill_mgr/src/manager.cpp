@@ -274,25 +274,28 @@ void Manager::publish_progress(const Task& t) {
   p.task = t.id;
   p.state = state_code(t.root->state());
   p.tick = t.ticks;
-  std::function<void(const Node&, int32_t)> walk = [&](const Node& n, int32_t parent) {
-    skill_node_progress_t np{};
-    np.id = static_cast<int32_t>(p.nodes.size());
+  // The tree depth first, parents before children (built in place: every tick, every node).
+  std::vector<std::pair<const Node*, int32_t>> todo{{t.root.get(), -1}};
+  while (!todo.empty()) {
+    const auto [n, parent] = todo.back();
+    todo.pop_back();
+    const int32_t me = static_cast<int32_t>(p.nodes.size());
+    skill_node_progress_t& np = p.nodes.emplace_back();
+    np.id = me;
     np.parent = parent;
-    np.type = n.type();
-    np.label = n.label();
-    np.processor = n.processor_name();
-    np.state = state_code(n.state());
-    np.message = n.message();
-    np.code = n.code();
-    np.progress = n.progress();
-    if (auto* prim = dynamic_cast<const RemotePrimitive*>(&n)) np.params = params_text(prim->last_params());
-    const int32_t me = np.id;
-    p.nodes.push_back(std::move(np));
-    for (const auto& c : n.children()) walk(*c, me);
-  };
-  walk(*t.root, -1);
+    np.type = n->type();
+    np.label = n->label();
+    np.processor = n->processor_name();
+    np.state = state_code(n->state());
+    np.message = n->message();
+    np.code = n->code();
+    np.progress = n->progress();
+    if (auto* prim = dynamic_cast<const RemotePrimitive*>(n)) np.params = prim->last_params_text();
+    const auto& children = n->children();
+    for (auto c = children.rbegin(); c != children.rend(); ++c) todo.emplace_back(c->get(), me);
+  }
   p.num_nodes = static_cast<int32_t>(p.nodes.size());
-  participant_.publish(channel("SB_SKILL_PROGRESS"), p);
+  participant_.publish(progress_channel_, p);
   remember(std::move(p));  // (a task's whole tree, every tick: moved, not copied)
 }
 
@@ -309,7 +312,7 @@ void Manager::publish_end_without_tree(int64_t id, const std::string& type, cons
   root.code = skill_state_t::CODE_FAILED;
   p.nodes = {root};
   p.num_nodes = 1;
-  participant_.publish(channel("SB_SKILL_PROGRESS"), p);
+  participant_.publish(progress_channel_, p);
   remember(std::move(p));
 }
 

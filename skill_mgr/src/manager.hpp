@@ -99,6 +99,7 @@ class Manager {
   std::map<int64_t, std::string> results_;
   static constexpr size_t kFinishedKept = 20;
   std::map<int64_t, skillbus_msgs::skill_progress_t> latest_;  // running and recently finished tasks
+  std::string progress_channel_ = channel("SB_SKILL_PROGRESS");  // (named once: published every tick)
   std::deque<int64_t> finished_;  // ids in latest_ that ended, oldest first
   int64_t start_task_ = -1;  // the --start task's id
   std::unique_ptr<Liveness> liveness_;  // wall clock only

@@ -36,7 +36,21 @@ std::string seconds(std::chrono::milliseconds d) {
 RemotePrimitive::RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope)
     : Node(impl.description.type, impl.description.label), ctx_(ctx), impl_(std::move(impl)), scope_(std::move(scope)) {}
 
+void RemotePrimitive::set_params(std::vector<Param> params) {
+  params_ = std::move(params);
+  params_text_stale_ = true;
+}
+
+const std::string& RemotePrimitive::last_params_text() const {
+  if (params_text_stale_) {
+    params_text_ = params_text(params_);
+    params_text_stale_ = false;
+  }
+  return params_text_;
+}
+
 bool RemotePrimitive::start() {
+  params_text_stale_ = true;
   const std::string err = prepare_start(ctx_, impl_, *scope_, params_);
   if (!err.empty()) {
     set_result(err, kFailed);
@@ -70,13 +84,22 @@ State RemotePrimitive::call(int8_t action) {
   t.action = action;
   t.frame = ctx_.frame;
   t.sim_time_ns = ctx_.sim_time_ns;
-  t.params = params_;
   t.num_params = static_cast<int32_t>(params_.size());
+  t.params = std::move(params_);  // (lent to the request, not copied: back right after the call)
   CallOptions opts;
   opts.timeout = ctx_.tick_timeout;
   opts.retry_interval = std::chrono::milliseconds(100);
   try {
-    const auto reply = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tick_reply_t>("tick", t, opts);
+    skillbus_msgs::skill_tick_reply_t reply;
+    try {
+      reply = ctx_.client(impl_.rpc_area).call<skillbus_msgs::skill_tick_reply_t>("tick", t, opts);
+    } catch (...) {
+      params_ = std::move(t.params);
+      params_text_stale_ = true;
+      throw;
+    }
+    params_ = std::move(t.params);
+    params_text_stale_ = true;  // (whatever read the text while they were lent read none)
     set_result(reply.message, reply.code, reply.progress);
     wm_version_ = reply.wm_version;
     // What the skill changed goes to the blackboard, an emptied value included; what it
@@ -89,7 +112,7 @@ State RemotePrimitive::call(int8_t action) {
       if (sent && same_values(*sent, p)) continue;
       ctx_.blackboard.set(scope_->key(p.key), p);
     }
-    if (!reply.params.empty()) params_ = reply.params;
+    if (!reply.params.empty()) set_params(std::move(reply.params));
     return to_state(reply.state);
   } catch (const RpcTimeout&) {
     unresponsive_ = true;
@@ -104,7 +127,7 @@ State RemotePrimitive::call(int8_t action) {
 }
 
 State RemotePrimitive::step() {
-  params_ = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
+  set_params(gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_)));
   if (!first_) {  // hold-conditions, checked on every later tick (the first was checked at start)
     const std::string broken = check_hold(ctx_, impl_, params_);
     if (!broken.empty()) {

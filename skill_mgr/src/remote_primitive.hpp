@@ -18,6 +18,9 @@ class RemotePrimitive : public Node {
  public:
   RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope);
   const std::vector<Param>& last_params() const { return params_; }
+  // params_text(last_params()), formatted once per change: the task's progress shows it for
+  // every primitive of the tree at every tick.
+  const std::string& last_params_text() const;
 
  protected:
   bool start() override;
@@ -27,10 +30,13 @@ class RemotePrimitive : public Node {
 
  private:
   State call(int8_t action);
+  void set_params(std::vector<Param> params);
   TaskContext& ctx_;
   Implementation impl_;
   std::shared_ptr<Scope> scope_;
-  std::vector<Param> params_;
+  std::vector<Param> params_;  // (assigned through set_params: the text below follows it)
+  mutable std::string params_text_;
+  mutable bool params_text_stale_ = true;
   int64_t instance_ = 0;
   int64_t incarnation_ = 0;  // of the skill process that runs this instance
   bool first_ = true;

@@ -14,21 +14,25 @@ using skillbus_msgs::skill_param_t;
 
 namespace {
 
-// Values compared by their encoding: what a skill sent back unchanged.
-std::vector<uint8_t> encoded(const Param& p) {
-  std::vector<uint8_t> out;
-  for (const auto& v : p.values) {
-    std::vector<uint8_t> buf(static_cast<size_t>(v.getEncodedSize()));
-    v.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    out.insert(out.end(), buf.begin(), buf.end());
-  }
-  return out;
+// One value's encoding into `buf` (reused: a tick compares every parameter it sent).
+const std::vector<uint8_t>& encode_into(const skillbus_msgs::skill_value_t& v, std::vector<uint8_t>& buf) {
+  buf.resize(static_cast<size_t>(v.getEncodedSize()));
+  v.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
 }
 
 }  // namespace
 
+// Values compared by their encoding: what a skill sent back unchanged. (Value by value:
+// each encoding is a whole message, so equal sequences are equal value by value.)
 bool same_values(const Param& a, const Param& b) {
-  return a.values.size() == b.values.size() && encoded(a) == encoded(b);
+  if (a.values.size() != b.values.size()) return false;
+  thread_local std::vector<uint8_t> ea, eb;
+  for (size_t i = 0; i < a.values.size(); ++i) {
+    if (a.values[i].getEncodedSize() != b.values[i].getEncodedSize()) return false;
+    if (encode_into(a.values[i], ea) != encode_into(b.values[i], eb)) return false;
+  }
+  return true;
 }
 
 const wm::WorldStore* world_if_ready(TaskContext& ctx) {
@@ -60,6 +64,7 @@ std::string conditions_error(const char* kind, const std::vector<Condition>& con
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb,
                                  std::string* missing, const wm::WorldStore* world) {
   std::vector<Param> out;
+  out.reserve(d.params.size());
   for (const auto& decl : d.params) {
     Param p = decl;
     const std::string key = scope.key(decl.key);
@@ -78,12 +83,13 @@ std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, co
     }
     if (world) {  // element parameters are re-read from the world model; a deleted one is dropped
       std::vector<skillbus_msgs::skill_value_t> kept;
-      for (auto& v : p.values) {
+      kept.reserve(p.values.size());
+      for (auto& v : p.values) {  // (p's own copy: moved, not copied again)
         if (v.type != skillbus_msgs::skill_value_t::ELEMENT || v.element.id.empty()) {
-          kept.push_back(v);
+          kept.push_back(std::move(v));
         } else if (const wm::Element* e = world->get(v.element.id)) {
           v.element = wm::to_msg(*e);
-          kept.push_back(v);
+          kept.push_back(std::move(v));
         }
       }
       p.values = std::move(kept);

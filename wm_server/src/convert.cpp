@@ -46,20 +46,20 @@ skillbus_msgs::wm_element_t to_msg(const Element& e) {
   m.id = e.id;
   m.type = e.type;
   m.label = e.label;
+  m.properties.reserve(e.properties.size());
   for (const auto& [key, values] : e.properties) {
-    skillbus_msgs::wm_property_t p{};
+    skillbus_msgs::wm_property_t& p = m.properties.emplace_back();  // (built in place: no copies)
     p.key = key;
+    p.values.reserve(values.size());
     for (const auto& v : values) {
-      wm_value_t x{};
+      wm_value_t& x = p.values.emplace_back();
       x.type = static_cast<int8_t>(v.index());
       if (auto s = std::get_if<std::string>(&v)) x.s = *s;
       if (auto i = std::get_if<int64_t>(&v)) x.i = *i;
       if (auto d = std::get_if<double>(&v)) x.f = *d;
       if (auto b = std::get_if<bool>(&v)) x.b = *b;
-      p.values.push_back(x);
     }
     p.num_values = static_cast<int32_t>(p.values.size());
-    m.properties.push_back(p);
   }
   m.num_properties = static_cast<int32_t>(m.properties.size());
   return m;

@@ -193,6 +193,7 @@ class LockstepParticipant {
     std::string stop_reason;
   };
   std::string master_;  // name of the master whose clock we follow (from the first clock)
+  std::string ack_channel_ = ack_channel();  // (named once: an ack goes out every frame)
   std::chrono::steady_clock::time_point master_heard_{};  // the last resend of the clock we acked
   bool have_clock_ = false;
   int64_t completed_ = -1;
