@@ -86,3 +86,71 @@ def test_outbox_stamps_counts_and_hashes_like_the_cpp_side():
     for d in sent:
         h.update(struct.pack("<I", 4) + b"SB_A" + struct.pack("<I", len(d)) + d)
     assert out.finish_frame() == h.digest()
+
+
+# -- what the quiet-frame core hands back (skillbus.quiet_frames) -------------------------
+
+def participant_on_memq():
+    from skillbus.lockstep import LockstepParticipant
+    return LockstepParticipant(open_bus("memq://"), "me")
+
+
+def test_handed_back_newest_goes_to_the_handler_a_clock_and_messages_to_pythons_path():
+    p = participant_on_memq()
+    got = []
+    p.subscribe("SB_STATE", got.append, latest_only=True)
+    p.subscribe("SB_OTHER", lambda m: None)
+    assert p.latest_only == {"SB_STATE"}
+    p._take_back([(0, "SB_STATE", stamped(4, "sim", 0, 7)),  # newest of frames the core acked
+                  (2, "SB_OTHER", stamped(5, "sim", 0))])    # held for the frame Python takes
+    assert [(m.channel, m.stamp.frame, m.stamp.sender) for m in got] == [("SB_STATE", 4, "sim")]
+    assert p.inbox.missing([count("sim", "SB_OTHER", 5, 1)]) == ""
+    p.subscribe("SB_STATE", got.append)  # subscribed again without it: every message again
+    assert p.latest_only == set()
+
+
+def test_a_latest_only_handler_that_fails_between_frames_fails_the_next_frame_naming_it():
+    p = participant_on_memq()
+
+    def broken(m):
+        raise ValueError("cannot read it")
+
+    p.subscribe("SB_STATE", broken, latest_only=True)
+    p._take_back([(0, "SB_STATE", stamped(4, "sim", 0))])
+    assert p._latest_failure == "handler of SB_STATE failed: ValueError: cannot read it"
+
+
+def test_after_frame_hooks_keep_frames_from_the_core_unless_idle():
+    p = participant_on_memq()
+    p._master, p._last_ack = "clock", b"ack"
+
+    class Hook:
+        def __init__(self, idle):
+            self.is_idle = idle
+
+        def __call__(self, frame):
+            pass
+
+        def idle(self):
+            return self.is_idle
+
+    class Core:  # (a stand-in for skillbus.quiet_frames.QuietFrames: only the decision is tested)
+        def usable(self):
+            return True
+
+    core = Core()
+    p._quiet_made, p._quiet = True, core
+    assert p._quiet_core() == (core, (2**63 - 1, 2**63 - 1))  # no callback: no horizon
+    p.after_frame.append(Hook(True))
+    assert p._quiet_core() is not None
+    p.after_frame[0].is_idle = False
+    assert p._quiet_core() is None
+    p.after_frame[:] = [lambda frame: None]  # a plain hook: it always has work
+    assert p._quiet_core() is None
+    p.after_frame[:] = []
+    p.on_frame = lambda f, t: None
+    assert p._quiet_core() is None  # a frame callback without a horizon: every frame is Python's
+    p.quiet_horizon = lambda: (9, 100)
+    assert p._quiet_core() == (core, (9, 100))
+    p.quiet_horizon = lambda: None
+    assert p._quiet_core() is None
