@@ -41,18 +41,23 @@ class QuietFrames:
         self.core, self._lcm, self._auth = core, lcm_bus, auth_bus
         self._clock_channel, self._fd = clock_channel, fd
         self._counts: dict[tuple[str, str], int] = {}
+        self._latest: list[str] = []  # the latest-only channels the core collects
         self._lost_sends = 0
 
     def usable(self) -> bool:
         """Still the bus it was made for: the same one socket read, and the participant
-        the only one here hearing the clock (the core consumes the clocks it acks)."""
-        return self._lcm.lane0_socket() == self._fd and self._lcm.subscribers(self._clock_channel) == 1
+        the only one here hearing the clock and the latest-only channels the core
+        collects (it consumes those datagrams)."""
+        lcm = self._lcm
+        return (lcm.lane0_socket() == self._fd and lcm.subscribers(self._clock_channel) == 1
+                and all(lcm.subscribers(ch) == 1 for ch in self._latest))
 
     def set_subscribed(self, channels: set[str], latest_only: set[str] = frozenset()) -> None:
         """What gives a frame work; `latest_only` (of those) the core may collect itself,
         where the participant is this bus's only subscriber (the core takes the datagrams)."""
+        self._latest = sorted(ch for ch in latest_only if self._lcm.subscribers(ch) == 1)
         self.core.set_subscribed(sorted(channels))
-        self.core.set_latest_only(sorted(ch for ch in latest_only if self._lcm.subscribers(ch) == 1))
+        self.core.set_latest_only(self._latest)
 
     def feed(self, datagram: bytes, sender: object) -> None:
         """A datagram the core returned, to the bus's handlers (verified when signed)."""

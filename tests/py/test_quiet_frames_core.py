@@ -425,3 +425,14 @@ def test_held_messages_go_back_on_release_and_python_held_ones_complete_a_frame(
     assert rig.core.release() == []
     with pytest.raises(TypeError):
         rig.core.hold(STATE, "not bytes", 0)
+
+
+def test_a_latest_only_channel_someone_else_hears_too_is_not_the_cores(socket_bus):
+    socket_bus._by_channel[STATE] = {5: lambda c, d: None}
+    q = quiet_frames.for_bus(socket_bus, NAME, CLOCK, ACK)
+    q.set_subscribed({STATE}, {STATE})
+    assert q.usable()
+    socket_bus._by_channel[STATE][6] = lambda c, d: None  # a second subscriber, later
+    assert not q.usable()  # (the core would take its datagrams)
+    q.set_subscribed({STATE}, {STATE})
+    assert q.usable() and q._latest == []  # then Python keeps that channel
