@@ -31,8 +31,9 @@ import can
 import canopen
 
 from skillbus.can import cia402 as c
-from skillbus.can.eds import EDS  # noqa: F401  (also the runners' import)
+from skillbus.can.eds import EDS, TPDO1_FIELDS  # noqa: F401  (EDS: also the runners' import)
 from skillbus.can.fingers import MAX_WIDTH_UM, FingerModel, SimFingers, sim_state_reading
+from skillbus.can.pdo_codec import PdoCodec
 from skillbus.validate import BadValue, Rejects, integer, one_of
 
 log = logging.getLogger("gripper-device")
@@ -80,6 +81,11 @@ class GripperDevice:
         self.node.rpdo.read(from_od=True)
         self.node.rpdo[1].add_callback(self._on_rpdo)
         self.node.tpdo.read(from_od=True)
+        self._tpdo_codec = PdoCodec.of(self.node.tpdo[1], TPDO1_FIELDS)  # (None: canopen's own path)
+        # The dictionary's entries of the status (what an SDO upload reads), written as an
+        # SDO download to this node would write them, without the SDO layers.
+        od = self.node.object_dictionary
+        self._status_entries = [(index, od[index]) for index in (0x6041, 0x6064, 0x2000)]
         network.subscribe(self.node.rpdo[1].cob_id, self._check_rpdo_length)
         # The heartbeat's period (0x1017), read at every lockstep frame: kept here as it is
         # written (a read through the dictionary costs python-canopen several microseconds).
@@ -228,9 +234,8 @@ class GripperDevice:
                 # only when they change: each write costs python-canopen several
                 # microseconds and its write callbacks, and at rest nothing changes for
                 # hundreds of frames.
-                self.node.sdo[0x6041].raw = sw
-                self.node.sdo[0x6064].raw = now[1]
-                self.node.sdo[0x2000].raw = grip
+                for (index, var), value in zip(self._status_entries, now):
+                    self.node.set_data(index, 0, var.encode_raw(value))
                 self._last_written = now
             operational = self.node.nmt.state == "OPERATIONAL"
             self._since_sent += 1
@@ -240,9 +245,12 @@ class GripperDevice:
                 # TPDO1's contents before every send, changed or not: python-canopen takes a
                 # frame that arrives with TPDO1's COB-ID (a rogue node's) into the map's
                 # buffer, and it would go out as ours.
-                tpdo["Statusword"].raw = sw
-                tpdo["Position actual value"].raw = now[1]
-                tpdo["Grip state"].raw = grip
+                if self._tpdo_codec is not None:
+                    self._tpdo_codec.write(tpdo, now)
+                else:
+                    tpdo["Statusword"].raw = sw
+                    tpdo["Position actual value"].raw = now[1]
+                    tpdo["Grip state"].raw = grip
         if operational and due:
             tpdo.transmit()
 

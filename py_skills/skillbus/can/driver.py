@@ -48,7 +48,8 @@ import canopen
 
 from skillbus import tick_context
 from skillbus.can import cia402 as c
-from skillbus.can.eds import EDS
+from skillbus.can.eds import EDS, TPDO1_FIELDS
+from skillbus.can.pdo_codec import PdoCodec
 from skillbus.can.fingers import MAX_WIDTH_UM, WIDTH_SLACK_UM
 from skillbus.validate import BadValue, Rejects, integer, one_of
 from skillbus.waiting import WaitTimeout, wait_until
@@ -117,6 +118,7 @@ class GripperDriver:
         self.rejects = Rejects("gripper-driver")
         self._filter_frames(network, node_id)
         self.node.tpdo.read(from_od=True)
+        self._tpdo_codec = PdoCodec.of(self.node.tpdo[1], TPDO1_FIELDS)  # (None: canopen's own reads)
         self.node.tpdo[1].add_callback(self._on_tpdo)
         self.node.rpdo.read(from_od=True)
         self.node.nmt.add_heartbeat_callback(self._on_heartbeat)
@@ -159,14 +161,15 @@ class GripperDriver:
     def _on_tpdo(self, pdo) -> None:
         if len(pdo.data) != 7:
             return
-        statusword = pdo["Statusword"].raw
+        if self._tpdo_codec is not None:
+            statusword, position, grip = self._tpdo_codec.read(pdo.data)
+        else:
+            statusword, position, grip = (pdo[name].raw for name in TPDO1_FIELDS)
         try:
             # A position beyond the travel (with the slack a measurement may overshoot) or a
             # grip state with bits 0x2000 does not define is no status of this gripper:
             # the last good status stays.
-            position = integer(pdo["Position actual value"].raw, "position actual value", -WIDTH_SLACK_UM,
-                               self.max_width_um + WIDTH_SLACK_UM)
-            grip = pdo["Grip state"].raw
+            position = integer(position, "position actual value", -WIDTH_SLACK_UM, self.max_width_um + WIDTH_SLACK_UM)
             if grip & ~GRIP_BITS:
                 raise BadValue("grip state", grip, f"bits outside 0x{GRIP_BITS:02X}")
         except BadValue as e:
