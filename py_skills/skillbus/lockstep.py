@@ -305,7 +305,13 @@ class LockstepParticipant:
         self._subs = []
 
     def run(self) -> RunResult:
-        return self._run_wall_clock() if self.wall_clock else self._run_lockstep()
+        if self.wall_clock:
+            return self._run_wall_clock()
+        try:
+            return self._run_lockstep()
+        finally:
+            if self._quiet is not None:  # (the core's last counts, into the bus's, for the summary)
+                self._quiet.note_counts()
 
     # -- bus callbacks -----------------------------------------------------
     def _on_stamped(self, ch: str, data: bytes) -> None:
@@ -442,7 +448,7 @@ class LockstepParticipant:
             self.inbox.take([], last_acked)  # (as each frame's take: what is older is stale)
         if resends:
             self._master_heard = time.monotonic()
-        q.note_counts()
+        q.note_counts_now_and_then()
         if handed:
             self._take_back(handed)
         if datagram is not None:
@@ -472,9 +478,10 @@ class LockstepParticipant:
             self._quiet_stale = (stats["stale"], stats["duplicates"])
 
     def quiet_core_rejected(self) -> dict[str, int]:
-        """Clocks the quiet-frame core dropped, by reason (counted in the bus's too)."""
+        """Messages the quiet-frame core dropped, by reason (counted in the bus's too)."""
         if self._quiet is None:
             return {}
+        self._quiet.note_counts()
         return {k: v for k, v in self._quiet.core.counts().items() if k != "ok"}
 
     # -- loops -------------------------------------------------------------

@@ -24,6 +24,7 @@ caller's thread (skillbus.udpm), signed with the deployment's key or open. Elsew
 from __future__ import annotations
 
 import logging
+import time
 from typing import Any
 
 from skillbus import native
@@ -42,6 +43,7 @@ class QuietFrames:
         self._clock_channel, self._fd = clock_channel, fd
         self._counts: dict[tuple[str, str], int] = {}
         self._latest: list[str] = []  # the latest-only channels the core collects
+        self._next_note = 0.0
         self._lost_sends = 0
 
     def usable(self) -> bool:
@@ -62,6 +64,15 @@ class QuietFrames:
     def feed(self, datagram: bytes, sender: object) -> None:
         """A datagram the core returned, to the bus's handlers (verified when signed)."""
         (self._auth or self._lcm).feed_datagram(datagram, sender)
+
+    NOTE_EVERY_S = 0.25  # (reading the core's counts at every wait was a few per cent of a frame)
+
+    def note_counts_now_and_then(self) -> None:
+        """note_counts, at most every NOTE_EVERY_S: refusals are logged that much later."""
+        now = time.monotonic()
+        if now >= self._next_note:
+            self._next_note = now + self.NOTE_EVERY_S
+            self.note_counts()
 
     def note_counts(self) -> None:
         """What the core verified, dropped (forged, stale, replayed, forbidden messages)
