@@ -5,6 +5,8 @@
 #include <dart/collision/CollisionGroup.hpp>
 #include <dart/collision/CollisionObject.hpp>
 #include <dart/collision/fcl/FCLCollisionDetector.hpp>
+#include <dart/collision/fcl/FCLCollisionObject.hpp>
+#include <dart/collision/fcl/FCLTypes.hpp>
 #include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/BoxShape.hpp>
 #include <dart/dynamics/CylinderShape.hpp>
@@ -77,6 +79,32 @@ class AllowedPairs : public collision::CollisionFilter {
   std::set<std::pair<std::string, std::string>> allowed_;
 };
 
+// DART's FCL detector, whose collision objects `clear` also holds itself: it checks the
+// arm's shapes against the world's pair by pair, without the two groups' broad phase.
+// DART's group against group re-sorts the arm's AABB tree at every state (removing and
+// inserting each moved link's leaf) and recomputes every static shape's box: three
+// quarters of a check, with a dozen shapes a side. The narrow phase is the same call DART
+// makes (fcl::collide on the same geometry, with DART's request), on the same pairs less
+// those whose boxes do not overlap (which DART's broad phase skips too): the same answer.
+class PairDetector : public collision::FCLCollisionDetector {
+ public:
+  PairDetector() = default;
+  std::unique_ptr<collision::CollisionObject> object_for(const dynamics::ShapeFrame* frame) {
+    return createCollisionObject(frame);
+  }
+};
+
+// One side of the pairwise check: a shape's own FCL object, kept at its frame's pose.
+struct PairObject {
+  std::unique_ptr<collision::CollisionObject> owner;
+  collision::fcl::CollisionObject* fcl = nullptr;
+  const dynamics::ShapeFrame* frame = nullptr;
+  void place() {
+    fcl->setTransform(collision::FCLTypes::convertTransform(frame->getWorldTransform()));
+    fcl->computeAABB();
+  }
+};
+
 }  // namespace
 
 struct CollisionModel::Impl {
@@ -91,12 +119,48 @@ struct CollisionModel::Impl {
   std::shared_ptr<dynamics::VoxelGridShape> voxels;
   std::vector<Eigen::Vector3d> occupied;
   double resolution = 0;
-  std::shared_ptr<collision::CollisionDetector> detector;
+  std::shared_ptr<PairDetector> detector;
   std::unique_ptr<collision::CollisionGroup> arm, world;
   // Each shape's name: the robot's link, the held object, a fixture, the map.
   std::map<const dynamics::ShapeFrame*, std::string> names;
   mutable std::shared_ptr<AllowedPairs> filter;  // clear()'s, for the contacts in filter_for
   mutable std::vector<Touch> filter_for;
+  // clear()'s own objects (made again when the held object or the map changes) and which
+  // arm-world pairs its allowed contacts skip (arm-major), for `filter_for`.
+  mutable std::vector<PairObject> arm_objects, world_objects;
+  mutable bool objects_stale = true;
+  mutable std::vector<char> skipped;
+  mutable bool skipped_stale = true;
+
+  void make_objects() const {
+    auto make = [&](const collision::CollisionGroup& g, std::vector<PairObject>& out) {
+      out.clear();
+      for (size_t i = 0; i < g.getNumShapeFrames(); ++i) {
+        PairObject o;
+        o.frame = g.getShapeFrame(i);
+        o.owner = detector->object_for(o.frame);
+        o.fcl = static_cast<collision::FCLCollisionObject*>(o.owner.get())->getFCLCollisionObject();
+        out.push_back(std::move(o));
+      }
+    };
+    make(*arm, arm_objects);
+    make(*world, world_objects);
+    for (auto& w : world_objects) w.place();  // (fixtures and the map never move)
+    objects_stale = false;
+    skipped_stale = true;
+  }
+  void mark_skipped(const std::vector<Touch>& allowed) const {
+    std::set<std::pair<std::string, std::string>> pairs;
+    for (const auto& t : allowed) pairs.insert({t.part, t.body});
+    skipped.assign(arm_objects.size() * world_objects.size(), 0);
+    for (size_t a = 0; a < arm_objects.size(); ++a)
+      for (size_t w = 0; w < world_objects.size(); ++w) {
+        const std::string& na = names.at(arm_objects[a].frame);
+        const std::string& nw = names.at(world_objects[w].frame);
+        skipped[a * world_objects.size() + w] = pairs.count({na, nw}) > 0 || pairs.count({nw, na}) > 0;
+      }
+    skipped_stale = false;
+  }
 
   void set(const Eigen::VectorXd& q) const {
     for (size_t k = 0; k < dofs.size(); ++k) robot->setPosition(dofs[k], q[static_cast<Eigen::Index>(k)]);
@@ -107,6 +171,7 @@ struct CollisionModel::Impl {
       world->removeShapeFrame(map.get());
       map.reset();
     }
+    objects_stale = true;
     if (occupied.empty()) return;
     voxels = std::make_shared<dynamics::VoxelGridShape>(resolution);
     for (const auto& p : occupied) voxels->updateOccupancy(p, true);
@@ -139,7 +204,7 @@ CollisionModel::CollisionModel(const scene::Scene& scene, const std::string& rob
       m.obstacle_names.insert(f.name);
     }
   }
-  m.detector = collision::FCLCollisionDetector::create();  // boxes as meshes: exact (DART's default)
+  m.detector = std::make_shared<PairDetector>();  // boxes as meshes: exact (DART's default)
   m.arm = m.detector->createCollisionGroup(m.robot.get());
   m.world = m.detector->createCollisionGroup();
   for (const auto& s : m.fixtures) m.world->addShapeFramesOf(s.get());
@@ -154,6 +219,7 @@ CollisionModel::~CollisionModel() = default;
 
 void CollisionModel::set_held(const Eigen::Vector3d& size) {
   Impl& m = *impl_;
+  m.objects_stale = true;
   if (m.held) {
     m.names.erase(m.held.get());
     m.arm->removeShapeFrame(m.held.get());
@@ -207,11 +273,43 @@ std::vector<Touch> CollisionModel::touches(const Eigen::VectorXd& q) const {
 bool CollisionModel::clear(const Eigen::VectorXd& q, const std::vector<Touch>& allowed) const {
   const Impl& m = *impl_;
   m.set(q);
-  // The path search asks this thousands of times with the same allowed contacts: their
-  // filter is built once, not per state.
+  // The path search asks this thousands of times with the same allowed contacts: which
+  // pairs they skip is worked out once, not per state.
+  if (m.objects_stale) m.make_objects();
+  if (m.skipped_stale || m.filter_for != allowed) {
+    m.mark_skipped(allowed);
+    m.filter_for = allowed;
+    m.filter.reset();  // (clear_by_groups' filter was for other contacts)
+  }
+  for (auto& a : m.arm_objects) a.place();
+  // DART's request for a yes/no check (FCLCollisionDetector: CollisionOption(false, 1)).
+  collision::fcl::CollisionRequest request;
+  request.num_max_contacts = 100;
+  request.enable_contact = false;
+  request.gjk_solver_type = ::fcl::GST_LIBCCD;
+  collision::fcl::CollisionResult result;
+  const size_t nw = m.world_objects.size();
+  for (size_t a = 0; a < m.arm_objects.size(); ++a) {
+    const auto* oa = m.arm_objects[a].fcl;
+    for (size_t w = 0; w < nw; ++w) {
+      if (m.skipped[a * nw + w]) continue;
+      const auto* ow = m.world_objects[w].fcl;
+      if (!oa->getAABB().overlap(ow->getAABB())) continue;
+      result.clear();
+      ::fcl::collide(oa, ow, request, result);
+      if (result.isCollision()) return false;
+    }
+  }
+  return true;
+}
+
+bool CollisionModel::clear_by_groups(const Eigen::VectorXd& q, const std::vector<Touch>& allowed) const {
+  const Impl& m = *impl_;
+  m.set(q);
   if (!m.filter || m.filter_for != allowed) {
     m.filter = std::make_shared<AllowedPairs>(m.names, allowed);
     m.filter_for = allowed;
+    m.skipped_stale = true;
   }
   collision::CollisionOption option(false, 1);
   option.collisionFilter = m.filter;

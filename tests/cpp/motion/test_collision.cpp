@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "skillbus/motion/collision.hpp"
 #include "skillbus/motion/ik.hpp"
@@ -224,4 +225,91 @@ TEST(Collision, MapVoxelsAroundAPointCanBeLeftOut) {
   world.clear_map_around(Eigen::Vector3d(0.3, 0.5, 0.3), 0.05);
   EXPECT_LT(world.map_voxels(), 6000u);
   EXPECT_GT(world.map_voxels(), 0u);
+}
+
+namespace {
+
+// How many of `states` clear() and DART's group-against-group check answer alike, and how
+// many of them are clear.
+struct Agreement {
+  int same = 0, clear = 0, total = 0;
+};
+
+Agreement compare(const CollisionModel& world, const std::vector<Eigen::VectorXd>& states,
+                  const std::vector<Touch>& allowed = {}) {
+  Agreement a;
+  for (const auto& q : states) {
+    const bool pairwise = world.clear(q, allowed);
+    const bool groups = world.clear_by_groups(q, allowed);
+    a.same += pairwise == groups;
+    a.clear += pairwise;
+    ++a.total;
+  }
+  return a;
+}
+
+// Seeded states: anywhere within the joint limits, and along the straight joint moves
+// between the demo's poses (the table, the post and the bin close by, touching or nearly).
+std::vector<Eigen::VectorXd> sample_states() {
+  std::vector<Eigen::VectorXd> out;
+  std::mt19937 rng(20261204);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto& joints = kin().joints();
+  for (int i = 0; i < 400; ++i) {
+    Eigen::VectorXd q(static_cast<Eigen::Index>(joints.size()));
+    for (size_t j = 0; j < joints.size(); ++j)
+      q[static_cast<Eigen::Index>(j)] = joints[j].lower + u(rng) * (joints[j].upper - joints[j].lower);
+    out.push_back(q);
+  }
+  std::vector<Eigen::VectorXd> poses = {home(), over_red()};
+  for (const auto& t : {top_down(0.4, 0.15, 0.40), top_down(0.0, 0.6, 0.45), top_down(0.3, 0.5, 0.45),
+                        top_down(0.2, 0.45, 0.3), top_down(0.0, 0.6, 0.2)}) {
+    const IkResult r = solve_ik(kin(), t, home());
+    if (r.ok) poses.push_back(r.q);
+  }
+  for (size_t a = 0; a < poses.size(); ++a)
+    for (size_t b = a + 1; b < poses.size(); ++b)
+      for (int i = 0; i <= 60; ++i) out.push_back(poses[a] + (poses[b] - poses[a]) * (i / 60.0));
+  return out;
+}
+
+}  // namespace
+
+TEST(Collision, ThePairwiseCheckAnswersAsDartsGroups) {
+  // clear() checks pair by pair, without DART's broad phase: on every state it must give
+  // DART's answer, with and without a held object, with a map, and with allowed contacts.
+  const auto states = sample_states();
+  CollisionModel world(demo_scene());
+  Agreement bare = compare(world, states);
+  EXPECT_EQ(bare.same, bare.total);
+  EXPECT_GT(bare.clear, bare.total / 10);  // both answers occur
+  EXPECT_LT(bare.clear, bare.total - bare.total / 10);
+
+  world.set_held(Eigen::Vector3d::Constant(0.05));
+  const Agreement held = compare(world, states);
+  EXPECT_EQ(held.same, held.total);
+  EXPECT_LT(held.clear, bare.clear);  // the cube makes some states touch
+
+  // Allowed: the contacts of a grasp still on the table.
+  const IkResult at_cube = solve_ik(kin(), top_down(0.4, 0.15, 0.42), home());
+  ASSERT_TRUE(at_cube.ok);
+  const auto touching = world.touches(at_cube.q);
+  ASSERT_FALSE(touching.empty());
+  const Agreement allowed = compare(world, states, touching);
+  EXPECT_EQ(allowed.same, allowed.total);
+  EXPECT_GT(allowed.clear, held.clear);
+  EXPECT_FALSE(world.clear(at_cube.q));
+  EXPECT_TRUE(world.clear(at_cube.q, touching));
+  // Back to no allowed contacts, after the other check: the pairs are worked out again.
+  EXPECT_FALSE(world.clear_by_groups(at_cube.q, touching) && world.clear(at_cube.q));
+
+  CollisionModel mapped(scene_without_obstacles());
+  const Agreement before = compare(mapped, states);
+  mapped.set_map(post_voxels(), 0.01);
+  const Agreement with_map = compare(mapped, states);
+  EXPECT_EQ(with_map.same, with_map.total);
+  EXPECT_LT(with_map.clear, before.clear);  // the mapped post is in the way of some
+  mapped.set_held(Eigen::Vector3d::Constant(0.05));
+  const Agreement map_held = compare(mapped, states);
+  EXPECT_EQ(map_held.same, map_held.total);
 }
