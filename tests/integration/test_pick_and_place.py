@@ -62,6 +62,10 @@ def test_clear_table_is_reproducible_bit_for_bit_even_under_load(tmp_path):
     # The post between the table and the bin stands in the straight way; the motion
     # service planned around it: the physics server saw the robot touch it in no step.
     assert first["sim"]["obstacle_contact_steps"] == {"post": 0}, first["sim"]
+    # The Python participants set their start-up heap aside from the collector's walks
+    # (skillbus.startup_heap): the skill process's libraries, ontology and replica.
+    assert first["skills"]["startup_objects"] > 50_000, first["skills"]
+    assert first["gripper"]["startup_objects"] > 10_000, first["gripper"]
     for r in runs[1:]:
         assert r["sim"]["frames"] == first["sim"]["frames"]
         assert r["sim"]["state_digest"] == first["sim"]["state_digest"]
@@ -144,6 +148,10 @@ def test_with_perception_the_cubes_are_located_by_the_camera_and_placed_side_by_
     assert all(abs(p[2] - 0.045) < 0.003 for p in cubes.values()), cubes  # side by side on the floor, none stacked
     assert first["map"]["clouds"] >= 2 and first["map"]["bad_input"] == 0, first["map"]
     assert first["sim"]["obstacle_contact_steps"] == {"post": 0}, first["sim"]
+    # The Python participants set their start-up heap aside from the collector's walks
+    # (skillbus.startup_heap): the skill process's libraries, ontology and replica.
+    assert first["skills"]["startup_objects"] > 50_000, first["skills"]
+    assert first["gripper"]["startup_objects"] > 10_000, first["gripper"]
     second = runs[1]
     for key in ("frames", "state_digest", "session_digest"):
         assert second["sim"][key] == first["sim"][key], key

@@ -8,6 +8,7 @@ import json
 
 import canopen
 
+from skillbus import startup_heap
 from skillbus.can.device import EDS, GripperDevice, summary, take_sim_state
 from skillbus.can.fingers import SimFingers
 
@@ -92,10 +93,11 @@ def run(args) -> int:
     p.on_frame = frame_of_device
     p.quiet_horizon = quiet_horizon
     print(json.dumps({"node": args.node_id, "channel": args.channel, "lockstep": args.name}), flush=True)
+    set_aside = startup_heap.set_aside()
     r = p.run()
     p.close()
     link.shutdown()
     print(json.dumps(summary(dev, bad[0] + link.rejects.total + p.bad_input.total, ok=r.ok, error=r.error,
                              frames=r.frames, quiet_frames=p.quiet_frames, digest=r.digest_hex, can_sent=link.stats["sent"],
-                             can_received=link.stats["received"], can_rejected=link.rejects.summary())), flush=True)
+                             can_received=link.stats["received"], can_rejected=link.rejects.summary(), startup_objects=set_aside)), flush=True)
     return 0 if r.ok else 1

@@ -9,6 +9,7 @@ import signal
 
 import canopen
 
+from skillbus import startup_heap
 from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock, summary, take_sim_state
 from skillbus.can.fingers import SimFingers
 
@@ -49,6 +50,7 @@ def run(args) -> int:
 
     signal.signal(signal.SIGINT, on_sigint)
     failure: OSError | None = None
+    startup_heap.set_aside()
     try:
         p.run()
     except OSError as e:

@@ -11,6 +11,7 @@ import time
 
 import canopen
 
+from skillbus import startup_heap
 from skillbus.can.device import EDS, GripperDevice, step_on_the_wall_clock, summary
 
 
@@ -22,6 +23,7 @@ def run(args) -> int:
     print(json.dumps({"node": args.node_id, "channel": args.channel}), flush=True)
     period = args.period_ms / 1000.0
     next_t = time.monotonic()
+    startup_heap.set_aside()
     try:
         while True:  # standalone: the finger model on a wall-clock timer
             next_t += period

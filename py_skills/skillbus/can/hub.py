@@ -30,6 +30,7 @@ import sys
 import time
 from pathlib import Path
 
+from skillbus import startup_heap
 from skillbus.can.records import CANFD_MTU, check_record
 
 log = logging.getLogger("can-hub")
@@ -263,6 +264,7 @@ def main(args) -> int:
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
     print(f"can-hub {hub.path}", flush=True)
+    startup_heap.set_aside()
     hub.run()
     print(f'{{"relayed": {hub.relayed}, "bad": {hub.bad}, "stalled": {hub.stalled}}}', flush=True)
     return 0

@@ -23,6 +23,7 @@ import time
 import traceback
 from typing import Any
 
+from skillbus import startup_heap
 from skillbus.bus import Bus, open_bus
 from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, skill_tree_t, skill_value_t
 from skillbus.skill.tick_decode import TickDecoder
@@ -487,6 +488,7 @@ def main(args) -> int:
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
     if getattr(args, "standalone", False):
         log.info("serving %d skill(s) without a skill manager (--standalone)", len(proc.classes))
+        startup_heap.set_aside()
         while True:
             bus.handle(1.0)
     try:
@@ -504,10 +506,13 @@ def main(args) -> int:
                         "until it ends", ", ".join(left), WARM_UP_TIMEOUT_S)
         # Under lockstep the process follows the frames (its world-model replica changes
         # only at frame boundaries); RPC ticks are answered while it waits for a clock.
+        set_aside = startup_heap.set_aside()
         r = participant.run()
         print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "quiet_frames": participant.quiet_frames,
+                          "startup_objects": set_aside,
                           "digest": r.digest_hex, **bad_input(proc, wmi, participant)}), flush=True)
         return 0 if r.ok else 1
+    startup_heap.set_aside()
     Liveness(bus, proc, url=args.url).serve_forever()
 
 
