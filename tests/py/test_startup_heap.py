@@ -37,3 +37,48 @@ def test_start_up_objects_leave_the_collectors_walks_and_later_cycles_are_still_
     assert got["later_freed"]  # a cycle made after set_aside is still collected
     # A full collection no longer walks the start-up heap: far cheaper than before.
     assert got["after_ms"] < got["before_ms"] / 5, got
+
+
+RELEASE = r'''
+import gc, json, weakref
+from skillbus import startup_heap
+
+class Node:
+    def __init__(self):
+        self.me = self
+
+old = Node(); ref = weakref.ref(old)
+startup_heap.set_aside()
+del old
+gc.collect()
+kept_while_frozen = ref() is not None   # a frozen cycle is not walked
+released = startup_heap.release()
+gc.collect()
+print(json.dumps({"kept": kept_while_frozen, "released": released, "freed": ref() is None,
+                  "count": gc.get_freeze_count(), "again": startup_heap.release()}))
+'''
+
+
+def test_released_objects_are_collected_again():
+    out = subprocess.run([sys.executable, "-c", RELEASE], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["kept"] and got["released"] > 0
+    assert got["freed"] and got["count"] == 0 and got["again"] == 0
+
+
+def test_a_replica_read_again_gives_the_old_one_back_to_the_collector(monkeypatch):
+    # The skill process's replica is part of its set-aside start-up heap; a resync drops it.
+    from skillbus import startup_heap
+    from skillbus.bus import open_bus
+    from skillbus.world.client import WorldModelInterface
+
+    real_resync = WorldModelInterface.resync
+    monkeypatch.setattr(WorldModelInterface, "resync", lambda self: None)
+    w = WorldModelInterface(open_bus("memq://"), "test")
+    released = []
+    monkeypatch.setattr(startup_heap, "release", lambda: released.append(True) or 0)
+    monkeypatch.setattr(WorldModelInterface, "_read_pages", lambda self: ({}, [], 7, 7))
+    monkeypatch.setattr(WorldModelInterface, "_changes_up_to", lambda self, first, last: [])
+    real_resync(w)
+    assert released == [True] and w.version == 7

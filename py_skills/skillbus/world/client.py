@@ -18,6 +18,7 @@ import contextlib
 import gc
 from typing import Any
 
+from skillbus import startup_heap
 from skillbus.bus import Bus, channel
 from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elements_t, wm_op_t, wm_query_t,
                            wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
@@ -97,6 +98,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
             if changes is None:
                 last_error = f"changes {first + 1}..{last} of the world did not all arrive"
                 continue
+            startup_heap.release()  # (the old replica, if it was set aside, goes back to the collector)
             self._elements = elements
             self._relations, self._by_node, self._rel_cache = set(), {}, {}
             self._ontology_cache = None  # a scene load or add_class may bring classes
