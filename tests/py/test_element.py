@@ -63,3 +63,35 @@ def test_message_round_trip_keeps_value_types():
     assert value_msg(True, "b").type == wm_value_t.BOOL  # bool is not taken for an int
     with pytest.raises(TypeError, match="property x: a value of type dict"):
         value_msg({}, "x")
+
+
+def test_an_element_off_the_wire_is_what_set_property_makes():
+    # element_from_msg builds without setProperty (a parameter at every tick): the same
+    # element, a key given twice keeping its last values, an empty property, and an
+    # unknown value type refused as before.
+    from skillbus.msgs import wm_element_t, wm_property_t
+
+    def prop(key, *values):
+        p = wm_property_t()
+        p.key = key
+        p.values = [value_msg(v, key) for v in values]
+        p.num_values = len(p.values)
+        return p
+
+    m = wm_element_t()
+    m.id, m.type, m.label = "skiros:Cube-2", "skiros:Cube", "red"
+    m.properties = [prop("s", "a", "b"), prop("i", 3), prop("f", 0.5, 1.5), prop("b", False), prop("empty"),
+                    prop("i", 4, 5)]
+    m.num_properties = len(m.properties)
+    by_hand = Element("skiros:Cube", "red", "skiros:Cube-2")
+    for p in m.properties:
+        by_hand.setProperty(p.key, [v.s if v.type == wm_value_t.STRING else v.i if v.type == wm_value_t.INT else
+                                    v.f if v.type == wm_value_t.FLOAT else v.b for v in p.values])
+    got = element_from_msg(type(m).decode(m.encode()))
+    assert got == by_hand
+    assert got.getProperty("i").values == [4, 5] and got.getProperty("empty").values == []
+    assert got.getProperty("f").dataType() is float and got.getProperty("empty").dataType() is None
+    assert got.getRelations() == [] and got.loaded() is None and not got.isAbstract()
+    m.properties[1].values[0].type = 99
+    with pytest.raises(KeyError):
+        element_from_msg(m)

@@ -29,8 +29,12 @@ def value_msg(v: Any, key: str) -> wm_value_t:
     return m
 
 
+# Which field holds a value of each type (an unknown type is a KeyError, as ever).
+_VALUE_FIELD = {wm_value_t.STRING: "s", wm_value_t.INT: "i", wm_value_t.FLOAT: "f", wm_value_t.BOOL: "b"}
+
+
 def value_from_msg(m: wm_value_t) -> Any:
-    return {wm_value_t.STRING: m.s, wm_value_t.INT: m.i, wm_value_t.FLOAT: m.f, wm_value_t.BOOL: m.b}[m.type]
+    return getattr(m, _VALUE_FIELD[m.type])
 
 
 def property_msg(p: Property) -> wm_property_t:
@@ -50,10 +54,15 @@ def element_msg(e: Element) -> wm_element_t:
 
 
 def element_from_msg(m: wm_element_t) -> Element:
-    e = Element(m.type, m.label, m.id)
+    """The element a message carries (a skill's parameter at every tick: built as the
+    replica's elements are, without setProperty's checks, which a value off the wire never
+    needs; a key given twice keeps its last values, as setProperty would)."""
+    field = _VALUE_FIELD
+    new_property = Property._from_wire
+    props = {}
     for p in m.properties:
-        e.setProperty(p.key, [value_from_msg(v) for v in p.values])
-    return e
+        props[p.key] = new_property(p.key, [getattr(v, field[v.type]) for v in p.values])
+    return Element._from_wire(m.type, m.label, m.id, props)
 
 
 def relation_msg(s: str, p: str, o: str) -> wm_relation_t:
