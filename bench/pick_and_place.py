@@ -10,6 +10,9 @@ participant, transport or skill. Both at the demo's 20 ms frames and at 10 ms fr
 Targets (issue "Performance"): at 20 ms frames the demo keeps at least 90 % of the
 physics-alone speed and runs at least 10x real time on this 2-core machine.
 
+At 20 ms frames the pair (demo, then the physics alone) is run three times and the median
+ratio is the figure: one pair moves by a few per cent with the machine.
+
 Run: .venv/bin/python bench/pick_and_place.py   (in `make bench`)
 """
 
@@ -23,6 +26,9 @@ from pathlib import Path
 from skillbus import cpu_layout, paths
 from skillbus.netns import Sandbox, last_json
 from skillbus.system import programs, start
+
+
+REPEATS = 3  # paired runs at 20 ms frames
 
 
 def demo(box: Sandbox, run: Path, frame_ms: float) -> dict:
@@ -49,37 +55,54 @@ def alone(box: Sandbox, script: str, frames: int, frame_ms: float, prefix: list[
     return last_json(p.stdout())
 
 
+def one_run(tmp: Path, frame_ms: float, n: int) -> dict:
+    """The demo, then the physics alone on its recorded commands: one paired run."""
+    run = Path(tmp) / f"f{int(frame_ms)}-{n}"
+    run.mkdir()
+    with Sandbox(log_dir=run / "logs") as box:
+        d = demo(box, run, frame_ms)
+        a = alone(box, d["script"], d["frames"], frame_ms, d["physics_prefix"])
+    return {"frame_ms": frame_ms, "task": d["task"], "sim_time_s": d["sim_time_s"], "demo_wall_s": d["wall_time_s"],
+            "demo_rtf": d["real_time_factor"], "alone_wall_s": a["wall_time_s"], "alone_rtf": a["real_time_factor"],
+            "ratio": d["real_time_factor"] / a["real_time_factor"], "same_physics": d["state_digest"] == a["state_digest"],
+            "frame_breakdown_ms": d.get("frame_ms", {}), "frames_ended_by": d.get("frames_ended_by", {}),
+            "cores": d["cores"]}
+
+
 def main() -> int:
+    # The ratio of two runs of a second and a half each moves by a few per cent with the
+    # machine (the physics alone alone has ranged 26.4x-28.6x within an hour): at 20 ms
+    # frames, where the target is, the figure is the median of REPEATS paired runs.
+    repeats = {20.0: REPEATS, 10.0: 1}
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for frame_ms in (20.0, 10.0):
-            run = Path(tmp) / f"f{int(frame_ms)}"
-            run.mkdir()
-            with Sandbox(log_dir=run / "logs") as box:
-                d = demo(box, run, frame_ms)
-                a = alone(box, d["script"], d["frames"], frame_ms, d["physics_prefix"])
-            fm = d.get("frame_ms", {})
-            row = {"frame_ms": frame_ms, "task": d["task"], "sim_time_s": d["sim_time_s"],
-                   "demo_wall_s": d["wall_time_s"], "demo_rtf": d["real_time_factor"],
-                   "alone_wall_s": a["wall_time_s"], "alone_rtf": a["real_time_factor"],
-                   "ratio": d["real_time_factor"] / a["real_time_factor"],
-                   "same_physics": d["state_digest"] == a["state_digest"], "frame_breakdown_ms": fm,
-                   "frames_ended_by": d.get("frames_ended_by", {})}
+            runs = [one_run(Path(tmp), frame_ms, n) for n in range(repeats[frame_ms])]
+            for r in runs:
+                fm, ended = r["frame_breakdown_ms"], r["frames_ended_by"]
+                held = ", ".join(f"{k[5:]} {v:.3f} (last in {100 * ended.get(k[5:], 0):.0f} %)"
+                                 for k, v in sorted(fm.items()) if k.startswith("held_"))
+                print(f"frames of {frame_ms:.0f} ms: ClearTable ({r['task']}) {r['sim_time_s']:.2f} s of sim time in "
+                      f"{r['demo_wall_s']:.2f} s: {r['demo_rtf']:.2f}x real time; the physics alone, same "
+                      f"motions: {r['alone_wall_s']:.2f} s, {r['alone_rtf']:.2f}x; the demo keeps "
+                      f"{100 * r['ratio']:.0f} % of it (same physics bit for bit: {r['same_physics']}; {r['cores']})")
+                print(f"    per frame (ms): state {fm.get('state', 0):.2f}, physics {fm.get('physics', 0):.2f}, "
+                      f"wait for acks {fm.get('ack_wait', 0):.2f} (past the physics "
+                      f"{fm.get('ack_wait', 0) - fm.get('physics', 0):.2f}), total {fm.get('total', 0):.2f}; "
+                      f"acks past the physics by participant: {held}", flush=True)
+            row = dict(sorted(runs, key=lambda r: r["ratio"])[len(runs) // 2])  # the median run
+            row["runs"] = [{k: r[k] for k in ("demo_rtf", "alone_rtf", "ratio", "same_physics")} for r in runs]
             rows.append(row)
-            ended = d.get("frames_ended_by", {})
-            held = ", ".join(f"{k[5:]} {v:.3f} (last in {100 * ended.get(k[5:], 0):.0f} %)"
-                             for k, v in sorted(fm.items()) if k.startswith("held_"))
-            print(f"frames of {frame_ms:.0f} ms: ClearTable ({d['task']}) {d['sim_time_s']:.2f} s of sim time in "
-                  f"{d['wall_time_s']:.2f} s: {d['real_time_factor']:.2f}x real time; the physics alone, same "
-                  f"motions: {a['wall_time_s']:.2f} s, {a['real_time_factor']:.2f}x; the demo keeps "
-                  f"{100 * row['ratio']:.0f} % of it (same physics bit for bit: {row['same_physics']}; {d['cores']})")
-            print(f"    per frame (ms): state {fm.get('state', 0):.2f}, physics {fm.get('physics', 0):.2f}, "
-                  f"wait for acks {fm.get('ack_wait', 0):.2f} (past the physics "
-                  f"{fm.get('ack_wait', 0) - fm.get('physics', 0):.2f}), total {fm.get('total', 0):.2f}; "
-                  f"acks past the physics by participant: {held}", flush=True)
+            if len(runs) > 1:
+                kept = ", ".join(f"{100 * r['ratio']:.0f}" for r in runs)
+                demos = ", ".join(f"{r['demo_rtf']:.1f}" for r in runs)
+                alones = ", ".join(f"{r['alone_rtf']:.1f}" for r in runs)
+                print(f"frames of {frame_ms:.0f} ms, {len(runs)} paired runs: the demo keeps {kept} % (median "
+                      f"{100 * row['ratio']:.0f} %); the demo {demos}x, the physics alone {alones}x")
     r20 = next(r for r in rows if r["frame_ms"] == 20.0)
     print(f"target: at 20 ms frames the demo keeps at least 90 % of the physics alone: "
-          f"{'met' if r20['ratio'] >= 0.9 else 'NOT met'} ({100 * r20['ratio']:.0f} %)")
+          f"{'met' if r20['ratio'] >= 0.9 else 'NOT met'} ({100 * r20['ratio']:.0f} %, the median of "
+          f"{len(r20['runs'])} paired runs)")
     print(f"target: at 20 ms frames the demo runs at least 10x real time: "
           f"{'met' if r20['demo_rtf'] >= 10 else 'NOT met'} ({r20['demo_rtf']:.1f}x)")
     print(json.dumps({"pick_and_place": rows}))
