@@ -90,7 +90,15 @@ def finite_all(values: Iterable[Any], name: str, lo: float | None = None, hi: fl
                length: int | None = None) -> list[float]:
     """Every value finite and within [lo, hi], and (if given) exactly `length` of them.
     A bad element is named with its index: ``position[2]``."""
-    out = [finite(v, f"{name}[{i}]", lo, hi) for i, v in enumerate(values)]
+    values = values if isinstance(values, (list, tuple)) else list(values)
+    # The common case at a frame's rate (a state's joints): every value a float, finite,
+    # within the bounds, checked without naming each one; anything else is checked one by
+    # one, which names the first bad value as ever.
+    if (all(type(v) is float for v in values) and all(map(math.isfinite, values))
+            and (not values or ((lo is None or min(values) >= lo) and (hi is None or max(values) <= hi)))):
+        out = list(values)
+    else:
+        out = [finite(v, f"{name}[{i}]", lo, hi) for i, v in enumerate(values)]
     if length is not None and len(out) != length:
         raise BadValue(name, f"{len(out)} values", f"{length} expected")
     return out
@@ -122,8 +130,9 @@ def pose(values: Sequence[Any], name: str, reach: float) -> list[float]:
     QUATERNION_TOLERANCE): a zero or huge quaternion is no rotation, and every transform
     made from it would be garbage."""
     v = finite_all(values, name, length=7)
-    for i, axis in enumerate("xyz"):
-        finite(v[i], f"{name}.{axis}", -reach, reach)
+    if not all(-reach <= x <= reach for x in v[:3]):  # (named axis by axis only when one is out)
+        for i, axis in enumerate("xyz"):
+            finite(v[i], f"{name}.{axis}", -reach, reach)
     norm = math.sqrt(sum(q * q for q in v[3:]))
     if abs(norm - 1.0) > QUATERNION_TOLERANCE:
         raise BadValue(f"{name}.rotation", v[3:], f"not a unit quaternion (norm {norm:.6g})")

@@ -62,6 +62,41 @@ def test_finite_all_names_the_bad_element_and_checks_the_length():
         finite_all([0.0, 0.0, 0.0], "q", length=2)
 
 
+def test_finite_all_answers_as_checking_each_value_does():
+    # finite_all takes a shortcut when every value is a float in range; whatever the
+    # values, it must give what checking them one by one gives: the same list or the same
+    # error, naming the first bad value.
+    import random
+
+    def one_by_one(values, name, lo=None, hi=None, length=None):
+        out = [finite(v, f"{name}[{i}]", lo, hi) for i, v in enumerate(values)]
+        if length is not None and len(out) != length:
+            raise BadValue(name, f"{len(out)} values", f"{length} expected")
+        return out
+
+    def outcome(f, *args, **kw):
+        try:
+            got = f(*args, **kw)
+            return "ok", got, [type(v) for v in got]
+        except BadValue as e:
+            return "bad", str(e)
+
+    rng = random.Random(20261204)
+    pool = [0.0, 0.5, -0.5, 1.0, -1.0, 2.5, -2.5, 1e300, math.nan, math.inf, -math.inf, 1, 0, -3, True, False,
+            2 ** 1100, "1.0", None]
+    for _ in range(5000):
+        values = [rng.choice(pool) for _ in range(rng.randint(0, 5))]
+        lo, hi = rng.choice([(None, None), (-1.0, 1.0), (-2, None), (None, 2)])
+        length = rng.choice([None, len(values), 3])
+        values = values if rng.random() < 0.5 else tuple(values)
+        assert outcome(finite_all, values, "q", lo, hi, length=length) == outcome(one_by_one, values, "q", lo, hi,
+                                                                                   length=length), (values, lo, hi)
+    assert finite_all(iter([0.25, 0.5]), "q") == [0.25, 0.5]  # any iterable, as before
+    with pytest.raises(BadValue, match=r"^p\.y=3\.0: above 2$"):
+        pose([0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 1.0], "p", 2.0)
+    assert pose([0.0, 2.0, -2.0, 0.0, 0.0, 0.0, 1.0], "p", 2.0)[1] == 2.0
+
+
 def test_one_of_and_text():
     assert one_of(1, "mode", (1,)) == 1
     with pytest.raises(BadValue, match=r"^mode=7: not one of 1, 3$"):

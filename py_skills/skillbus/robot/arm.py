@@ -21,6 +21,7 @@ from typing import Any
 from skillbus.bus import Bus
 from skillbus.msgs import (decode, joint_traj_point_t, motion_plan_t, motion_request_t, robot_arm_state_t,
                            robot_cmd_reply_t)
+from skillbus.robot.arm_state_decode import decode_arm_state
 from skillbus.robot.messages import (arm_cmd_channel, arm_command, arm_state_channel, check_arm_state, reply_channel,
                                      traj_point)
 from skillbus.rpc import RpcClient
@@ -83,7 +84,7 @@ class Arm:
     @property
     def state(self) -> robot_arm_state_t | None:
         if self._raw is not None:
-            s = decode(robot_arm_state_t, self._raw)
+            s = decode_arm_state(self._raw)
             self._raw = None
             if s is None:
                 self.bad += 1

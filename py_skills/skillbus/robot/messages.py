@@ -81,7 +81,9 @@ def check_arm_state(s) -> None:
     tracking error not negative. Skills plan from these positions and decide "settled"
     from the tracking error: a NaN there never compares below a tolerance."""
     n = integer(s.num_joints, "num_joints", 1, MAX_JOINTS)
-    names = [text(x, f"joint_names[{i}]") for i, x in enumerate(s.joint_names)]
+    names = list(s.joint_names)
+    if not all(type(x) is str and x for x in names):  # (named one by one only when one is bad)
+        names = [text(x, f"joint_names[{i}]") for i, x in enumerate(names)]
     if len(names) != n or len(set(names)) != n:
         raise BadValue("joint_names", names, f"{n} distinct names expected")
     finite_all(s.position, "position", -MAX_JOINT_POSITION, MAX_JOINT_POSITION, length=n)
