@@ -77,3 +77,15 @@ def test_flipped_bytes_and_odd_counts_decode_alike():
     bad_utf8[bad_utf8.index(b"abc")] = 0xFF
     same(bytes(bad_utf8))
     assert decode_arm_state(bytes(bad_utf8)).joint_names == ["\ufffdbc"]
+
+
+def test_forged_counts_do_not_grow_the_decoders_structs():
+    # A struct per joint count is kept: counts that cannot fit the message never get one.
+    from skillbus.robot import arm_state_decode
+
+    data = state(6)
+    at = 8 + 16 + 4 + 4 + 4
+    before = len(arm_state_decode._DOUBLES)
+    for count in range(1000, 3000):
+        assert decode_arm_state(data[:at] + struct.pack(">i", count) + data[at + 4:]) is None
+    assert len(arm_state_decode._DOUBLES) <= before + 1

@@ -32,6 +32,20 @@ def _doubles(n: int) -> struct.Struct:
     return s
 
 
+class _CutShort(Exception):
+    """A string's length runs past the message's end."""
+
+
+def _string(data: bytes, at: int, end: int) -> tuple[str, int]:
+    """The LCM string at `at` (its length counts the NUL, dropped as LCM's Python drops the
+    last byte whatever it is) and the position after it."""
+    (size,) = _LENGTH.unpack_from(data, at)
+    at += 4
+    if at + size > end:
+        raise _CutShort
+    return data[at:at + size][:-1].decode("utf-8", "replace"), at + size
+
+
 def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
     """The robot_arm_state_t `data` encodes, or None when skillbus.msgs.decode would
     refuse it."""
@@ -40,25 +54,15 @@ def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
         return None
     try:
         frame, sim_time_ns = _TIMES.unpack_from(data, 8)
-        at = 24
-        (size,) = _LENGTH.unpack_from(data, at)
-        at += 4
-        if at + size > end:
-            return None
-        sender = data[at:at + size][:-1].decode("utf-8", "replace")
-        at += size
+        sender, at = _string(data, 24, end)
         seq, n = struct.unpack_from(">ii", data, at)
         at += 8
-        if n < 0:
+        if n < 0 or 24 * n > end - at:  # (its three arrays could not fit: cut short, whatever follows)
             return None
         names = []
         for _ in range(n):
-            (size,) = _LENGTH.unpack_from(data, at)
-            at += 4
-            if at + size > end:
-                return None
-            names.append(data[at:at + size][:-1].decode("utf-8", "replace"))
-            at += size
+            name, at = _string(data, at, end)
+            names.append(name)
         doubles = _doubles(n)
         position = doubles.unpack_from(data, at)
         at += doubles.size
@@ -67,16 +71,10 @@ def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
         effort = doubles.unpack_from(data, at)
         at += doubles.size
         tool_pose = _POSE.unpack_from(data, at)
-        at += _POSE.size
-        (size,) = _LENGTH.unpack_from(data, at)
-        at += 4
-        if at + size > end:
-            return None
-        command_id = data[at:at + size][:-1].decode("utf-8", "replace")
-        at += size
+        command_id, at = _string(data, at + _POSE.size, end)
         moving, tracking_error = _TAIL.unpack_from(data, at)
         at += _TAIL.size
-    except struct.error:
+    except (struct.error, _CutShort):
         return None
     if at != end:
         return None
