@@ -86,6 +86,10 @@ def test_forged_counts_do_not_grow_the_decoders_structs():
     data = state(6)
     at = 8 + 16 + 4 + 4 + 4
     before = len(arm_state_decode._DOUBLES)
-    for count in range(1000, 3000):
-        assert decode_arm_state(data[:at] + struct.pack(">i", count) + data[at + 4:]) is None
+    for count in range(1000, 1300):
+        # `count` names of one byte each (their NUL), then nothing: the names fit, the
+        # arrays after them cannot.
+        forged = data[:at] + struct.pack(">i", count) + (struct.pack(">I", 1) + b"\0") * count
+        assert decode_arm_state(forged) is None
+        assert decode(robot_arm_state_t, forged) is None
     assert len(arm_state_decode._DOUBLES) <= before + 1
