@@ -92,6 +92,20 @@ def test_an_element_off_the_wire_is_what_set_property_makes():
     assert got.getProperty("i").values == [4, 5] and got.getProperty("empty").values == []
     assert got.getProperty("f").dataType() is float and got.getProperty("empty").dataType() is None
     assert got.getRelations() == [] and got.loaded() is None and not got.isAbstract()
+    # A key given twice with another type, or empty the second time: setProperty's rules
+    # (the first values' type stays), as before.
+    for first, again in ((prop("k", 1.5), prop("k", "x")), (prop("e", 2), prop("e"))):
+        m2 = wm_element_t()
+        m2.id, m2.type, m2.label = "skiros:Cube-3", "skiros:Cube", "green"
+        m2.properties = [first, again]
+        m2.num_properties = 2
+        by_hand = Element("skiros:Cube", "green", "skiros:Cube-3")
+        for p in m2.properties:
+            by_hand.setProperty(p.key, [v.s if v.type == wm_value_t.STRING else v.i if v.type == wm_value_t.INT else
+                                        v.f for v in p.values])
+        got = element_from_msg(m2)
+        assert got == by_hand
+        assert got.getProperty(first.key).dataType() is by_hand.getProperty(first.key).dataType() is not None
     m.properties[1].values[0].type = 99
     with pytest.raises(KeyError):
         element_from_msg(m)

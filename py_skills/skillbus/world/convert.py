@@ -56,13 +56,23 @@ def element_msg(e: Element) -> wm_element_t:
 def element_from_msg(m: wm_element_t) -> Element:
     """The element a message carries (a skill's parameter at every tick: built as the
     replica's elements are, without setProperty's checks, which a value off the wire never
-    needs; a key given twice keeps its last values, as setProperty would)."""
+    needs). A key given twice is built by setProperty (its last values, the first one's
+    type), as it always was."""
     field = _VALUE_FIELD
     new_property = Property._from_wire
     props = {}
     for p in m.properties:
+        if p.key in props:
+            return _element_by_set_property(m)
         props[p.key] = new_property(p.key, [getattr(v, field[v.type]) for v in p.values])
     return Element._from_wire(m.type, m.label, m.id, props)
+
+
+def _element_by_set_property(m: wm_element_t) -> Element:
+    e = Element(m.type, m.label, m.id)
+    for p in m.properties:
+        e.setProperty(p.key, [value_from_msg(v) for v in p.values])
+    return e
 
 
 def relation_msg(s: str, p: str, o: str) -> wm_relation_t:
