@@ -76,9 +76,14 @@ def test_a_replica_read_again_gives_the_old_one_back_to_the_collector(monkeypatc
     real_resync = WorldModelInterface.resync
     monkeypatch.setattr(WorldModelInterface, "resync", lambda self: None)
     w = WorldModelInterface(open_bus("memq://"), "test")
-    released = []
-    monkeypatch.setattr(startup_heap, "release", lambda: released.append(True) or 0)
+    released, set_aside = [], []
+    frozen = [0]
+    monkeypatch.setattr(startup_heap, "release", lambda: released.append(True) or frozen[0])
+    monkeypatch.setattr(startup_heap, "set_aside", lambda: set_aside.append(True) or 1)
     monkeypatch.setattr(WorldModelInterface, "_read_pages", lambda self: ({}, [], 7, 7))
     monkeypatch.setattr(WorldModelInterface, "_changes_up_to", lambda self, first, last: [])
+    real_resync(w)  # nothing was set aside: nothing is set aside after
+    assert released == [True] and set_aside == [] and w.version == 7
+    frozen[0] = 120_000  # a serving process: the new replica is set aside again
     real_resync(w)
-    assert released == [True] and w.version == 7
+    assert released == [True, True] and set_aside == [True]

@@ -98,7 +98,9 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
             if changes is None:
                 last_error = f"changes {first + 1}..{last} of the world did not all arrive"
                 continue
-            startup_heap.release()  # (the old replica, if it was set aside, goes back to the collector)
+            # The old replica, if it was set aside with the process's start-up heap, goes
+            # back to the collector; the new one is set aside again below.
+            released = startup_heap.release()
             self._elements = elements
             self._relations, self._by_node, self._rel_cache = set(), {}, {}
             self._ontology_cache = None  # a scene load or add_class may bring classes
@@ -109,6 +111,8 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
                 if ch.version == self.version + 1:
                     self._apply_change(ch)
             self._stale = False
+            if released:
+                startup_heap.set_aside()
             return
         raise WorldModelError(f"could not read the world: {last_error}")
 
