@@ -90,11 +90,11 @@ def finite_all(values: Iterable[Any], name: str, lo: float | None = None, hi: fl
                length: int | None = None) -> list[float]:
     """Every value finite and within [lo, hi], and (if given) exactly `length` of them.
     A bad element is named with its index: ``position[2]``."""
-    values = values if isinstance(values, (list, tuple)) else list(values)
-    # The common case at a frame's rate (a state's joints): every value a float, finite,
-    # within the bounds, checked without naming each one; anything else is checked one by
-    # one, which names the first bad value as ever.
-    if (all(type(v) is float for v in values) and all(map(math.isfinite, values))
+    # The common case at a frame's rate (a state's joints, a list or tuple): every value a
+    # float, finite, within the bounds, checked without naming each one; anything else is
+    # checked one by one (an iterator lazily), which names the first bad value as ever.
+    if (isinstance(values, (list, tuple)) and all(type(v) is float for v in values)
+            and all(map(math.isfinite, values))
             and (not values or ((lo is None or min(values) >= lo) and (hi is None or max(values) <= hi)))):
         out = list(values)
     else:

@@ -92,6 +92,14 @@ def test_finite_all_answers_as_checking_each_value_does():
         assert outcome(finite_all, values, "q", lo, hi, length=length) == outcome(one_by_one, values, "q", lo, hi,
                                                                                    length=length), (values, lo, hi)
     assert finite_all(iter([0.25, 0.5]), "q") == [0.25, 0.5]  # any iterable, as before
+
+    def values_then_trouble():  # checked lazily: the bad value is named before the rest is read
+        yield 0.5
+        yield math.nan
+        raise RuntimeError("read past the bad value")
+
+    with pytest.raises(BadValue, match=r"^q\[1\]=nan"):
+        finite_all(values_then_trouble(), "q")
     with pytest.raises(BadValue, match=r"^p\.y=3\.0: above 2$"):
         pose([0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 1.0], "p", 2.0)
     assert pose([0.0, 2.0, -2.0, 0.0, 0.0, 0.0, 1.0], "p", 2.0)[1] == 2.0
