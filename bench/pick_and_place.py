@@ -92,6 +92,8 @@ def main() -> int:
                       f"acks past the physics by participant: {held}", flush=True)
             row = dict(sorted(runs, key=lambda r: r["ratio"])[len(runs) // 2])  # the median run
             row["runs"] = [{k: r[k] for k in ("demo_rtf", "alone_rtf", "ratio", "same_physics")} for r in runs]
+            row["demo_rtf"] = sorted(r["demo_rtf"] for r in runs)[len(runs) // 2]  # (its own median)
+            row["same_physics"] = all(r["same_physics"] for r in runs)
             rows.append(row)
             if len(runs) > 1:
                 kept = ", ".join(f"{100 * r['ratio']:.0f}" for r in runs)
@@ -104,7 +106,9 @@ def main() -> int:
           f"{'met' if r20['ratio'] >= 0.9 else 'NOT met'} ({100 * r20['ratio']:.0f} %, the median of "
           f"{len(r20['runs'])} paired runs)")
     print(f"target: at 20 ms frames the demo runs at least 10x real time: "
-          f"{'met' if r20['demo_rtf'] >= 10 else 'NOT met'} ({r20['demo_rtf']:.1f}x)")
+          f"{'met' if r20['demo_rtf'] >= 10 else 'NOT met'} ({r20['demo_rtf']:.1f}x, the median)")
+    if not all(r["same_physics"] for r in rows):
+        print("the demo's physics and the physics alone differed in a run: the ratio compares different work")
     print(json.dumps({"pick_and_place": rows}))
     return 0
 
