@@ -12,12 +12,13 @@ from test_skills import LIBS, mgr_binary
 FRAMES = 1200  # 12 s of sim time; the task needs 20 + 30 + 5 ticks of 40 ms (2.2 s)
 
 
-def session(box, frames=FRAMES, ack_timeout_ms=5000):
+def session(box, frames=FRAMES, ack_timeout_ms=5000, env_b=None):
     clock = box.start("clock", [paths.binary("sb_clock"), "--frames", str(frames), "--participants",
                                 "skill_mgr,proc_a,proc_b", "--ack-timeout-ms", str(ack_timeout_ms)])
     mgr = box.start("skill_mgr", [mgr_binary(), "--start", "Both"])
+    extra = {"proc_a": {}, "proc_b": env_b or {}}
     procs = {n: box.start(n, [sys.executable, "-m", "skillbus.cli", "skills-process", "--lockstep", "--name", n,
-                              "--library", lib], env={"PYTHONPATH": str(LIBS)})
+                              "--library", lib], env={"PYTHONPATH": str(LIBS), **extra[n]})
              for n, lib in (("proc_a", "lockstep_a"), ("proc_b", "lockstep_b"))}
     return clock, mgr, procs
 
@@ -38,7 +39,10 @@ def test_runs_to_success_twice_with_the_same_digest(tmp_path):
 
 def test_killing_a_skill_process_fails_the_task_by_name_and_a_restart_succeeds(tmp_path):
     with Sandbox(log_dir=tmp_path / "killed") as box:
-        clock, mgr, procs = session(box, frames=100_000, ack_timeout_ms=1500)
+        # `other` ticks for ever here: the task can only end by the kill (with 30 ticks, at the
+        # clock's pace, it sometimes ended before the kill landed and the task succeeded).
+        clock, mgr, procs = session(box, frames=100_000, ack_timeout_ms=1500,
+                                    env_b={"LOCKSTEP_B_OTHER_TICKS": "1000000"})
         procs["proc_b"].wait_for("other started", 60, interval=0.01)
         box.kill(procs["proc_b"])
         killed = time.monotonic()
