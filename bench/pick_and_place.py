@@ -64,7 +64,8 @@ def one_run(tmp: Path, frame_ms: float, n: int) -> dict:
         a = alone(box, d["script"], d["frames"], frame_ms, d["physics_prefix"])
     return {"frame_ms": frame_ms, "task": d["task"], "sim_time_s": d["sim_time_s"], "demo_wall_s": d["wall_time_s"],
             "demo_rtf": d["real_time_factor"], "alone_wall_s": a["wall_time_s"], "alone_rtf": a["real_time_factor"],
-            "ratio": d["real_time_factor"] / a["real_time_factor"], "same_physics": d["state_digest"] == a["state_digest"],
+            "ratio": d["real_time_factor"] / a["real_time_factor"],
+            "same_physics": d["state_digest"] == a["state_digest"],
             "frame_breakdown_ms": d.get("frame_ms", {}), "frames_ended_by": d.get("frames_ended_by", {}),
             "cores": d["cores"]}
 

@@ -99,5 +99,6 @@ def run(args) -> int:
     link.shutdown()
     print(json.dumps(summary(dev, bad[0] + link.rejects.total + p.bad_input.total, ok=r.ok, error=r.error,
                              frames=r.frames, quiet_frames=p.quiet_frames, digest=r.digest_hex, can_sent=link.stats["sent"],
-                             can_received=link.stats["received"], can_rejected=link.rejects.summary(), startup_objects=set_aside)), flush=True)
+                             can_received=link.stats["received"], can_rejected=link.rejects.summary(),
+                             startup_objects=set_aside)), flush=True)
     return 0 if r.ok else 1
