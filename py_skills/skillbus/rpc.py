@@ -30,6 +30,7 @@ from skillbus.bus import Bus
 from skillbus.channels import channel, robot_channel
 from skillbus.log import BadInputCounter
 from skillbus.msgs import decode, rpc_reply_t, rpc_request_t
+from skillbus.rpc_wire import decode_reply, decode_request, encode_reply, encode_request
 
 OK, ERROR, UNKNOWN_METHOD, BAD_REQUEST = (rpc_reply_t.OK, rpc_reply_t.ERROR,
                                           rpc_reply_t.UNKNOWN_METHOD, rpc_reply_t.BAD_REQUEST)
@@ -158,7 +159,7 @@ class RpcServer:
         payload = answer.payload
         if len(payload) <= CHUNK_BYTES:  # (one chunk, most answers: sent as it is, not copied)
             answer.chunk, answer.chunks, answer.payload_size = 0, 1, len(payload)
-            self.bus.publish(self.rep_channel, answer.encode())
+            self.bus.publish(self.rep_channel, encode_reply(answer))
             return
         key = (answer.client_id, answer.request_id)
         if _chunks(len(payload)) > 1:
@@ -172,10 +173,10 @@ class RpcServer:
         rep.chunk, rep.chunks = chunk, _chunks(len(payload))
         rep.payload = payload[chunk * CHUNK_BYTES:(chunk + 1) * CHUNK_BYTES]
         rep.payload_size = len(rep.payload)
-        self.bus.publish(self.rep_channel, rep.encode())
+        self.bus.publish(self.rep_channel, encode_reply(rep))
 
     def _on_request(self, ch: str, data: bytes) -> None:
-        req = decode(rpc_request_t, data)
+        req = decode_request(data)
         if req is None:
             self.bad_input.record(ch, "not an rpc_request_t", len(data))
             return
@@ -286,7 +287,7 @@ class RpcClient:
         self.bus.unsubscribe(self._sub)
 
     def _on_reply(self, ch: str, data: bytes) -> None:
-        rep = decode(rpc_reply_t, data)
+        rep = decode_reply(data)
         if rep is None:
             self.bad_input.record(ch, "not an rpc_reply_t", len(data))
             return
@@ -328,7 +329,7 @@ class RpcClient:
         asked = parts.missing(PULL_WINDOW)
         for k in asked:
             pull.chunk = k
-            self.bus.publish(self.req_channel, pull.encode())
+            self.bus.publish(self.req_channel, encode_request(pull))
         return len(asked)
 
     def call_raw(self, method: str, payload: bytes, timeout: float = 2.0,
@@ -338,7 +339,7 @@ class RpcClient:
         self.next_request_id += 1
         req.deadline_ns = time.time_ns() + int(timeout * 1e9)
         req.method, req.payload, req.payload_size = method, payload, len(payload)
-        buf = req.encode()
+        buf = encode_request(req)
         rid = req.request_id
         self._pending[rid] = None
         deadline = time.monotonic() + timeout
