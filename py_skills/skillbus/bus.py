@@ -304,6 +304,8 @@ class LcmBus(Bus):
         self._turn = 0  # the lane read first by the next handle(): neither starves the other
         self._caught_up = time.monotonic()  # (caught_up_at: set each time every socket was read empty)
         self.lost_sends = 0  # messages the network refused to send
+        self._publishing: dict[str, int] = {}  # channel -> the lane it is published on (checked once)
+        self._read_orders: tuple = (([], []), ([], []))  # handle()'s receivers and their sockets, in turns
         self._lane(0)  # fail early, with a clear message
 
     def _lane(self, i: int) -> lcm.LCM:
@@ -327,6 +329,10 @@ class LcmBus(Bus):
             except OSError as e:
                 raise BusError(f"cannot receive on '{self._lane_urls[i]}' (for udpm:// the host needs a "
                                f"multicast route, e.g. `ip route add 224.0.0.0/4 dev lo`): {e}") from e
+            # (made once here, not at every handle(): with two lanes each is read first in turn)
+            order = [x for x in self._receivers if x is not None]
+            orders = [order, order[::-1]] if len(order) == 2 else [order, order]
+            self._read_orders = tuple((rs, [x.sock for x in rs]) for rs in orders)
         return r
 
     _filter_refused = False  # the kernel refused a filter once: logged, not tried again
@@ -353,10 +359,18 @@ class LcmBus(Bus):
         return self._url
 
     def publish(self, channel: str, data: bytes) -> None:
-        refuse_long_channel(channel)
-        refuse_oversized(channel, len(data))
+        i = self._publishing.get(channel)
+        if i is None:  # (a channel's name is checked and its lane found once)
+            refuse_long_channel(channel)
+            i = lane_of(channel) if self._lane_urls[1] else 0
+            self._lane(i)
+            if len(self._publishing) > 4096:  # (a process sends on few channels; bounded anyway)
+                self._publishing.clear()
+            self._publishing[channel] = i
+        if len(data) > MAX_MESSAGE_BYTES:
+            refuse_oversized(channel, len(data))
         try:
-            self._lane(lane_of(channel)).publish(channel, data)
+            self._lanes[i].publish(channel, data)  # type: ignore[union-attr]
         except OSError as e:
             if e.errno in (None, 0, errno.EMSGSIZE, errno.EINVAL):  # LCM refused it, or it can never fit
                 raise BusError(f"LCM publish failed on {channel} ({len(data)} bytes): {e}") from None
@@ -424,11 +438,8 @@ class LcmBus(Bus):
     def _handle_direct(self, timeout: float) -> bool:
         """One message to its handlers, waiting at most `timeout` for it (datagrams for
         channels nobody here subscribed to are read and dropped meanwhile)."""
-        receivers = [r for r in self._receivers if r is not None]
-        if len(receivers) == 2 and self._turn:
-            receivers.reverse()
+        receivers, sockets = self._read_orders[self._turn]  # (select asks a socket for its descriptor in C)
         self._turn ^= 1
-        sockets = [r.sock for r in receivers]  # (select asks a socket for its descriptor in C)
         deadline = None
         while True:
             for r in receivers:

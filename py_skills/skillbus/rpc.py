@@ -230,7 +230,8 @@ class RpcServer:
         self._send_chunk(rep, 0)
         self._answered[key] = rep
         self._answered_bytes += len(rep.payload) + 64
-        self._forget_old()
+        if len(self._answered) > self.memory or self._answered_bytes > self.memory_bytes:
+            self._forget_old()
 
     def _forget_old(self) -> None:
         """Bounded by count and by bytes. The newest is kept whatever its size, and so,
