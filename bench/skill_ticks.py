@@ -20,6 +20,7 @@ Run: .venv/bin/python bench/skill_ticks.py   (in `make bench`)
 from __future__ import annotations
 
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -71,29 +72,34 @@ def py_trees_figure() -> float:
 NO_KEY = {"SKILLBUS_KEY_FILE": "none"}
 
 
-def tick_round_trip(ticks: int, signed: bool, native: bool = True) -> tuple[dict, dict]:
+def tick_round_trip(ticks: int, signed: bool, native: bool = True,
+                    cores: tuple[str, str] | None = None) -> tuple[dict, dict]:
     """The raw LCM round trip (LCM's Python module: no key) and the tick, with the
     deployment's key (as the system runs) or without one (like for like with LCM); with
-    `native` False the skill process signs and verifies in Python (SKILLBUS_NATIVE=0)."""
+    `native` False the skill process signs and verifies in Python (SKILLBUS_NATIVE=0).
+    `cores`: where the asking end (ping, the manager's node) and the answering end (pong,
+    the skill process) run, both pairs alike (taskset); None leaves it to the kernel."""
     env = {} if signed else dict(NO_KEY)
     if not native:
         env["SKILLBUS_NATIVE"] = "0"
+    asking, answering = (["taskset", "--cpu-list", c] for c in cores) if cores else ([], [])
     with Sandbox() as box:
-        pong = box.start("pong", [sys.executable, HERE / "pingpong.py", "lcm", "pong"], env=NO_KEY)
-        ping = box.start("ping", [sys.executable, HERE / "pingpong.py", "lcm", "ping", str(ticks), "200"], env=NO_KEY)
+        pong = box.start("pong", [*answering, sys.executable, HERE / "pingpong.py", "lcm", "pong"], env=NO_KEY)
+        ping = box.start("ping", [*asking, sys.executable, HERE / "pingpong.py", "lcm", "ping", str(ticks), "200"],
+                         env=NO_KEY)
         box.wait(ping, 120)
         box.kill(pong)
         raw = last_json(ping.stdout())
         # tick_rtt_bench plays the manager's node that ticks the process: no manager (a real
         # one would end the skill instances it did not start).
-        proc = box.start("skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "bench",
+        proc = box.start("skills", [*answering, sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "bench",
                                     "--library", "spin_skills", "--standalone"], env={"PYTHONPATH": str(HERE), **env})
         try:
             proc.wait_for("without a skill manager", 60)
         except RuntimeError as e:
             raise SystemExit(f"the skill process did not start: {e}")
-        rtt = box.start("rtt", [paths.build_dir() / "bench" / "tick_rtt_bench", "SKPROC_BENCH", "spin", str(ticks)],
-                        env=env)
+        rtt = box.start("rtt", [*asking, paths.build_dir() / "bench" / "tick_rtt_bench", "SKPROC_BENCH", "spin",
+                                str(ticks)], env=env)
         box.wait(rtt, 120)
         got = last_json(rtt.stdout())
         if got is None or "error" in got:
@@ -152,7 +158,7 @@ print(json.dumps(out))
 def task_growth(window_s: float = 4.0) -> dict:
     with Sandbox() as box:
         box.start("skill_mgr", [paths.build_dir() / "skill_mgr" / "skill_mgr", "--wall-clock"])
-        proc = box.start("skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "bench",
+        proc = box.start("skills", [*answering, sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "bench",
                                     "--library", "spin_skills", "--register-timeout", "60"], env={"PYTHONPATH": str(HERE)})
         proc.wait_for("registered", 60)
         client = box.start("tasks", [sys.executable, "-c", TASKS_CLIENT, ",".join(map(str, GROWTH)), str(window_s)])
@@ -211,6 +217,19 @@ def main() -> int:
         print(f"    target, {name}: the tick's median within 1.5x of the round trip's median: "
               f"{'met' if ratio <= 1.5 else 'NOT met'} ({ratio:.2f}x); its p99 within 3x of its median: "
               f"{'met' if tail <= 3 else 'NOT met'} ({tail:.2f}x)")
+    # Where the two ends run moves both round trips by more than the tick's own work: a
+    # message that wakes a process on the other core costs its sender a wake-up across
+    # cores (an inter-processor interrupt; about 20 us each way on this machine), one on
+    # the same core does not. Both pairs placed alike, signed, one round each (not targets).
+    print("    placed (signed; the asking end's core / the answering end's; one round each): ", end="")
+    placed = []
+    for cores in (("0", "0"), ("0", "1"), ("1", "0")):
+        if not set(map(int, cores)) <= os.sched_getaffinity(0):
+            continue
+        raw, t = tick_round_trip(2000, signed=True, cores=cores)
+        placed.append(f"{cores[0]}/{cores[1]}: tick {t['median_us']:.0f} us, raw {raw['median_us']:.0f} us, "
+                      f"{t['median_us'] / raw['median_us']:.2f}x")
+    print("; ".join(placed) or "fewer than 2 cores")
     growth = task_growth()
     print("(c) ticks a second per task (median / least served), asked for 25 Hz, by concurrent tasks")
     for n in sorted(growth):
