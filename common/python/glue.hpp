@@ -27,5 +27,6 @@ std::shared_ptr<SharedOpener> opener_of(PyObject* o);
 bool add_quiet_frames(PyObject* module);
 bool add_auth(PyObject* module);
 bool add_channel_filter(PyObject* module);
+bool add_tick_wire(PyObject* module);
 
 }  // namespace skillbus::native

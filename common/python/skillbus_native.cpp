@@ -6,6 +6,8 @@
 //                skillbus.auth)
 //   attach_channel_filter  the kernel filter of a udpm:// socket (py_channel_filter.cpp:
 //                skillbus/channel_filter.hpp's, for skillbus.bus)
+//   element_wire  a skill parameter's element in wm_element_t's bytes (py_tick_wire.cpp,
+//                for skillbus.skill.tick_wire)
 //
 // Python finds it through skillbus.native, which also honours SKILLBUS_NATIVE=0.
 #include "glue.hpp"
@@ -57,7 +59,7 @@ PyMODINIT_FUNC PyInit_skillbus_native() {
   PyObject* m = PyModule_Create(&module_def);
   if (!m) return nullptr;
   if (!skillbus::native::add_quiet_frames(m) || !skillbus::native::add_auth(m) ||
-      !skillbus::native::add_channel_filter(m)) {
+      !skillbus::native::add_channel_filter(m) || !skillbus::native::add_tick_wire(m)) {
     Py_DECREF(m);
     return nullptr;
   }

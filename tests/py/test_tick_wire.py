@@ -162,3 +162,80 @@ def test_a_reader_copy_encodes_what_it_holds_without_copying_its_properties():
     assert "_properties" not in copy.__dict__  # (nothing copied to encode it)
     assert got == wm_element_t.encode(element_msg(copy))[8:]  # (element_msg makes the copy)
     assert src.getProperty("skiros:Size").value == 0.05
+
+
+# -- skillbus_native's element encoder (py_tick_wire.cpp) ----------------------------------
+
+import math  # noqa: E402
+
+import skillbus_native  # noqa: E402  (built by make build: a test of it fails without it)
+
+from skillbus.skill.tick_wire import python_element_bytes  # noqa: E402
+
+
+class Fraction(float):
+    pass
+
+
+class Count(int):
+    pass
+
+
+class Name(str):
+    pass
+
+
+def same_as_python(e) -> bytes | None:
+    """element_bytes(e) is Python's bytes, or raises what Python raises; the bytes."""
+    try:
+        want = python_element_bytes(e)
+    except Exception as py_error:
+        with pytest.raises(type(py_error)):
+            element_bytes(e)
+        return None
+    assert element_bytes(e) == want
+    return want
+
+
+def test_the_native_element_encoder_writes_pythons_bytes_for_random_elements():
+    rng = random.Random(5)
+    for _ in range(500):
+        e = an_element(rng)
+        native = skillbus_native.element_wire(e)
+        assert native is not None  # (the regular case is the native one's)
+        assert native == python_element_bytes(e) == wm_element_t.encode(element_msg(e))[8:]
+
+
+def test_numbers_at_their_edges_are_written_as_python_writes_them():
+    e = Element("skiros:Cube", "c", "skiros:Cube-1")
+    e.setProperty("skiros:F", [0.0, -0.0, math.inf, -math.inf, math.nan, 5e-324, 1.7976931348623157e308])
+    e.setProperty("skiros:I", [0, -1, 2**63 - 1, -2**63])
+    e.setProperty("skiros:B", [True, False])
+    e.setProperty("skiros:S", ["", "\0inside", "gr\u00fc\u00dfe \U0001f916"])
+    assert skillbus_native.element_wire(e) == python_element_bytes(e)
+
+
+def test_what_the_native_encoder_leaves_to_python_is_written_or_refused_as_python_does():
+    cases = [("subclass of float", Fraction(0.5)), ("subclass of int", Count(3)), ("subclass of str", Name("n")),
+             ("an int over 64 bits", 2**63), ("a lone surrogate", "\udc80"), ("a list", [1, 2]), ("None", None)]
+    for why, value in cases:
+        e = Element("skiros:Cube", "c", "skiros:Cube-1")
+        e.setProperty("skiros:Before", 1.0)
+        e._properties["skiros:X"] = e._properties["skiros:Before"]._copy()
+        e._properties["skiros:X"]._key = "skiros:X"
+        e._properties["skiros:X"]._values = [value]
+        assert skillbus_native.element_wire(e) is None, why
+        same_as_python(e)
+    odd = Element("skiros:Cube", "c", "skiros:Cube-1")
+    odd.setProperty("skiros:T", 1.0)
+    odd._properties["skiros:T"]._values = (1.0, 2.0)  # (a tuple: Python's loop takes it)
+    assert skillbus_native.element_wire(odd) is None and same_as_python(odd) is not None
+    nameless = Element("skiros:Cube", "c", "skiros:Cube-1")
+    nameless._id = Name("skiros:Cube-1")
+    assert skillbus_native.element_wire(nameless) is None and same_as_python(nameless) is not None
+    src = Element("skiros:Cube", "red", "skiros:Cube-2")
+    src.setProperty("skiros:Size", 0.05)
+    reader = Element._reader_copy(src, ())
+    assert skillbus_native.element_wire(reader) is None  # (its properties are still the replica's)
+    assert element_bytes(reader) == python_element_bytes(reader)
+    assert skillbus_native.element_wire(object()) is None and skillbus_native.element_wire(3) is None

@@ -23,11 +23,14 @@ import json
 import struct
 from typing import Any, Iterable
 
+from skillbus import native
 from skillbus.msgs import skill_param_t, skill_tick_reply_t, skill_value_t, wm_element_t, wm_value_t
 from skillbus.skill.convert import TYPE_NAMES, param_msg
 from skillbus.skill.param import Param
 from skillbus.world.element import Element
 
+# skillbus_native's element encoder (None: not built, or SKILLBUS_NATIVE=0 at start).
+_element_wire = getattr(native.module(), "element_wire", None)
 _FINGERPRINT = skill_tick_reply_t._get_packed_fingerprint()
 _U32 = struct.Struct(">I").pack
 _I32 = struct.Struct(">i").pack
@@ -144,7 +147,18 @@ def _wm_value(v: Any, key: str) -> bytes:
 
 
 def element_bytes(e: Element) -> bytes:
-    """What world/convert.element_msg(e) encodes to (a reader copy is not copied for it)."""
+    """What world/convert.element_msg(e) encodes to (a reader copy is not copied for it):
+    skillbus_native's encoder when it takes the element, else Python's."""
+    if _element_wire is not None:
+        b = _element_wire(e)
+        if b is not None:
+            return b
+    return python_element_bytes(e)
+
+
+def python_element_bytes(e: Element) -> bytes:
+    """element_bytes in Python: for what the native encoder leaves (a reader copy, a value
+    of a subclass or of a type that cannot be stored, text that is not UTF-8)."""
     d = e.__dict__
     props = d["_properties"].values() if "_properties" in d else e._wire_properties()
     text = _text
