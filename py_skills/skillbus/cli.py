@@ -38,7 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the cubes at random places of the table, from this seed (N >= 0; the scene's \"scatter\", "
                         "docs/scene.md); default: where the scene file puts them")
     d.add_argument("--physics-core", default="auto", metavar="auto|off|N",
-                   help="the physics server on a core of its own, every other program on the others (taskset; "
+                   help="the physics server on a core of its own, every other program on the others under the "
+                        "batch scheduling policy (taskset, chrt; "
                         "docs/pick_and_place.md): auto (the last usable core; nothing with one core), off (the "
                         "kernel places them), or the core's number; default auto")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")

@@ -1,5 +1,6 @@
 """The demo's placement (skillbus.cpu_layout) on real processes: the physics server runs on
-its core only, the other programs on the others (the kernel's own view of each process)."""
+its core only, the other programs on the others under the batch policy (the kernel's own
+view of each process)."""
 
 from __future__ import annotations
 
@@ -36,3 +37,7 @@ def test_the_physics_server_runs_on_its_core_and_the_rest_on_the_others(sandbox,
     want = str(others[0]) if len(others) == 1 else None
     got = cores_of(procs["wm"].popen.pid)
     assert got == want if want else str(allowed[-1]) not in got.replace("-", ",").split(","), got
+    # The others under the batch policy (a woken one does not preempt the running one);
+    # the physics server under the normal one.
+    assert os.sched_getscheduler(procs["wm"].popen.pid) == os.SCHED_BATCH
+    assert os.sched_getscheduler(procs["sim"].popen.pid) == os.SCHED_OTHER

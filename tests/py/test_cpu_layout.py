@@ -12,19 +12,31 @@ from skillbus.system import Program
 PROGS = [Program("can_hub", ["hub"]), Program("sim", ["sim_server", "--pipeline"]), Program("wm", ["wm_server"]),
          Program("skills", ["python", "-m", "skillbus.cli", "skills-process"], participant=True)]
 TASKSET = "/usr/bin/taskset"
+CHRT = "/usr/bin/chrt"
+BATCH = [CHRT, "--batch", "0"]
 
 
 def prefixes(layout):
     return {p.name: p.argv[:3] for p in layout.programs}
 
 
-def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest():
-    two = place(PROGS, "auto", {0, 1}, taskset=TASKSET)
+def commands(layout):
+    """Each program's command after its placement's prefix."""
+    return [p.argv[3:] if p.name == "sim" else p.argv[6:] for p in layout.programs]
+
+
+def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_batch_policy():
+    two = place(PROGS, "auto", {0, 1}, taskset=TASKSET, chrt=CHRT)
     assert prefixes(two) == {"can_hub": [TASKSET, "--cpu-list", "0"], "sim": [TASKSET, "--cpu-list", "1"],
                              "wm": [TASKSET, "--cpu-list", "0"], "skills": [TASKSET, "--cpu-list", "0"]}
-    assert [p.argv[3:] for p in two.programs] == [p.argv for p in PROGS]  # the commands themselves unchanged
-    assert two.others == {0} and two.note == "the physics server on core 1, the other programs on 0"
-    four = place(PROGS, "auto", {0, 2, 5, 7}, taskset=TASKSET)
+    # The others wait for the running one to block instead of preempting it; the physics
+    # server, alone on its core, keeps the normal policy.
+    assert {p.name: p.argv[3:6] == BATCH for p in two.programs} == {"can_hub": True, "sim": False, "wm": True,
+                                                                     "skills": True}
+    assert commands(two) == [p.argv for p in PROGS]  # the commands themselves unchanged
+    assert two.others == {0}
+    assert two.note == "the physics server on core 1, the other programs on 0 (batch scheduling)"
+    four = place(PROGS, "auto", {0, 2, 5, 7}, taskset=TASKSET, chrt=CHRT)
     assert prefixes(four)["sim"][2] == "7" and prefixes(four)["wm"][2] == "0,2,5"
     assert [p.participant for p in four.programs] == [p.participant for p in PROGS]
 
@@ -64,3 +76,11 @@ def test_without_taskset_auto_changes_nothing_and_a_named_core_is_refused(monkey
     assert layout.programs == PROGS and "taskset (util-linux) is not installed" in layout.note
     with pytest.raises(LayoutError, match="--physics-core 1: taskset"):
         place(PROGS, "1", {0, 1})
+
+
+def test_without_chrt_the_programs_are_placed_and_the_note_says_what_is_missing(monkeypatch):
+    monkeypatch.setattr("skillbus.cpu_layout.shutil.which", lambda name: None if name == "chrt" else TASKSET)
+    layout = place(PROGS, "auto", {0, 1})
+    assert prefixes(layout)["wm"] == [TASKSET, "--cpu-list", "0"] and [p.argv[3:] for p in layout.programs] == \
+        [p.argv for p in PROGS]
+    assert "no batch scheduling: chrt (util-linux) is not installed" in layout.note
