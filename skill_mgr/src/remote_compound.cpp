@@ -22,7 +22,14 @@ RemoteCompound::RemoteCompound(TaskContext& ctx, Implementation impl, std::share
       scope_(std::move(scope)) {}
 
 State RemoteCompound::step() {
-  const auto params = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
+  const auto& d = impl_.description;
+  if (d.hold.empty() && d.post.empty()) {
+    // Nothing to check: the parameters (each element re-read from the world model) are
+    // not gathered at every tick, only what gathering writes to the blackboard is.
+    write_static_params(d, *scope_, ctx_.blackboard);
+    return CompoundNode::step();
+  }
+  const auto params = gather_params(d, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
   const std::string broken = check_hold(ctx_, impl_, params);
   if (!broken.empty()) {
     for (const auto& c : children()) c->preempt();

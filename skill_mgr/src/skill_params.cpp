@@ -61,6 +61,27 @@ std::string conditions_error(const char* kind, const std::vector<Condition>& con
 
 }  // namespace
 
+namespace {
+
+// A required non-element parameter with a value in the description, that the user did
+// not give: its value is the description's, written to the blackboard (gather_params).
+bool is_static(const Param& decl, const std::string& key, Blackboard& bb) {
+  return decl.param_type == skill_param_t::REQUIRED && decl.num_defaults > 0 && decl.data_type != "element" &&
+         !bb.given(key);
+}
+
+}  // namespace
+
+void write_static_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb) {
+  for (const auto& decl : d.params) {
+    const std::string key = scope.key(decl.key);
+    if (scope.specified(decl.key) || !is_static(decl, key, bb)) continue;
+    Param p = decl;
+    p.values = decl.defaults;  // (as gather_params writes it)
+    bb.set(key, p);
+  }
+}
+
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb,
                                  std::string* missing, const wm::WorldStore* world) {
   std::vector<Param> out;
@@ -70,8 +91,7 @@ std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, co
     const std::string key = scope.key(decl.key);
     if (const Param* fixed = scope.specified(decl.key)) {
       p.values = fixed->values;
-    } else if (decl.param_type == skill_param_t::REQUIRED && decl.num_defaults > 0 && decl.data_type != "element" &&
-               !bb.given(key)) {
+    } else if (is_static(decl, key, bb)) {
       p.values = decl.defaults;  // static: overwrites the blackboard every run, unless the user gave it
       bb.set(key, p);
     } else if (bb.has(key)) {

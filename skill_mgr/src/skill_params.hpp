@@ -20,6 +20,9 @@ namespace skillbus::skills {
 // (a deleted element is dropped).
 std::vector<Param> gather_params(const skillbus_msgs::skill_description_t& d, const Scope& scope,
                                  Blackboard& bb, std::string* missing, const wm::WorldStore* world = nullptr);
+// What gather_params writes to the blackboard (its static parameters), without gathering:
+// for a tick that needs no parameter values (a compound without hold- or post-conditions).
+void write_static_params(const skillbus_msgs::skill_description_t& d, const Scope& scope, Blackboard& bb);
 // The id of the one robot (a sumo:Agent: skiros:Robot, cora:Robot) labelled `label` in `world` into `id`;
 // "" or why not (none, several).
 std::string find_robot(const wm::WorldStore& world, const std::string& label, std::string* id);
