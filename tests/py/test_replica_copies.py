@@ -104,6 +104,26 @@ def test_add_relations_completes_the_callers_element_itself(wmi):
     assert wmi.add_relations(unknown) is unknown and unknown.getRelations() == [] and unknown.loaded() is not None
 
 
+def test_a_fresh_element_is_completed_as_one_that_carried_relations_would_be(wmi):
+    """A tick's parameter carries no relations: they are the replica's, and what it is
+    loaded as is made from those tuples; the same as completing it relation by relation."""
+    for eid in ("skiros:Cube-2", "skiros:Table-1"):
+        fresh = Element("skiros:Cube", "red", eid)
+        fresh.setProperty("skiros:Size", [0.05, 0.06])
+        slow = fresh.clone()
+        slow._relations = [{"src": "x", "type": "y", "dst": "z", "state": False, "abstract": False}]  # (a false one)
+        wmi.add_relations(fresh)
+        wmi.add_relations(slow)
+        slow._relations = slow._relations[1:]
+        assert fresh.getRelations() == slow.getRelations() != []
+        assert fresh.loaded()[3] == slow.loaded()[3] == frozenset(fresh._resolved_relations())
+        assert fresh.loaded()[:2] == slow.loaded()[:2] and fresh.loaded()[2] == slow.loaded()[2]
+        assert fresh.loaded()[2]["skiros:Size"] is not fresh.getProperty("skiros:Size")  # (a copy)
+        assert not fresh.changed_since_loaded()
+        fresh.getProperty("skiros:Size").setValue(0.5, 0)
+        assert fresh.changed_since_loaded()
+
+
 def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeypatch):
     """A tick's element values are decoded afresh at every tick (skillbus.skill.convert):
     completing them took a copy and remembered what they were loaded as twice."""
@@ -127,7 +147,7 @@ def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeyp
     skill.wmi = wmi
     marks = []
     real_mark = Element.mark_loaded
-    monkeypatch.setattr(Element, "mark_loaded", lambda e: (marks.append(e.id), real_mark(e))[1])
+    monkeypatch.setattr(Element, "mark_loaded", lambda e, **kw: (marks.append(e.id), real_mark(e, **kw))[1])
     monkeypatch.setattr(Element, "clone", lambda e: pytest.fail("a tick's fresh element was copied"))
     apply_param_msgs(skill, msgs)
     got = skill.params["Object"].value

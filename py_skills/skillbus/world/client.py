@@ -267,6 +267,13 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
     def _complete(self, e: Element) -> Element:
         """`e` with the replica's relations of its id that it lacks, marked as loaded."""
         if e.id and e.id in self._elements:
+            rels = self._relations_of(e.id)
+            if not e._relations and not any(s == "-1" or o == "-1" for s, _, o in rels):
+                # (a tick's parameter, made just now: its relations are the replica's, and
+                # what it is loaded as is made from them, not read back from the dicts)
+                e._relations = [{"src": s, "type": p, "dst": o, "state": True, "abstract": False} for (s, p, o) in rels]
+                e.mark_loaded(resolved=frozenset(rels))
+                return e
             have = {(r["src"], r["type"], r["dst"]) for r in e._relations if r.get("state", True)}
             e._relations += [{"src": s, "type": p, "dst": o, "state": True, "abstract": False}
                              for (s, p, o) in self._relations_of(e.id) if (s, p, o) not in have]

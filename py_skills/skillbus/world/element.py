@@ -148,12 +148,14 @@ class Element:
         d["_relations"] = [dict(r) for r in self._relations]
         return e
 
-    def mark_loaded(self) -> None:
+    def mark_loaded(self, resolved: frozenset | None = None) -> None:
         """Remembers type, label, properties and relations as they are now: what the world
         model holds. ``WorldModelInterface.update_element`` then writes only the
-        differences, so a property or relation this copy never carried is never erased."""
+        differences, so a property or relation this copy never carried is never erased.
+        `resolved`: its relations as (subject, predicate, object) with its own id for
+        "-1", when the caller has them already (they are not read back from the dicts)."""
         self._loaded = (self._type, self._label, _copy_properties(self._properties),
-                        frozenset(self._resolved_relations()))
+                        frozenset(self._resolved_relations()) if resolved is None else resolved)
 
     def loaded(self) -> tuple[str, str, dict[str, Property], frozenset] | None:
         return self._loaded
