@@ -158,7 +158,7 @@ print(json.dumps(out))
 def task_growth(window_s: float = 4.0) -> dict:
     with Sandbox() as box:
         box.start("skill_mgr", [paths.build_dir() / "skill_mgr" / "skill_mgr", "--wall-clock"])
-        proc = box.start("skills", [*answering, sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "bench",
+        proc = box.start("skills", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "bench",
                                     "--library", "spin_skills", "--register-timeout", "60"], env={"PYTHONPATH": str(HERE)})
         proc.wait_for("registered", 60)
         client = box.start("tasks", [sys.executable, "-c", TASKS_CLIENT, ",".join(map(str, GROWTH)), str(window_s)])
