@@ -68,9 +68,13 @@ class AllowedPairs : public collision::CollisionFilter {
     for (const auto& t : allowed) allowed_.insert({t.part, t.body});
   }
   bool ignoresCollision(const collision::CollisionObject* a, const collision::CollisionObject* b) const override {
+    return allows(a->getShapeFrame(), b->getShapeFrame());
+  }
+  // Whether the contact of these two shapes is allowed (either way round).
+  bool allows(const dynamics::ShapeFrame* a, const dynamics::ShapeFrame* b) const {
     if (allowed_.empty()) return false;
-    const std::string& na = names_.at(a->getShapeFrame());
-    const std::string& nb = names_.at(b->getShapeFrame());
+    const std::string& na = names_.at(a);
+    const std::string& nb = names_.at(b);
     return allowed_.count({na, nb}) > 0 || allowed_.count({nb, na}) > 0;
   }
 
@@ -149,16 +153,20 @@ struct CollisionModel::Impl {
     objects_stale = false;
     skipped_stale = true;
   }
-  void mark_skipped(const std::vector<Touch>& allowed) const {
-    std::set<std::pair<std::string, std::string>> pairs;
-    for (const auto& t : allowed) pairs.insert({t.part, t.body});
+  // The filter of the allowed contacts, made again only when they change (the path search
+  // asks thousands of times with the same ones).
+  void use_allowed(const std::vector<Touch>& allowed) const {
+    if (filter && filter_for == allowed) return;
+    filter = std::make_shared<AllowedPairs>(names, allowed);
+    filter_for = allowed;
+    skipped_stale = true;
+  }
+  // Which arm-world pairs the filter skips, for clear()'s own loop.
+  void mark_skipped() const {
     skipped.assign(arm_objects.size() * world_objects.size(), 0);
     for (size_t a = 0; a < arm_objects.size(); ++a)
-      for (size_t w = 0; w < world_objects.size(); ++w) {
-        const std::string& na = names.at(arm_objects[a].frame);
-        const std::string& nw = names.at(world_objects[w].frame);
-        skipped[a * world_objects.size() + w] = pairs.count({na, nw}) > 0 || pairs.count({nw, na}) > 0;
-      }
+      for (size_t w = 0; w < world_objects.size(); ++w)
+        skipped[a * world_objects.size() + w] = filter->allows(arm_objects[a].frame, world_objects[w].frame);
     skipped_stale = false;
   }
 
@@ -273,14 +281,9 @@ std::vector<Touch> CollisionModel::touches(const Eigen::VectorXd& q) const {
 bool CollisionModel::clear(const Eigen::VectorXd& q, const std::vector<Touch>& allowed) const {
   const Impl& m = *impl_;
   m.set(q);
-  // The path search asks this thousands of times with the same allowed contacts: which
-  // pairs they skip is worked out once, not per state.
   if (m.objects_stale) m.make_objects();
-  if (m.skipped_stale || m.filter_for != allowed) {
-    m.mark_skipped(allowed);
-    m.filter_for = allowed;
-    m.filter.reset();  // (clear_by_groups' filter was for other contacts)
-  }
+  m.use_allowed(allowed);
+  if (m.skipped_stale) m.mark_skipped();
   for (auto& a : m.arm_objects) a.place();
   // DART's request for a yes/no check (FCLCollisionDetector: CollisionOption(false, 1)).
   collision::fcl::CollisionRequest request;
@@ -306,11 +309,7 @@ bool CollisionModel::clear(const Eigen::VectorXd& q, const std::vector<Touch>& a
 bool CollisionModel::clear_by_groups(const Eigen::VectorXd& q, const std::vector<Touch>& allowed) const {
   const Impl& m = *impl_;
   m.set(q);
-  if (!m.filter || m.filter_for != allowed) {
-    m.filter = std::make_shared<AllowedPairs>(m.names, allowed);
-    m.filter_for = allowed;
-    m.skipped_stale = true;
-  }
+  m.use_allowed(allowed);
   collision::CollisionOption option(false, 1);
   option.collisionFilter = m.filter;
   return !m.arm->collide(m.world.get(), option, nullptr);

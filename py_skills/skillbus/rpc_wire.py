@@ -21,6 +21,9 @@ from skillbus.msgs import decode, rpc_reply_t, rpc_request_t
 _REQUEST_FP = rpc_request_t._get_packed_fingerprint()
 _REPLY_FP = rpc_reply_t._get_packed_fingerprint()
 _U32 = struct.Struct(">I")
+_Q = struct.Struct(">q")      # request_id
+_B = struct.Struct(">b")      # status
+_QQ = struct.Struct(">qq")    # request_id, deadline_ns
 _QQI = struct.Struct(">qqI")  # request_id, deadline_ns, the method's length
 _II = struct.Struct(">ii")    # chunk, payload_size
 _QI = struct.Struct(">qI")    # request_id, the method's length
@@ -50,7 +53,7 @@ def decode_request(data: bytes) -> rpc_request_t | None:
         got = _text_at(data, 8)
         if got is not None:
             client_id, at = got
-            request_id, deadline_ns, _ = _QQI.unpack_from(data, at)
+            request_id, deadline_ns = _QQ.unpack_from(data, at)
             got = _text_at(data, at + 16)
         if got is not None:
             method, at = got
@@ -74,11 +77,11 @@ def decode_reply(data: bytes) -> rpc_reply_t | None:
         got = _text_at(data, 8)
         if got is not None:
             client_id, at = got
-            request_id = struct.unpack_from(">q", data, at)[0]
+            request_id = _Q.unpack_from(data, at)[0]
             got = _text_at(data, at + 8)
         if got is not None:
             method, at = got
-            status = struct.unpack_from(">b", data, at)[0]
+            status = _B.unpack_from(data, at)[0]
             got = _text_at(data, at + 1)
         if got is not None:
             error, at = got
@@ -94,21 +97,25 @@ def decode_reply(data: bytes) -> rpc_reply_t | None:
     return decode(rpc_reply_t, data)
 
 
+def _payload(payload, size: int) -> bytes:
+    """What LCM writes of a payload: its first `size` bytes (a list of ints as bytes); the
+    bytes themselves when they are bytes already (not copied twice)."""
+    out = payload[:size]
+    return out if type(out) is bytes else bytes(bytearray(out))
+
+
 def encode_request(r: rpc_request_t) -> bytes:
     """As ``r.encode()``."""
     client_id, method = r.client_id.encode("utf-8"), r.method.encode("utf-8")
     return b"".join((_REQUEST_FP, _U32.pack(len(client_id) + 1), client_id, _NUL,
                      _QQI.pack(r.request_id, r.deadline_ns, len(method) + 1), method, _NUL,
-                     _II.pack(r.chunk, r.payload_size), bytes(bytearray(r.payload[:r.payload_size]))))
+                     _II.pack(r.chunk, r.payload_size), _payload(r.payload, r.payload_size)))
 
 
 def encode_reply(r: rpc_reply_t) -> bytes:
     """As ``r.encode()``."""
     client_id, method, error = r.client_id.encode("utf-8"), r.method.encode("utf-8"), r.error.encode("utf-8")
-    payload = r.payload[:r.payload_size]
-    if type(payload) is not bytes:
-        payload = bytes(bytearray(payload))
     return b"".join((_REPLY_FP, _U32.pack(len(client_id) + 1), client_id, _NUL,
                      _QI.pack(r.request_id, len(method) + 1), method, _NUL,
                      _BI.pack(r.status, len(error) + 1), error, _NUL,
-                     _III.pack(r.chunk, r.chunks, r.payload_size), payload))
+                     _III.pack(r.chunk, r.chunks, r.payload_size), _payload(r.payload, r.payload_size)))

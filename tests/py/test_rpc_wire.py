@@ -112,22 +112,18 @@ def test_what_is_not_bytes_is_left_to_lcm():
 
 def test_values_lcm_cannot_encode_are_refused_as_lcm_refuses_them():
     rng = random.Random(3)
-    cases = [("request_id", 2**63), ("deadline_ns", -2**63 - 1), ("chunk", 2**31), ("client_id", None),
-             ("method", 5), ("payload", "text")]
-    for name, value in cases:
-        m = request(rng)
-        setattr(m, name, value)
-        with pytest.raises(Exception) as lcm:
-            m.encode()
-        with pytest.raises(type(lcm.value)):
-            rpc_wire.encode_request(m)
-    for name, value in [("status", 128), ("chunks", -2**31 - 1), ("error", b"bytes")]:
-        m = reply(rng)
-        setattr(m, name, value)
-        with pytest.raises(Exception) as lcm:
-            m.encode()
-        with pytest.raises(type(lcm.value)):
-            rpc_wire.encode_reply(m)
+    cases = [(request, rpc_wire.encode_request, [("request_id", 2**63), ("deadline_ns", -2**63 - 1),
+                                                 ("chunk", 2**31), ("client_id", None), ("method", 5),
+                                                 ("payload", "text")]),
+             (reply, rpc_wire.encode_reply, [("status", 128), ("chunks", -2**31 - 1), ("error", b"bytes")])]
+    for make, encode, bad in cases:
+        for name, value in bad:
+            m = make(rng)
+            setattr(m, name, value)
+            with pytest.raises(Exception) as lcm:
+                m.encode()
+            with pytest.raises(type(lcm.value)):
+                encode(m)
 
 
 def test_a_payload_size_other_than_the_payloads_length_encodes_as_lcm_encodes_it():

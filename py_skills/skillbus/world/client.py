@@ -276,7 +276,7 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
                 return e
             have = {(r["src"], r["type"], r["dst"]) for r in e._relations if r.get("state", True)}
             e._relations += [{"src": s, "type": p, "dst": o, "state": True, "abstract": False}
-                             for (s, p, o) in self._relations_of(e.id) if (s, p, o) not in have]
+                             for (s, p, o) in rels if (s, p, o) not in have]
         e.mark_loaded()
         return e
 
