@@ -18,6 +18,7 @@ import concurrent.futures as cf
 import os
 import pickle
 import shutil
+import signal
 import subprocess
 import sys
 import threading
@@ -133,8 +134,20 @@ def run_ray_task(cfg_path: str, seed: int, request: int, attempt: int) -> dict[s
     node needs skillbus and the config's files at the same paths."""
     import tempfile
     from skillbus.generate.config import load
-    with tempfile.TemporaryDirectory(prefix="skillbus-episode-") as work:
-        return run_local(load(cfg_path), seed, request, attempt, Path(work))
+    # A terminal's Ctrl-C reaches the whole process group, this worker too; the driver then
+    # cancels the task as well (forced), and the two endings raced inside Ray: its core
+    # worker in the driver aborted on a task completed twice ("Tried to complete task that
+    # was not pending"), and generate exited 1 instead of 130. The driver alone ends a task.
+    try:
+        before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # (not the worker's main thread: nothing to hold off)
+        before = None
+    try:
+        with tempfile.TemporaryDirectory(prefix="skillbus-episode-") as work:
+            return run_local(load(cfg_path), seed, request, attempt, Path(work))
+    finally:
+        if before is not None:
+            signal.signal(signal.SIGINT, before)
 
 
 def generate(cfg: GenerateConfig, out: Path, episodes: int, seed: int, workers: int = 2, first: int = 0,
