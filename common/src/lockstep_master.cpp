@@ -157,7 +157,19 @@ bool LockstepMaster::wait_for_joins(std::string& error) {
   auto all_joined = [&] {
     return std::all_of(expected_.begin(), expected_.end(), [&](const std::string& p) { return joined_.count(p) > 0; });
   };
+  // Those who joined wait for their first clock with their own timeout, which a slow
+  // start of another (a library's warm-up on a loaded machine) can outlast: the clock of
+  // frame -1, resent meanwhile, tells them the master is alive and waiting. It starts no
+  // frame; a participant only notes it.
+  skillbus_msgs::lockstep_clock_t waiting = make_clock(-1, 0);
+  waiting.stop = false;
+  const Bytes waiting_clock = encode_msg(waiting);
+  auto say_waiting_at = steady::now();
   while (!all_joined()) {
+    if (steady::now() >= say_waiting_at) {
+      bus_.publish(clock_channel(), waiting_clock.data(), waiting_clock.size());
+      say_waiting_at = steady::now() + cfg_.resend_interval;
+    }
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - steady::now());
     if (left.count() <= 0) {
       std::vector<std::string> missing;
@@ -167,7 +179,7 @@ bool LockstepMaster::wait_for_joins(std::string& error) {
               secs_text(cfg_.join_timeout);
       return false;
     }
-    bus_.handle(std::min(left, std::chrono::milliseconds(50)));
+    bus_.handle(std::min({left, cfg_.resend_interval, std::chrono::milliseconds(50)}));
   }
   return true;
 }

@@ -74,6 +74,10 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     stop_reason_ = c.stop_reason;
     return;
   }
+  if (c.header.frame < 0) {  // the master waits for others to join: it is alive, and so we wait on
+    master_heard_ = steady::now();
+    return;
+  }
   if (c.header.frame == last_acked_ && !last_ack_.empty()) {
     // The master resends the clock while a participant is still at work on the frame: it
     // is alive, so this one waits on (a frame may take a slow participant long).
@@ -141,9 +145,9 @@ RunResult LockstepParticipant::run_lockstep() {
   auto next_join = last_event;
   while (!have_clock_ && !stop_seen_) {
     const auto now = steady::now();
-    if (now - last_event > cfg_.clock_timeout) {
-      fail("lockstep: no clock from the master within " + std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) +
-           " s of joining");
+    if (now - std::max(last_event, master_heard_) > cfg_.clock_timeout) {
+      fail("lockstep: joined, but no clock from the master, nor word that it waits for the others to join, within " +
+           std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) + " s (no master on this bus?)");
       return r;
     }
     if (now >= next_join) {

@@ -348,6 +348,9 @@ class LockstepParticipant:
             self._stop_seen, self._stop_reason = True, c.stop_reason
             return
         frame = c.header.frame
+        if frame < 0:  # the master waits for others to join: it is alive, and so we wait on
+            self._master_heard = time.monotonic()
+            return
         if frame == self._last_acked and self._last_ack:
             # The master resends the clock while a participant is still at work on the
             # frame: it is alive, so this one waits on (a slow participant's frame may be long).
@@ -507,9 +510,9 @@ class LockstepParticipant:
         next_join = last_event
         while self._next_clock is None and not self._stop_seen:
             now = time.monotonic()
-            if now - last_event > self.clock_timeout:
-                return self._fail(r, f"lockstep: no clock from the master within {self.clock_timeout:.1f} s "
-                                     f"of joining")
+            if now - max(last_event, self._master_heard) > self.clock_timeout:
+                return self._fail(r, "lockstep: joined, but no clock from the master, nor word that it waits for "
+                                     f"the others to join, within {self.clock_timeout:.1f} s (no master on this bus?)")
             if now >= next_join:
                 self.bus.publish(self._join_channel, join_bytes)
                 next_join = now + self.join_interval

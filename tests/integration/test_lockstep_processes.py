@@ -158,6 +158,46 @@ def test_lost_clocks_and_lost_acks_are_recovered_and_change_nothing(sandbox, bin
     assert s["wall_time_s"] > 6 * 0.25
 
 
+def participant_argv(binary, name, *extra_py, clock_timeout_s=None):
+    if name.startswith("py"):
+        return python_participant_argv(name, *extra_py, *(("--clock-timeout", str(clock_timeout_s))
+                                                          if clock_timeout_s else ()))
+    return [binary("sb_demo_participant"), "--name", name,
+            *(("--clock-timeout-ms", str(int(clock_timeout_s * 1000))) if clock_timeout_s else ())]
+
+
+@pytest.mark.parametrize("early", ["py1", "cpp1"])
+def test_a_participant_that_joined_waits_for_one_that_starts_later_than_its_clock_timeout(sandbox, binary, early):
+    # The demo's skill process joins once its libraries' warm-ups are done, which took over
+    # 10 s on a fresh, loaded machine: the skill manager and the world model, joined long
+    # before, gave up waiting for their first clock and were restarted, and the restarted
+    # manager knew no skills. The master, waiting for the others, says so to those who joined.
+    clock = sandbox.start("clock", [binary("sb_clock"), "--demo", "--frames", "50", "--participants",
+                                    f"{early},cpp2", "--join-timeout-ms", "30000"])
+    first = sandbox.start(early, participant_argv(binary, early, clock_timeout_s=1))
+    time.sleep(3.5)  # three times its clock timeout, and more
+    assert first.popen.poll() is None, first.stdout()[-2000:] + first.stderr()[-2000:]
+    late = sandbox.start("cpp2", participant_argv(binary, "cpp2"))
+    assert sandbox.wait(clock, 60) == 0, clock.stdout() + clock.stderr()[-2000:]
+    s = last_json(clock.stdout())
+    assert s["ok"] and s["frames"] == 50
+    for p in (first, late):
+        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
+        r = last_json(p.stdout())
+        assert r["ok"] and r["frames"] == 50
+
+
+@pytest.mark.parametrize("name", ["py1", "cpp1"])
+def test_a_participant_without_a_master_gives_up_after_its_clock_timeout_saying_why(sandbox, binary, name):
+    started = time.monotonic()
+    p = sandbox.start(name, participant_argv(binary, name, clock_timeout_s=1))
+    assert sandbox.wait(p, 30) != 0
+    took = time.monotonic() - started
+    assert "no clock from the master, nor word that it waits for the others to join, within 1.0" in p.stderr()
+    assert "no master on this bus?" in p.stderr()
+    assert took < 15, took  # its timeout (with the start-up), not a master's join timeout
+
+
 @pytest.mark.parametrize("slow", ["py1", "cpp1"])
 def test_a_slow_participant_is_waited_for_and_no_frame_is_skipped_or_repeated(sandbox, binary, tmp_path, slow):
     # One participant takes 0.8 s over frame 20 while dispatching the bus, longer than the

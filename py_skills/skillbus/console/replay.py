@@ -137,7 +137,8 @@ class ReplayLog:
                 for cc in c.counts:
                     k = (cc.sender, cc.channel, cc.frame)
                     self._announced[k] = max(self._announced[k], cc.count)
-                if not c.stop and c.header.frame not in self.sim_time_ns:
+                # (frame -1: the master waiting for joins, no frame)
+                if not c.stop and c.header.frame >= 0 and c.header.frame not in self.sim_time_ns:
                     self.frames.append(c.header.frame)
                     self.sim_time_ns[c.header.frame] = c.header.sim_time_ns
                     self._participants[c.header.frame] = sorted(c.participants)
