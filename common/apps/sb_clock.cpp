@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   std::string url;
   MasterConfig cfg;
   cfg.name = "clock";
-  int64_t frames = 1000, join_ms = 10000, ack_ms = 5000, message_ms = 2000;
+  int64_t frames = 1000, join_ms = 10000, ack_ms = 5000, message_ms = 2000, ack_poll_us = 0;
   double period_ms = 10.0;
   int lose_clocks_every = 0;
   bool demo = false;
@@ -45,6 +45,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> ack_of;
   apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
+  app.add_option("--ack-poll-us", ack_poll_us, "once its own work of a frame is done, poll this long for the acks before sleeping (0: sleep at once; for a process on a core of its own: docs/lockstep.md)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000}));
   app.add_option("--lose-clocks-every", lose_clocks_every, "tests: lose every N-th clock message (0: none)");
   app.add_flag("--demo", demo, "play the toy world: publish SB_DEMO_STATE, fold in SB_DEMO_CMD");
   apps::parse_or_exit(app, argc, argv);
@@ -57,6 +59,7 @@ int main(int argc, char** argv) {
     if (std::find(cfg.participants.begin(), cfg.participants.end(), name) == cfg.participants.end())
       apps::usage_error(app, "--ack-timeout-ms-of names '" + name + "', who is not among --participants");
   cfg.message_timeout = std::chrono::milliseconds(message_ms);
+  cfg.ack_poll = std::chrono::microseconds(ack_poll_us);
   if (cfg.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
 
   std::unique_ptr<Bus> bus;

@@ -152,6 +152,10 @@ void LockstepMaster::on_ack(const uint8_t* d, size_t n, const std::string& ch) {
   ack.error = std::move(a.error);
 }
 
+bool LockstepMaster::polling() const {
+  return cfg_.ack_poll.count() > 0 && steady::now() - own_work_done_ < cfg_.ack_poll;
+}
+
 bool LockstepMaster::wait_for_joins(std::string& error) {
   const auto deadline = steady::now() + cfg_.join_timeout;
   auto all_joined = [&] {
@@ -264,6 +268,10 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
         resend_at = std::max(resend_at, steady::now() + std::chrono::milliseconds(1));
       }
     }
+    if (polling()) {
+      bus_.handle(std::chrono::milliseconds(0));
+      continue;
+    }
     const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(std::min(resend_at, deadline) -
                                                                              steady::now());
     bus_.handle(std::max(wait, std::chrono::milliseconds(0)));
@@ -290,7 +298,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
       error = "lockstep: message lost on " + miss + " (master " + cfg_.name + ")";
       return false;
     }
-    bus_.handle(std::min(left, std::chrono::milliseconds(50)));
+    bus_.handle(polling() ? std::chrono::milliseconds(0) : std::min(left, std::chrono::milliseconds(50)));
   }
   try {
     for (const auto& m : inbox_.take(expected, frame + 1)) {

@@ -17,6 +17,13 @@ for the running one to block, so each does its frame's work in one go: 0.06 invo
 switches a frame, the demo 1-2 % faster (docs/benchmarks.md). Without `chrt` (util-linux)
 the placement goes on without it, and says so.
 
+On its own core the physics server also polls for the frame's acks once its step is done
+(``sim_server --ack-poll-us``) instead of sleeping until one comes: nothing else needs that
+core, and on a virtual machine a sleeping receiver on another core costs each sender about
+30 µs to wake (a vCPU's wake-up goes through the host) and costs the sleeper as long
+again before it runs. The participants' acks are sent from their core, where the demo's
+CPU is short.
+
 It is a trade: a physics server held to one core cannot move when something else, outside
 the system, takes that core. `--physics-core off` leaves placement to the kernel;
 `--physics-core N` names the core. With one usable core there is nothing to split, and
@@ -32,6 +39,9 @@ import shutil
 from skillbus.system import Program
 
 PHYSICS = "sim"  # the program that steps the physics (skillbus.system)
+# How long the physics server on its own core polls for a frame's acks after its step before
+# it sleeps: longer than a frame's acks take past the step but for a motion plan's frames.
+ACK_POLL_US = 2000
 
 
 class LayoutError(ValueError):
@@ -85,7 +95,11 @@ def place(progs: list[Program], choice: str = "auto", allowed: set[int] | None =
         raise LayoutError(f"--physics-core {core}: taskset (util-linux) is not installed")
     batch_tool = chrt or shutil.which("chrt")
     batch = [batch_tool, "--batch", "0"] if batch_tool else []
-    out = [dataclasses.replace(p, argv=[tool, "--cpu-list", cpu_list({core} if p.name == PHYSICS else others),
-                                        *([] if p.name == PHYSICS else batch), *p.argv]) for p in progs]
+    out = [dataclasses.replace(p, argv=[tool, "--cpu-list", cpu_list({core}), *p.argv,
+                                        "--ack-poll-us", str(ACK_POLL_US)])
+           if p.name == PHYSICS else
+           dataclasses.replace(p, argv=[tool, "--cpu-list", cpu_list(others), *batch, *p.argv])
+           for p in progs]
     how = "batch scheduling" if batch else "no batch scheduling: chrt (util-linux) is not installed"
-    return Layout(out, f"the physics server on core {core}, the other programs on {cpu_list(others)} ({how})", others)
+    return Layout(out, f"the physics server on core {core} (polling for acks), the other programs on "
+                       f"{cpu_list(others)} ({how})", others)

@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   apps::configure(app);
   std::string url;
   sim::ServerOptions o;
-  int64_t join_ms = 10000, ack_ms = 5000, message_ms = 2000;
+  int64_t join_ms = 10000, ack_ms = 5000, message_ms = 2000, ack_poll_us = 0;
   apps::add_url_option(app, url);
   app.add_option("--scene", o.scene_file, "the scene file (required; e.g. deploy/scenes/demo.scene.json)")->type_name("FILE");
   app.add_option("--scenes", o.scenes_dir,
@@ -46,12 +46,15 @@ int main(int argc, char** argv) {
   std::vector<std::string> ack_of;
   apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "lockstep: how long to wait for an announced message");
+  app.add_option("--ack-poll-us", ack_poll_us, "lockstep: once its own work of a frame is done, poll this long for the acks before sleeping (0: sleep at once; for a process on a core of its own: docs/lockstep.md)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000}));
   apps::parse_or_exit(app, argc, argv);
   if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
   o.join_timeout = std::chrono::milliseconds(join_ms);
   o.ack_timeout = std::chrono::milliseconds(ack_ms);
   o.ack_timeout_of = apps::parse_ack_timeouts(app, ack_of);
   o.message_timeout = std::chrono::milliseconds(message_ms);
+  o.ack_poll = std::chrono::microseconds(ack_poll_us);
 
   std::unique_ptr<Bus> bus;
   std::unique_ptr<sim::SimServer> server;

@@ -420,6 +420,7 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   cfg.ack_timeout = opt_.ack_timeout;
   cfg.ack_timeout_of = opt_.ack_timeout_of;
   cfg.message_timeout = opt_.message_timeout;
+  cfg.ack_poll = opt_.ack_poll;
   cfg.end_when_asked_by = opt_.end_when_asked_by;
   LockstepMaster master(bus_, cfg);
   // Commands come through the master: delivered after every ack of their frame, in

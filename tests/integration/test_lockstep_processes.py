@@ -2,6 +2,7 @@
 LCM (and, where marked, also over Cyclone DDS) in a private network namespace."""
 
 import re
+import sys
 import time
 
 import pytest
@@ -196,6 +197,45 @@ def test_a_participant_without_a_master_gives_up_after_its_clock_timeout_saying_
     assert "no clock from the master, nor word that it waits for the others to join, within 1.0" in p.stderr()
     assert "no master on this bus?" in p.stderr()
     assert took < 15, took  # its timeout (with the start-up), not a master's join timeout
+# Runs a command and prints, on stderr once it has ended, how often it slept (voluntary
+# context switches, from its rusage).
+SLEEPS = ("import json, resource, subprocess, sys\n"
+          "code = subprocess.call(sys.argv[1:])\n"
+          "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+          "print(json.dumps({'sleeps': u.ru_nvcsw}), file=sys.stderr, flush=True)\n"
+          "sys.exit(code)\n")
+
+
+def test_a_master_polling_for_acks_sleeps_far_less_and_gives_the_same_digests(sandbox, binary):
+    # --ack-poll-us (the demo's physics server on a core of its own): once its clock is out
+    # the master polls for the acks instead of sleeping until one comes. The acks, the
+    # messages and so every digest are the same; only its sleeps go.
+    frames, names, runs = 1500, ["cpp1", "cpp2"], {}
+    for poll_us in (0, 200_000):
+        clock = sandbox.start(f"clock-poll{poll_us}", [sys.executable, "-c", SLEEPS, binary("sb_clock"), "--demo",
+                                                         "--frames", str(frames), "--participants", ",".join(names),
+                                                         "--ack-poll-us", str(poll_us)])
+        parts = [sandbox.start(f"{n}-poll{poll_us}", [binary("sb_demo_participant"), "--name", n]) for n in names]
+        assert sandbox.wait(clock, 120) == 0, clock.stdout() + clock.stderr()[-2000:]
+        s = last_json(clock.stdout())
+        assert s["ok"] and s["frames"] == frames
+        digests = {}
+        for p in parts:
+            assert sandbox.wait(p, 15) == 0
+            digests[p.name.split("-")[0]] = last_json(p.stdout())["digest"]
+        runs[poll_us] = (s["digest"], digests, last_json(clock.stderr())["sleeps"])
+    (plain_digest, plain_parts, plain_sleeps), (poll_digest, poll_parts, poll_sleeps) = runs[0], runs[200_000]
+    assert poll_digest == plain_digest and poll_parts == plain_parts
+    assert plain_sleeps > frames / 2, runs  # sleeping on the socket: about once a frame
+    assert poll_sleeps < frames / 10, runs  # the joins and the end, not the frames
+
+
+def test_a_master_refuses_a_negative_or_huge_ack_poll(sandbox, binary):
+    for bad in ("-1", "5000000"):
+        clock = sandbox.start(f"clock-bad{bad}", [binary("sb_clock"), "--demo", "--participants", "cpp1",
+                                                 "--ack-poll-us", bad])
+        assert sandbox.wait(clock, 30) != 0
+        assert "--ack-poll-us" in clock.stderr()
 
 
 @pytest.mark.parametrize("slow", ["py1", "cpp1"])

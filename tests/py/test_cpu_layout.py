@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from skillbus.cpu_layout import LayoutError, place
+from skillbus.cpu_layout import ACK_POLL_US, LayoutError, place
 from skillbus.system import Program
 
 PROGS = [Program("can_hub", ["hub"]), Program("sim", ["sim_server", "--pipeline"]), Program("wm", ["wm_server"]),
@@ -20,9 +20,13 @@ def prefixes(layout):
     return {p.name: p.argv[:3] for p in layout.programs}
 
 
+POLL = ["--ack-poll-us", str(ACK_POLL_US)]
+
+
 def commands(layout):
-    """Each program's command after its placement's prefix."""
-    return [p.argv[3:] if p.name == "sim" else p.argv[6:] for p in layout.programs]
+    """Each program's command after its placement's prefix (and before the physics server's
+    polling option)."""
+    return [p.argv[3:-2] if p.name == "sim" else p.argv[6:] for p in layout.programs]
 
 
 def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_batch_policy():
@@ -34,8 +38,12 @@ def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_
     assert {p.name: p.argv[3:6] == BATCH for p in two.programs} == {"can_hub": True, "sim": False, "wm": True,
                                                                      "skills": True}
     assert commands(two) == [p.argv for p in PROGS]  # the commands themselves unchanged
+    # Alone on its core, the physics server polls for the acks instead of sleeping.
+    assert {p.name: p.argv[-2:] == POLL for p in two.programs} == {"can_hub": False, "sim": True, "wm": False,
+                                                                  "skills": False}
+    assert 0 < ACK_POLL_US <= 5000  # a frame's acks, not a stalled participant's
     assert two.others == {0}
-    assert two.note == "the physics server on core 1, the other programs on 0 (batch scheduling)"
+    assert two.note == "the physics server on core 1 (polling for acks), the other programs on 0 (batch scheduling)"
     four = place(PROGS, "auto", {0, 2, 5, 7}, taskset=TASKSET, chrt=CHRT)
     assert prefixes(four)["sim"][2] == "7" and prefixes(four)["wm"][2] == "0,2,5"
     assert [p.participant for p in four.programs] == [p.participant for p in PROGS]
@@ -81,6 +89,6 @@ def test_without_taskset_auto_changes_nothing_and_a_named_core_is_refused(monkey
 def test_without_chrt_the_programs_are_placed_and_the_note_says_what_is_missing(monkeypatch):
     monkeypatch.setattr("skillbus.cpu_layout.shutil.which", lambda name: None if name == "chrt" else TASKSET)
     layout = place(PROGS, "auto", {0, 1})
-    assert prefixes(layout)["wm"] == [TASKSET, "--cpu-list", "0"] and [p.argv[3:] for p in layout.programs] == \
-        [p.argv for p in PROGS]
+    assert prefixes(layout)["wm"] == [TASKSET, "--cpu-list", "0"]
+    assert [p.argv[3:-2] if p.name == "sim" else p.argv[3:] for p in layout.programs] == [p.argv for p in PROGS]
     assert "no batch scheduling: chrt (util-linux) is not installed" in layout.note

@@ -43,6 +43,12 @@ struct MasterConfig {
   std::map<std::string, std::chrono::milliseconds> ack_timeout_of;
   std::chrono::milliseconds message_timeout{2000};
   std::chrono::milliseconds resend_interval{250};  // re-publish an unacknowledged clock
+  // Once its own work of the frame is done (on_clock_sent), how long the master polls for
+  // the acks without sleeping before it sleeps on the socket. On a core of its own nothing
+  // else needs the time, and on a virtual machine a sleeping receiver on another core costs
+  // each sender about 30 us to wake and itself as long to run again (docs/lockstep.md,
+  // "Polling for the acks"). 0: sleep at once.
+  std::chrono::microseconds ack_poll{0};
   // Asked to end (lockstep_end_t): with names here, the session ends once each of them has
   // asked, at the latest frame asked for (several robots, each ending its own task); empty:
   // at the first frame anyone asks for.
@@ -125,6 +131,7 @@ class LockstepMaster {
   std::map<std::string, int64_t> end_asked_;  // with end_when_asked_by: who asked, for which frame
   std::chrono::steady_clock::time_point clock_sent_{};
   std::chrono::steady_clock::time_point own_work_done_{};  // on_clock_sent returned (or the clock went out)
+  bool polling() const;  // still polling for this frame's acks (MasterConfig::ack_poll)
   std::string last_acker_;
   std::map<std::string, double> ack_seconds_;
   std::map<std::string, double> held_seconds_;

@@ -67,6 +67,9 @@ struct ServerOptions {
   double step_ms = 0, frame_ms = 0;        // override the scene's when > 0
   std::chrono::milliseconds join_timeout{10000}, ack_timeout{5000}, message_timeout{2000};
   std::map<std::string, std::chrono::milliseconds> ack_timeout_of;  // participants allowed longer frames
+  // Lockstep: poll for the acks this long after the step before sleeping (MasterConfig::ack_poll;
+  // for a server on a core of its own).
+  std::chrono::microseconds ack_poll{0};
 };
 
 struct ServerReport {
