@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
   const RunResult r = p.run();
   apps::Summary out;
   out["ok"] = r.ok;
+  out["error"] = r.error;
   out["name"] = cfg.name;
   out["frames"] = r.frames;
   out["received"] = received;

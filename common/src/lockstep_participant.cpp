@@ -74,8 +74,17 @@ void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string
     stop_reason_ = c.stop_reason;
     return;
   }
-  if (c.header.frame < 0) {  // the master waits for others to join: it is alive, and so we wait on
-    master_heard_ = steady::now();
+  if (c.header.frame < 0) {  // the master waits for participants to join
+    if (last_acked_ < 0 && current_ < 0 && !have_clock_) {
+      master_heard_ = steady::now();  // before our first frame: it is alive, and so we wait on
+      return;
+    }
+    // Within a session: the master started again (killed and restarted), and the session
+    // is lost. Said now, naming it, rather than after the clock timeout.
+    master_restarted_ = "lockstep: master " + master_ + " started again after frame " + std::to_string(last_acked_) +
+                        " (it waits for participants to join): this session is lost";
+    stop_seen_ = true;
+    have_clock_ = false;
     return;
   }
   if (c.header.frame == last_acked_ && !last_ack_.empty()) {
@@ -208,7 +217,10 @@ RunResult LockstepParticipant::run_lockstep() {
     completed_ = clk.frame;
     if (after_frame) after_frame(clk.frame);
   }
-  if (stop_seen_ && !stop_reason_.empty()) fail("lockstep stopped by the master: " + stop_reason_);
+  if (!master_restarted_.empty())
+    fail(master_restarted_);
+  else if (stop_seen_ && !stop_reason_.empty())
+    fail("lockstep stopped by the master: " + stop_reason_);
   r.digest = running_digest_;
   r.wall_seconds = std::chrono::duration<double>(steady::now() - wall_start).count();
   return r;

@@ -225,6 +225,7 @@ class LockstepParticipant:
         self._ack_channel, self._join_channel = ack_channel(), join_channel()
         self._master = ""  # the master whose clock we follow (from the first clock)
         self._stop_seen, self._stop_reason = False, ""
+        self._master_restarted = ""  # the error, once a restarted master's join phase is heard in a session
         self._last_acked, self._last_ack = -1, b""
         self._current = -1  # the frame being worked on (its clock may be resent meanwhile)
         self._last_sim_time = 0  # sim time of the last clock taken: it never runs backwards
@@ -348,8 +349,16 @@ class LockstepParticipant:
             self._stop_seen, self._stop_reason = True, c.stop_reason
             return
         frame = c.header.frame
-        if frame < 0:  # the master waits for others to join: it is alive, and so we wait on
-            self._master_heard = time.monotonic()
+        if frame < 0:  # the master waits for participants to join
+            if self._last_acked < 0 and self._current < 0 and self._next_clock is None:
+                self._master_heard = time.monotonic()  # before our first frame: it is alive, we wait on
+                return
+            # Within a session: the master started again (killed and restarted), and the
+            # session is lost. Said now, naming it, rather than after the clock timeout.
+            self._master_restarted = (f"lockstep: master {self._master} started again after frame "
+                                      f"{self._last_acked} (it waits for participants to join): this "
+                                      "session is lost")
+            self._stop_seen, self._next_clock = True, None
             return
         if frame == self._last_acked and self._last_ack:
             # The master resends the clock while a participant is still at work on the
@@ -572,6 +581,8 @@ class LockstepParticipant:
             r.sim_time_ns = sim_time
             for after in self.after_frame:
                 after(frame)
+        if self._master_restarted:
+            return self._fail(r, self._master_restarted)
         if self._stop_seen and self._stop_reason:
             return self._fail(r, f"lockstep stopped by the master: {self._stop_reason}")
         r.digest = self._running

@@ -197,6 +197,29 @@ def test_a_participant_without_a_master_gives_up_after_its_clock_timeout_saying_
     assert "no clock from the master, nor word that it waits for the others to join, within 1.0" in p.stderr()
     assert "no master on this bus?" in p.stderr()
     assert took < 15, took  # its timeout (with the start-up), not a master's join timeout
+def test_a_master_restarted_mid_session_is_named_at_once_by_its_participants(sandbox, binary):
+    # A master killed and started again (supervisord restarts it) waits for joins and says
+    # so: those in the killed session must not take that for a sign of life (they waited
+    # on it forever), nor wait for their clock timeout: the session is lost, and they say
+    # so, naming the master, as soon as they hear it.
+    names = ["py1", "cpp1"]
+    clock = sandbox.start("clock", [binary("sb_clock"), "--demo", "--frames", "100000000",
+                                    "--participants", ",".join(names)])
+    parts = {n: sandbox.start(n, participant_argv(binary, n, clock_timeout_s=60)) for n in names}
+    clock.wait_for("starting frames", 30)
+    time.sleep(0.5)
+    sandbox.kill(clock)
+    again = sandbox.start("clock-again", [binary("sb_clock"), "--demo", "--frames", "10",
+                                          "--participants", ",".join(names), "--join-timeout-ms", "60000"])
+    started = time.monotonic()
+    for n, p in parts.items():
+        assert sandbox.wait(p, 20) != 0, p.stderr()[-2000:]
+        assert "master clock started again after frame" in p.stderr(), p.stderr()[-2000:]
+        assert "this session is lost" in last_json(p.stdout())["error"]
+    assert time.monotonic() - started < 20  # not their 60 s clock timeout
+    sandbox.kill(again)
+
+
 # Runs a command and prints, on stderr once it has ended, how often it slept (voluntary
 # context switches, from its rusage).
 SLEEPS = ("import json, resource, subprocess, sys\n"

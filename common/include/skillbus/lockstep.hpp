@@ -206,6 +206,7 @@ class LockstepParticipant {
   int64_t completed_ = -1;
   Clock next_clock_;
   bool stop_seen_ = false;
+  std::string master_restarted_;  // the error, once a restarted master's join phase is heard in a session
   std::string stop_reason_;
   int64_t last_acked_ = -1;
   int64_t current_ = -1;  // the frame being worked on (its clock may be resent meanwhile)
