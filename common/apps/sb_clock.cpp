@@ -45,8 +45,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> ack_of;
   apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
-  app.add_option("--ack-poll-us", ack_poll_us, "once its own work of a frame is done, poll this long for the acks before sleeping (0: sleep at once; for a process on a core of its own: docs/lockstep.md)")
-      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000}));
+  apps::add_ack_poll_option(app, ack_poll_us);
   app.add_option("--lose-clocks-every", lose_clocks_every, "tests: lose every N-th clock message (0: none)");
   app.add_flag("--demo", demo, "play the toy world: publish SB_DEMO_STATE, fold in SB_DEMO_CMD");
   apps::parse_or_exit(app, argc, argv);

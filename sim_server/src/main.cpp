@@ -46,8 +46,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> ack_of;
   apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "lockstep: how long to wait for an announced message");
-  app.add_option("--ack-poll-us", ack_poll_us, "lockstep: once its own work of a frame is done, poll this long for the acks before sleeping (0: sleep at once; for a process on a core of its own: docs/lockstep.md)")
-      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000}));
+  apps::add_ack_poll_option(app, ack_poll_us);
   apps::parse_or_exit(app, argc, argv);
   if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
   o.join_timeout = std::chrono::milliseconds(join_ms);

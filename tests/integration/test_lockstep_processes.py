@@ -220,6 +220,25 @@ def test_a_master_restarted_mid_session_is_named_at_once_by_its_participants(san
     sandbox.kill(again)
 
 
+def test_a_master_restarted_before_frame_0_is_waited_for_and_the_session_runs(sandbox, binary):
+    # Killed and started again while it waits for joins: no session was lost, so those who
+    # joined (before their first frame) keep joining, and the new master starts the session.
+    clock = sandbox.start("clock", [binary("sb_clock"), "--demo", "--frames", "50", "--participants", "py1,cpp2",
+                                    "--join-timeout-ms", "30000"])
+    first = sandbox.start("py1", participant_argv(binary, "py1", clock_timeout_s=3))
+    clock.wait_for("participant 'py1'", 30)
+    sandbox.kill(clock)
+    again = sandbox.start("clock-again", [binary("sb_clock"), "--demo", "--frames", "50", "--participants",
+                                          "py1,cpp2", "--join-timeout-ms", "30000"])
+    again.wait_for("participant 'py1'", 30)  # (py1 still joining: it had no frame yet)
+    late = sandbox.start("cpp2", participant_argv(binary, "cpp2"))
+    assert sandbox.wait(again, 60) == 0, again.stdout() + again.stderr()[-2000:]
+    assert last_json(again.stdout())["frames"] == 50
+    for p in (first, late):
+        assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
+        assert last_json(p.stdout())["frames"] == 50
+
+
 # Runs a command and prints, on stderr once it has ended, how often it slept (voluntary
 # context switches, from its rusage).
 SLEEPS = ("import json, resource, subprocess, sys\n"

@@ -113,6 +113,14 @@ CLI::Option* add_ack_timeouts_option(CLI::App& app, std::vector<std::string>& it
                         "(repeatable; e.g. map=60000)");
 }
 
+CLI::Option* add_ack_poll_option(CLI::App& app, int64_t& us) {
+  return app
+      .add_option("--ack-poll-us", us,
+                  "lockstep: once its own work of a frame is done, poll this long for the acks before sleeping "
+                  "(0: sleep at once; for a process on a core of its own: docs/lockstep.md)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000}));
+}
+
 std::map<std::string, std::chrono::milliseconds> parse_ack_timeouts(const CLI::App& app,
                                                                     const std::vector<std::string>& items) {
   std::map<std::string, std::chrono::milliseconds> out;

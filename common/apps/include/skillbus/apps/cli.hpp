@@ -55,4 +55,7 @@ CLI::Option* add_ack_timeouts_option(CLI::App& app, std::vector<std::string>& it
 std::map<std::string, std::chrono::milliseconds> parse_ack_timeouts(const CLI::App& app,
                                                                     const std::vector<std::string>& items);
 
+// --ack-poll-us US of a lockstep master (MasterConfig::ack_poll): 0 to 1 s, default 0.
+CLI::Option* add_ack_poll_option(CLI::App& app, int64_t& us);
+
 }  // namespace skillbus::apps
