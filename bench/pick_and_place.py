@@ -44,13 +44,16 @@ def demo(box: Sandbox, run: Path, frame_ms: float) -> dict:
     sim["cores"] = layout.note
     sim["physics_prefix"] = next(p.argv[:p.argv.index(str(paths.binary("sim_server")))] for p in layout.programs
                                  if p.name == "sim")
+    sim["physics_options"] = layout.physics_options
     return sim
 
 
-def alone(box: Sandbox, script: str, frames: int, frame_ms: float, prefix: list[str]) -> dict:
-    """The physics server alone, on the core the demo's had (`prefix`: its taskset)."""
+def alone(box: Sandbox, script: str, frames: int, frame_ms: float, prefix: list[str], options: list[str]) -> dict:
+    """The physics server alone, placed as the demo's was: on its core (`prefix`: its
+    taskset), with the placement's options (`options`: idle cores polling when the demo's
+    had it, so that both run on the same machine settings)."""
     p = box.start("alone", [*prefix, str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()), "--frame-ms",
-                            str(frame_ms), "--script", script, "--frames", str(frames)])
+                            str(frame_ms), "--script", script, "--frames", str(frames), *options])
     box.wait(p, 900)
     return last_json(p.stdout())
 
@@ -61,7 +64,7 @@ def one_run(tmp: Path, frame_ms: float, n: int) -> dict:
     run.mkdir()
     with Sandbox(log_dir=run / "logs") as box:
         d = demo(box, run, frame_ms)
-        a = alone(box, d["script"], d["frames"], frame_ms, d["physics_prefix"])
+        a = alone(box, d["script"], d["frames"], frame_ms, d["physics_prefix"], d["physics_options"])
     return {"frame_ms": frame_ms, "task": d["task"], "sim_time_s": d["sim_time_s"], "demo_wall_s": d["wall_time_s"],
             "demo_rtf": d["real_time_factor"], "alone_wall_s": a["wall_time_s"], "alone_rtf": a["real_time_factor"],
             "ratio": d["real_time_factor"] / a["real_time_factor"],

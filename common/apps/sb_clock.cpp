@@ -14,6 +14,7 @@
 
 #include "demo_mix.hpp"
 #include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/cpu_latency.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
 #include "skillbus/bus.hpp"
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
   std::string url;
   MasterConfig cfg;
   cfg.name = "clock";
-  int64_t frames = 1000, join_ms = 10000, ack_ms = 5000, message_ms = 2000, ack_poll_us = 0;
+  int64_t frames = 1000, join_ms = 10000, ack_ms = 5000, message_ms = 2000, ack_poll_us = 0, cpu_latency_us = -1;
   double period_ms = 10.0;
   int lose_clocks_every = 0;
   bool demo = false;
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
   apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "how long to wait for an announced message");
   apps::add_ack_poll_option(app, ack_poll_us);
+  apps::add_cpu_latency_option(app, cpu_latency_us);
   app.add_option("--lose-clocks-every", lose_clocks_every, "tests: lose every N-th clock message (0: none)");
   app.add_flag("--demo", demo, "play the toy world: publish SB_DEMO_STATE, fold in SB_DEMO_CMD");
   apps::parse_or_exit(app, argc, argv);
@@ -61,6 +63,7 @@ int main(int argc, char** argv) {
   cfg.ack_poll = std::chrono::microseconds(ack_poll_us);
   if (cfg.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");
 
+  const auto cpu_latency = apps::hold_cpu_latency_or_exit("sb_clock", cpu_latency_us);
   std::unique_ptr<Bus> bus;
   apps::start_or_exit("sb_clock", [&] {
     // --lose-clocks-every N: a test of the clock resend (every N-th clock is lost).
@@ -101,6 +104,7 @@ int main(int argc, char** argv) {
   out["digest"] = r.digest_hex();
   out["commands"] = commands;
   out["bad_input"] = master.bad_input().total();
+  if (cpu_latency) out["cpu_latency_us"] = cpu_latency->in_force_us();  // what the kernel applied at the end
   // Per participant: the ms its acks kept the master waiting after the clock went out (an
   // ack already in when the master first read the bus counts nothing), summed over the
   // run, and the frames its ack was the last one of (LockstepMaster::held_seconds).

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "skillbus/apps/cli.hpp"
+#include "skillbus/apps/cpu_latency.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
 #include "skillbus/auth.hpp"
@@ -19,7 +20,7 @@ int main(int argc, char** argv) {
   apps::configure(app);
   std::string url;
   sim::ServerOptions o;
-  int64_t join_ms = 10000, ack_ms = 5000, message_ms = 2000, ack_poll_us = 0;
+  int64_t join_ms = 10000, ack_ms = 5000, message_ms = 2000, ack_poll_us = 0, cpu_latency_us = -1;
   apps::add_url_option(app, url);
   app.add_option("--scene", o.scene_file, "the scene file (required; e.g. deploy/scenes/demo.scene.json)")->type_name("FILE");
   app.add_option("--scenes", o.scenes_dir,
@@ -47,6 +48,7 @@ int main(int argc, char** argv) {
   apps::add_ack_timeouts_option(app, ack_of);
   app.add_option("--message-timeout-ms", message_ms, "lockstep: how long to wait for an announced message");
   apps::add_ack_poll_option(app, ack_poll_us);
+  apps::add_cpu_latency_option(app, cpu_latency_us);
   apps::parse_or_exit(app, argc, argv);
   if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
   o.join_timeout = std::chrono::milliseconds(join_ms);
@@ -55,6 +57,7 @@ int main(int argc, char** argv) {
   o.message_timeout = std::chrono::milliseconds(message_ms);
   o.ack_poll = std::chrono::microseconds(ack_poll_us);
 
+  const auto cpu_latency = apps::hold_cpu_latency_or_exit("sim_server", cpu_latency_us);
   std::unique_ptr<Bus> bus;
   std::unique_ptr<sim::SimServer> server;
   apps::start_or_exit("sim_server", [&] {
@@ -104,6 +107,7 @@ int main(int argc, char** argv) {
   out["commands_accepted"] = rep.accepted;
   out["commands_rejected"] = rep.rejected;
   out["bad_input"] = rep.bad_input;
+  if (cpu_latency) out["cpu_latency_us"] = cpu_latency->in_force_us();  // what the kernel applied at the end
   out["finger_width"] = apps::rounded(state.finger_width, 5);  // (the first robot's)
   out["finger_force"] = apps::rounded(state.finger_force, 3);
   if (server->physics().num_robots() > 1) {

@@ -1,13 +1,16 @@
 """Lockstep between real processes: a C++ clock master, Python and C++ participants, over
 LCM (and, where marked, also over Cyclone DDS) in a private network namespace."""
 
+import os
 import re
+import subprocess
 import sys
 import time
 
 import pytest
 
 from conftest import TRANSPORTS, last_json, python_tool
+from support.skip_policy import cannot_run
 from skillbus.lockstep_session import python_participant_argv, run_session
 from skillbus.netns import Sandbox
 
@@ -278,6 +281,65 @@ def test_a_master_refuses_a_negative_or_huge_ack_poll(sandbox, binary):
                                                  "--ack-poll-us", bad])
         assert sandbox.wait(clock, 30) != 0
         assert "--ack-poll-us" in clock.stderr()
+
+
+LATENCY_DEVICE = "/dev/cpu_dma_latency"
+
+
+def latency_in_force() -> int:
+    with open(LATENCY_DEVICE, "rb") as f:
+        return int.from_bytes(f.read(4), "little", signed=True)
+
+
+def test_a_master_holds_the_cpu_latency_it_asks_for_while_it_runs_and_gives_the_same_digests(sandbox, binary):
+    # --cpu-latency-us (the demo's physics server): idle cores poll while the master runs,
+    # through the kernel's PM QoS device; the session is the same with it as without.
+    if not os.access(LATENCY_DEVICE, os.W_OK):
+        cannot_run(f"{LATENCY_DEVICE} is not writable here: a CPU latency request cannot be made")
+    # 7 us: a value no other program of the suite asks for, so that the kernel's value after
+    # the master ended shows its request went with it (others may hold 0 meanwhile).
+    frames, names, runs = 800, ["cpp1", "cpp2"], {}
+    for latency in ("-1", "7"):
+        clock = sandbox.start(f"clock-lat{latency}", [binary("sb_clock"), "--demo", "--frames", str(frames),
+                                                       "--participants", ",".join(names),
+                                                       "--cpu-latency-us", latency])
+        parts = [sandbox.start(f"{n}-lat{latency}", [binary("sb_demo_participant"), "--name", n]) for n in names]
+        assert sandbox.wait(clock, 120) == 0, clock.stdout() + clock.stderr()[-2000:]
+        s = last_json(clock.stdout())
+        assert s["ok"] and s["frames"] == frames
+        digests = {}
+        for p in parts:
+            assert sandbox.wait(p, 15) == 0
+            digests[p.name.split("-")[0]] = last_json(p.stdout())["digest"]
+        runs[latency] = (s["digest"], digests, s.get("cpu_latency_us"))
+    assert runs["7"][:2] == runs["-1"][:2]  # the same session
+    assert runs["-1"][2] is None  # not asked: nothing held, nothing said
+    assert 0 <= runs["7"][2] <= 7, runs  # held while it ran (the smallest request of all holders)
+    assert latency_in_force() != 7  # and dropped when it ended
+
+
+@pytest.mark.parametrize("value", ["-2", "1000001", "fast"])
+def test_a_master_refuses_a_cpu_latency_out_of_range(binary, value):
+    # (Refused while the command line is read: no bus is opened.)
+    r = subprocess.run([binary("sb_clock"), "--url", "memq://", "--cpu-latency-us", value],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2, r.stderr
+    assert f"sb_clock: error: --cpu-latency-us: Value {value} not in range -1 to 1000000" in r.stderr, r.stderr
+
+
+def test_a_master_that_may_not_hold_the_cpu_latency_ends_at_start_naming_the_device_and_why(binary):
+    # The device is root's: a user who may not write it is told so before anything runs
+    # (as root, the master is run as the unprivileged user nobody).
+    drop = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"] if os.geteuid() == 0 else []
+    if not drop and os.access(LATENCY_DEVICE, os.W_OK):
+        cannot_run(f"{LATENCY_DEVICE} is writable by this user, who is not root: no refusal to see")
+    for program in ("sb_clock", "sim_server"):
+        r = subprocess.run([*drop, binary(program), "--url", "memq://", "--cpu-latency-us", "0",
+                            *(["--scene", "deploy/scenes/demo.scene.json"] if program == "sim_server" else [])],
+                           capture_output=True, text=True, timeout=30)
+        assert r.returncode == 2, (program, r.stdout, r.stderr)
+        assert (f"{program}: cannot start: --cpu-latency-us 0: {LATENCY_DEVICE}: cannot open: Permission denied "
+                "(the device is root's") in r.stderr, r.stderr
 
 
 @pytest.mark.parametrize("slow", ["py1", "cpp1"])

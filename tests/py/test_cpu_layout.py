@@ -21,16 +21,26 @@ def prefixes(layout):
 
 
 POLL = ["--ack-poll-us", str(ACK_POLL_US)]
+LATENCY = ["--cpu-latency-us", "0"]
+
+
+@pytest.fixture
+def device(tmp_path):
+    """A file this process may write, standing for the kernel's CPU latency device."""
+    path = tmp_path / "cpu_dma_latency"
+    path.write_bytes(b"")
+    return str(path)
 
 
 def commands(layout):
     """Each program's command after its placement's prefix (and before the physics server's
-    polling option)."""
-    return [p.argv[3:-2] if p.name == "sim" else p.argv[6:] for p in layout.programs]
+    options)."""
+    return [p.argv[3:len(p.argv) - len(layout.physics_options)] if p.name == "sim" else p.argv[6:]
+            for p in layout.programs]
 
 
-def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_batch_policy():
-    two = place(PROGS, "auto", {0, 1}, taskset=TASKSET, chrt=CHRT)
+def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_batch_policy(device):
+    two = place(PROGS, "auto", {0, 1}, taskset=TASKSET, chrt=CHRT, latency_device=device)
     assert prefixes(two) == {"can_hub": [TASKSET, "--cpu-list", "0"], "sim": [TASKSET, "--cpu-list", "1"],
                              "wm": [TASKSET, "--cpu-list", "0"], "skills": [TASKSET, "--cpu-list", "0"]}
     # The others wait for the running one to block instead of preempting it; the physics
@@ -38,12 +48,15 @@ def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_
     assert {p.name: p.argv[3:6] == BATCH for p in two.programs} == {"can_hub": True, "sim": False, "wm": True,
                                                                      "skills": True}
     assert commands(two) == [p.argv for p in PROGS]  # the commands themselves unchanged
-    # Alone on its core, the physics server polls for the acks instead of sleeping.
-    assert {p.name: p.argv[-2:] == POLL for p in two.programs} == {"can_hub": False, "sim": True, "wm": False,
-                                                                  "skills": False}
+    # Alone on its core, the physics server polls for the acks instead of sleeping, and
+    # asks for idle cores that poll while it runs.
+    assert two.physics_options == POLL + LATENCY
+    assert {p.name: p.argv[-4:] == POLL + LATENCY for p in two.programs} == {"can_hub": False, "sim": True,
+                                                                             "wm": False, "skills": False}
     assert 0 < ACK_POLL_US <= 5000  # a frame's acks, not a stalled participant's
     assert two.others == {0}
-    assert two.note == "the physics server on core 1 (polling for acks), the other programs on 0 (batch scheduling)"
+    assert two.note == ("the physics server on core 1 (polling for acks; idle cores polling), the other programs "
+                        "on 0 (batch scheduling)")
     four = place(PROGS, "auto", {0, 2, 5, 7}, taskset=TASKSET, chrt=CHRT)
     assert prefixes(four)["sim"][2] == "7" and prefixes(four)["wm"][2] == "0,2,5"
     assert [p.participant for p in four.programs] == [p.participant for p in PROGS]
@@ -90,5 +103,22 @@ def test_without_chrt_the_programs_are_placed_and_the_note_says_what_is_missing(
     monkeypatch.setattr("skillbus.cpu_layout.shutil.which", lambda name: None if name == "chrt" else TASKSET)
     layout = place(PROGS, "auto", {0, 1})
     assert prefixes(layout)["wm"] == [TASKSET, "--cpu-list", "0"]
-    assert [p.argv[3:-2] if p.name == "sim" else p.argv[3:] for p in layout.programs] == [p.argv for p in PROGS]
+    assert [p.argv[3:len(p.argv) - len(layout.physics_options)] if p.name == "sim" else p.argv[3:]
+            for p in layout.programs] == [p.argv for p in PROGS]
     assert "no batch scheduling: chrt (util-linux) is not installed" in layout.note
+
+
+def test_without_the_cpu_latency_device_or_the_right_to_write_it_the_physics_is_placed_without_the_request(
+        tmp_path, device, monkeypatch):
+    missing = place(PROGS, "auto", {0, 1}, taskset=TASKSET, chrt=CHRT, latency_device=str(tmp_path / "none"))
+    assert missing.physics_options == POLL and commands(missing) == [p.argv for p in PROGS]
+    assert f"idle cores halting: no {tmp_path / 'none'} here" in missing.note
+    # (This process may be root, who may write anything: the kernel's answer is stood in for.)
+    monkeypatch.setattr("skillbus.cpu_layout.os.access", lambda path, mode: False)
+    refused = place(PROGS, "auto", {0, 1}, taskset=TASKSET, chrt=CHRT, latency_device=device)
+    assert refused.physics_options == POLL
+    assert f"idle cores halting: {device} is not writable here (it is root's)" in refused.note
+
+
+def test_nothing_is_asked_of_the_kernel_when_placement_is_off(device):
+    assert place(PROGS, "off", {0, 1}, taskset=TASKSET, latency_device=device).physics_options == []

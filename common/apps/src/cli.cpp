@@ -121,6 +121,15 @@ CLI::Option* add_ack_poll_option(CLI::App& app, int64_t& us) {
       ->check(CLI::Range(int64_t{0}, int64_t{1'000'000}));
 }
 
+CLI::Option* add_cpu_latency_option(CLI::App& app, int64_t& us) {
+  return app
+      .add_option("--cpu-latency-us", us,
+                  "while it runs, ask the kernel to keep every core's wake-up latency at most this long (Linux PM "
+                  "QoS, /dev/cpu_dma_latency; 0: idle cores poll instead of halting, which makes wake-ups across "
+                  "cores cheap and costs power; -1: do not ask; docs/lockstep.md)")
+      ->check(CLI::Range(int64_t{-1}, int64_t{1'000'000}));
+}
+
 std::map<std::string, std::chrono::milliseconds> parse_ack_timeouts(const CLI::App& app,
                                                                     const std::vector<std::string>& items) {
   std::map<std::string, std::chrono::milliseconds> out;

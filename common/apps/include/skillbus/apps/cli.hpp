@@ -58,4 +58,8 @@ std::map<std::string, std::chrono::milliseconds> parse_ack_timeouts(const CLI::A
 // --ack-poll-us US of a lockstep master (MasterConfig::ack_poll): 0 to 1 s, default 0.
 CLI::Option* add_ack_poll_option(CLI::App& app, int64_t& us);
 
+// --cpu-latency-us US: the CPU latency to ask the kernel for while the program runs
+// (skillbus/apps/cpu_latency.hpp): 0 to 1 s, default -1 (not asked).
+CLI::Option* add_cpu_latency_option(CLI::App& app, int64_t& us);
+
 }  // namespace skillbus::apps
