@@ -40,8 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--physics-core", default="auto", metavar="auto|off|N",
                    help="the physics server on a core of its own, every other program on the others under the "
                         "batch scheduling policy (taskset, chrt), idle cores polling while it runs where this user "
-                        "may ask the kernel (/dev/cpu_dma_latency; docs/pick_and_place.md): auto (the last usable core; nothing with one core), off (the "
-                        "kernel places them), or the core's number; default auto")
+                        "may ask the kernel (/dev/cpu_dma_latency; docs/pick_and_place.md): auto (the last usable "
+                        "core; nothing with one core), off (the kernel places them), or the core's number; "
+                        "default auto")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
     ls.add_argument("--frames", type=int, default=1000)
     ls.add_argument("--python", type=int, default=3, help="Python participants")
