@@ -89,7 +89,7 @@ def main() -> int:
                 print(f"frames of {frame_ms:.0f} ms: ClearTable ({r['task']}) {r['sim_time_s']:.2f} s of sim time in "
                       f"{r['demo_wall_s']:.2f} s: {r['demo_rtf']:.2f}x real time; the physics alone, same "
                       f"motions: {r['alone_wall_s']:.2f} s, {r['alone_rtf']:.2f}x; the demo keeps "
-                      f"{100 * r['ratio']:.0f} % of it (same physics bit for bit: {r['same_physics']}; {r['cores']})")
+                      f"{100 * r['ratio']:.1f} % of it (same physics bit for bit: {r['same_physics']}; {r['cores']})")
                 print(f"    per frame (ms): state {fm.get('state', 0):.2f}, physics {fm.get('physics', 0):.2f}, "
                       f"wait for acks {fm.get('ack_wait', 0):.2f} (past the physics "
                       f"{fm.get('ack_wait', 0) - fm.get('physics', 0):.2f}), total {fm.get('total', 0):.2f}; "
@@ -100,14 +100,14 @@ def main() -> int:
             row["same_physics"] = all(r["same_physics"] for r in runs)
             rows.append(row)
             if len(runs) > 1:
-                kept = ", ".join(f"{100 * r['ratio']:.0f}" for r in runs)
+                kept = ", ".join(f"{100 * r['ratio']:.1f}" for r in runs)
                 demos = ", ".join(f"{r['demo_rtf']:.1f}" for r in runs)
                 alones = ", ".join(f"{r['alone_rtf']:.1f}" for r in runs)
                 print(f"frames of {frame_ms:.0f} ms, {len(runs)} paired runs: the demo keeps {kept} % (median "
-                      f"{100 * row['ratio']:.0f} %); the demo {demos}x, the physics alone {alones}x")
+                      f"{100 * row['ratio']:.1f} %); the demo {demos}x, the physics alone {alones}x")
     r20 = next(r for r in rows if r["frame_ms"] == 20.0)
     print(f"target: at 20 ms frames the demo keeps at least 90 % of the physics alone: "
-          f"{'met' if r20['ratio'] >= 0.9 else 'NOT met'} ({100 * r20['ratio']:.0f} %, the median of "
+          f"{'met' if r20['ratio'] >= 0.9 else 'NOT met'} ({100 * r20['ratio']:.1f} %, the median of "
           f"{len(r20['runs'])} paired runs)")
     print(f"target: at 20 ms frames the demo runs at least 10x real time: "
           f"{'met' if r20['demo_rtf'] >= 10 else 'NOT met'} ({r20['demo_rtf']:.1f}x, the median)")
