@@ -104,7 +104,8 @@ int main(int argc, char** argv) {
   out["digest"] = r.digest_hex();
   out["commands"] = commands;
   out["bad_input"] = master.bad_input().total();
-  if (cpu_latency) out["cpu_latency_us"] = cpu_latency->in_force_us();  // what the kernel applied at the end
+  if (const auto in_force = cpu_latency ? cpu_latency->in_force_us() : std::nullopt)
+    out["cpu_latency_us"] = *in_force;  // what the kernel applied at the end (docs/lockstep.md)
   // Per participant: the ms its acks kept the master waiting after the clock went out (an
   // ack already in when the master first read the bus counts nothing), summed over the
   // run, and the frames its ack was the last one of (LockstepMaster::held_seconds).

@@ -114,7 +114,7 @@ def place(progs: list[Program], choice: str = "auto", allowed: set[int] | None =
         physics_options += ["--cpu-latency-us", "0"]
         idle = "idle cores polling"
     elif os.path.exists(latency_device):
-        idle = f"idle cores halting: {latency_device} is not writable here (it is root's)"
+        idle = f"idle cores halting: {latency_device} is not writable by this user (root's by default)"
     else:
         idle = f"idle cores halting: no {latency_device} here"
     out = [dataclasses.replace(p, argv=[tool, "--cpu-list", cpu_list({core}), *p.argv, *physics_options])

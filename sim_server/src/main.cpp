@@ -107,7 +107,8 @@ int main(int argc, char** argv) {
   out["commands_accepted"] = rep.accepted;
   out["commands_rejected"] = rep.rejected;
   out["bad_input"] = rep.bad_input;
-  if (cpu_latency) out["cpu_latency_us"] = cpu_latency->in_force_us();  // what the kernel applied at the end
+  if (const auto in_force = cpu_latency ? cpu_latency->in_force_us() : std::nullopt)
+    out["cpu_latency_us"] = *in_force;  // what the kernel applied at the end (docs/lockstep.md)
   out["finger_width"] = apps::rounded(state.finger_width, 5);  // (the first robot's)
   out["finger_force"] = apps::rounded(state.finger_force, 3);
   if (server->physics().num_robots() > 1) {

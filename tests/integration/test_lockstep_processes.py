@@ -291,18 +291,32 @@ def latency_in_force() -> int:
         return int.from_bytes(f.read(4), "little", signed=True)
 
 
+def holds_the_latency_device(pid: int) -> bool:
+    """Whether process `pid` has the kernel's CPU latency device open (its request)."""
+    try:
+        return any(os.readlink(f"/proc/{pid}/fd/{fd}") == LATENCY_DEVICE for fd in os.listdir(f"/proc/{pid}/fd"))
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
+@pytest.mark.allow_skip  # (whether this user may make the request is the machine's, not the code's)
 def test_a_master_holds_the_cpu_latency_it_asks_for_while_it_runs_and_gives_the_same_digests(sandbox, binary):
     # --cpu-latency-us (the demo's physics server): idle cores poll while the master runs,
     # through the kernel's PM QoS device; the session is the same with it as without.
     if not os.access(LATENCY_DEVICE, os.W_OK):
-        cannot_run(f"{LATENCY_DEVICE} is not writable here: a CPU latency request cannot be made")
-    # 7 us: a value no other program of the suite asks for, so that the kernel's value after
-    # the master ended shows its request went with it (others may hold 0 meanwhile).
+        cannot_run(f"{LATENCY_DEVICE} is missing or not writable here: a CPU latency request cannot be made")
     frames, names, runs = 800, ["cpp1", "cpp2"], {}
     for latency in ("-1", "7"):
         clock = sandbox.start(f"clock-lat{latency}", [binary("sb_clock"), "--demo", "--frames", str(frames),
                                                        "--participants", ",".join(names),
                                                        "--cpu-latency-us", latency])
+        if latency != "-1":
+            # Held from the start, while the master waits for its participants to join.
+            deadline = time.monotonic() + 10
+            while not holds_the_latency_device(clock.popen.pid):
+                assert clock.returncode is None, clock.stderr()
+                assert time.monotonic() < deadline, f"the master never opened {LATENCY_DEVICE}"
+                time.sleep(0.02)
         parts = [sandbox.start(f"{n}-lat{latency}", [binary("sb_demo_participant"), "--name", n]) for n in names]
         assert sandbox.wait(clock, 120) == 0, clock.stdout() + clock.stderr()[-2000:]
         s = last_json(clock.stdout())
@@ -314,8 +328,12 @@ def test_a_master_holds_the_cpu_latency_it_asks_for_while_it_runs_and_gives_the_
         runs[latency] = (s["digest"], digests, s.get("cpu_latency_us"))
     assert runs["7"][:2] == runs["-1"][:2]  # the same session
     assert runs["-1"][2] is None  # not asked: nothing held, nothing said
-    assert 0 <= runs["7"][2] <= 7, runs  # held while it ran (the smallest request of all holders)
-    assert latency_in_force() != 7  # and dropped when it ended
+    # What the kernel applied while it held 7 us: the smallest request of all holders (a
+    # placed demo of another test may hold 0 meanwhile), so at most 7.
+    assert 0 <= runs["7"][2] <= 7, runs
+    # (7: a value no other program of the suite asks for; dropped with the process. Alone,
+    # the kernel's value then leaves 7; with another holder of 0 this says nothing more.)
+    assert latency_in_force() != 7
 
 
 @pytest.mark.parametrize("value", ["-2", "1000001", "fast"])
@@ -327,9 +345,12 @@ def test_a_master_refuses_a_cpu_latency_out_of_range(binary, value):
     assert f"sb_clock: error: --cpu-latency-us: Value {value} not in range -1 to 1000000" in r.stderr, r.stderr
 
 
+@pytest.mark.allow_skip  # (a refusal needs a device this user may not write: the machine's)
 def test_a_master_that_may_not_hold_the_cpu_latency_ends_at_start_naming_the_device_and_why(binary):
     # The device is root's: a user who may not write it is told so before anything runs
     # (as root, the master is run as the unprivileged user nobody).
+    if not os.path.exists(LATENCY_DEVICE):
+        cannot_run(f"no {LATENCY_DEVICE} on this machine: nothing to refuse")
     drop = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"] if os.geteuid() == 0 else []
     if not drop and os.access(LATENCY_DEVICE, os.W_OK):
         cannot_run(f"{LATENCY_DEVICE} is writable by this user, who is not root: no refusal to see")

@@ -117,7 +117,7 @@ def test_without_the_cpu_latency_device_or_the_right_to_write_it_the_physics_is_
     monkeypatch.setattr("skillbus.cpu_layout.os.access", lambda path, mode: False)
     refused = place(PROGS, "auto", {0, 1}, taskset=TASKSET, chrt=CHRT, latency_device=device)
     assert refused.physics_options == POLL
-    assert f"idle cores halting: {device} is not writable here (it is root's)" in refused.note
+    assert f"idle cores halting: {device} is not writable by this user (root's by default)" in refused.note
 
 
 def test_nothing_is_asked_of_the_kernel_when_placement_is_off(device):

@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace skillbus::apps {
@@ -32,8 +33,9 @@ class CpuLatencyRequest {
   CpuLatencyRequest& operator=(const CpuLatencyRequest&) = delete;
 
   int64_t requested_us() const { return requested_us_; }
-  // The latency the kernel applies now: the smallest of every holder's request.
-  int64_t in_force_us() const;
+  // The latency the kernel applies now: the smallest of every holder's request (none when
+  // this process may not read the device: a request needs only write access).
+  std::optional<int64_t> in_force_us() const;
 
  private:
   std::string device_;
