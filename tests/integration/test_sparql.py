@@ -1,7 +1,9 @@
 """SPARQL on the world model (SkiROS2's query_ontology), answered by the server through
 Rasqal: over the ontology (subclass paths), the loaded scene's elements and their
-relations, in SkiROS2's answer form; a query that may read other files or hosts (FROM,
-SERVICE) and a malformed one are refused naming why; the server goes on."""
+relations, in SkiROS2's answer form; a CONSTRUCT's triples as rows; a query that may read
+other files or hosts (FROM, SERVICE), a DESCRIBE and a malformed one are refused naming
+why; the server goes on, and a query after a change of the world sees the change (the
+server keeps the world's graph between queries of one version)."""
 
 import json
 import sys
@@ -11,6 +13,7 @@ from skillbus import paths
 QUERY = """
 from skillbus.bus import open_bus
 from skillbus.world import WorldModelInterface
+from skillbus.world.element import Element
 import json, sys
 wmi = WorldModelInterface(open_bus())
 out = {}
@@ -19,6 +22,9 @@ for name, q in json.loads(sys.argv[1]).items():
         out[name] = wmi.query_ontology(q)
     except Exception as e:
         out[name] = "error: " + str(e)
+spare = wmi.add_element(Element("skiros:Cube", "spare"))
+out["after_adding"] = wmi.query_ontology(json.loads(sys.argv[1])["labels"])
+out["spare"] = spare.id
 print(json.dumps(out))
 """
 
@@ -31,6 +37,9 @@ QUERIES = {
                 "?c rdfs:subClassOf skiros:Product } ORDER BY ?x",
     "labels": "SELECT ?x ?l WHERE { ?x a skiros:Cube ; rdfs:label ?l } ORDER BY ?l",
     "ask": "ASK { skiros:Bin-5 a skiros:Bin }",
+    "construct": "CONSTRUCT { ?x skiros:near ?t } WHERE { ?t a skiros:Table . ?t skiros:contain ?x . "
+                 "?x a skiros:Cube }",
+    "describe": "DESCRIBE skiros:Bin-5",
     "from": "SELECT ?x FROM <file:///etc/passwd> WHERE { ?x ?p ?o }",
     "service": "SELECT ?x WHERE { SERVICE <http://example.org/sparql> { ?x ?p ?o } }",
     "broken": "SELECT ?x WHERE { ?x a }",
@@ -48,6 +57,9 @@ def test_sparql_on_the_world_model(sandbox, tmp_path):
     assert r["on_table"] == ["skiros:Cube-2", "skiros:Cube-3", "skiros:Cube-4"], r
     assert r["labels"] == ["skiros:Cube-4 blue ", "skiros:Cube-3 green ", "skiros:Cube-2 red "], r
     assert r["ask"] == ["true"], r
+    assert sorted(r["construct"]) == [f"skiros:Cube-{i} skiros:near skiros:Table-1 " for i in (2, 3, 4)], r
+    assert r["describe"].startswith("error:") and "DESCRIBE is not answered" in r["describe"], r
+    assert r["after_adding"] == sorted(r["labels"] + [f"{r['spare']} spare "], key=lambda row: row.split(" ", 1)[1]), r
     assert r["from"].startswith("error:") and "FROM" in r["from"], r
     assert r["service"].startswith("error:") and "SERVICE" in r["service"], r
     assert r["broken"].startswith("error: SPARQL"), r

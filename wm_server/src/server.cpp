@@ -354,12 +354,8 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method
   return elements_reply(store_.query(q, page), m.ids_only, method, relations);
 }
 
-const std::string& WorldModelServer::sparql_data() {
-  if (sparql_data_version_ != store_.version()) {
-    sparql_data_ = write_turtle(all_axioms(), prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
-    sparql_data_version_ = store_.version();
-  }
-  return sparql_data_;
+std::string WorldModelServer::sparql_graph() const {
+  return write_turtle(all_axioms(), prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
 }
 
 bool WorldModelServer::snapshot_on_disk(int64_t version) const {

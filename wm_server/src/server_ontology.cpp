@@ -85,7 +85,8 @@ void WorldModelServer::add_ontology_methods() {
     wm_scene_t out{};
     try {
       // (a large result comes in chunks, docs/rpc.md; the server's reply memory bounds it)
-      out.turtle = sparql_json(req.turtle, sparql_data(), prefixes_, opt_.rpc_memory_bytes / 2);
+      out.turtle = sparql_.query_json(req.turtle, store_.version(), [this] { return sparql_graph(); }, prefixes_,
+                                      opt_.rpc_memory_bytes / 2);
     } catch (const WmError& e) {
       throw RpcBadRequest(e.what());
     }

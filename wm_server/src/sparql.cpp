@@ -1,7 +1,8 @@
 // SPARQL 1.1 queries through Rasqal (the Redland query library): no hand-written query
 // engine. The data is one graph in Turtle (the ontology, the scene's other triples and the
-// world's elements), given by the caller; the query may read nothing else: FROM, FROM NAMED
-// and SERVICE (which would make the engine read files or the network) are refused.
+// world's elements), given by the caller and read once per version (sparql_graph.hpp); the
+// query may read nothing else: FROM, FROM NAMED and SERVICE (which would make the engine
+// read files or the network) are refused.
 #include "skillbus/wm/sparql.hpp"
 
 #include <rasqal.h>
@@ -9,24 +10,23 @@
 #include <cctype>
 #include <cstdlib>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <regex>
+#include <set>
 
 #include "skillbus/wm/model.hpp"
+#include "sparql_graph.hpp"
 
 namespace skillbus::wm {
 
 namespace {
 
-struct QueryState {
-  std::string error;
-};
-
-void on_log(void* user, raptor_log_message* m) {
-  auto* st = static_cast<QueryState*>(user);
-  if (m->level < RAPTOR_LOG_LEVEL_ERROR || !st->error.empty()) return;
+// The first error Rasqal or Raptor reports for a query, into `error`.
+void note_error(std::string& error, raptor_log_message* m) {
+  if (m->level < RAPTOR_LOG_LEVEL_ERROR || !error.empty()) return;
   std::string where;
   if (m->locator && m->locator->line > 0) where = "line " + std::to_string(m->locator->line) + ": ";
-  st->error = where + (m->text ? m->text : "error");
+  error = where + (m->text ? m->text : "error");
 }
 
 // SERVICE as a keyword (outside IRIs and strings it is the only use of the word); a false
@@ -43,58 +43,143 @@ bool has_property_path(const std::string& query) {
   return std::regex_search(query, path);
 }
 
+// A term of a graph result as SPARQL 1.1 JSON writes a binding's value.
+nlohmann::json term_json(const raptor_term* t) {
+  auto text = [](const unsigned char* s, size_t n) { return std::string(reinterpret_cast<const char*>(s), n); };
+  if (t->type == RAPTOR_TERM_TYPE_URI) {
+    size_t n = 0;
+    const unsigned char* s = raptor_uri_as_counted_string(t->value.uri, &n);
+    return {{"type", "uri"}, {"value", text(s, n)}};
+  }
+  if (t->type == RAPTOR_TERM_TYPE_BLANK)
+    return {{"type", "bnode"}, {"value", text(t->value.blank.string, t->value.blank.string_len)}};
+  nlohmann::json v = {{"type", "literal"}, {"value", text(t->value.literal.string, t->value.literal.string_len)}};
+  if (t->value.literal.language)
+    v["xml:lang"] = text(t->value.literal.language, t->value.literal.language_len);
+  if (t->value.literal.datatype) {
+    size_t n = 0;
+    const unsigned char* s = raptor_uri_as_counted_string(t->value.literal.datatype, &n);
+    v["datatype"] = text(s, n);
+  }
+  return v;
+}
+
+// A CONSTRUCT's triples, each once, as SPARQL 1.1 JSON results with the variables subject,
+// predicate and object (the JSON results format has no graphs; SkiROS2's query_ontology
+// gives a CONSTRUCT's triples as rows of three values, as rdflib iterates its graph).
+std::string graph_results_json(rasqal_query_results* results) {
+  nlohmann::json rows = nlohmann::json::array();
+  std::set<std::string> seen;  // (a graph is a set: Rasqal gives a triple once per solution that makes it)
+  for (const raptor_statement* t = rasqal_query_results_get_triple(results); t;
+       t = rasqal_query_results_next_triple(results) ? nullptr : rasqal_query_results_get_triple(results)) {
+    nlohmann::json row = {{"subject", term_json(t->subject)},
+                          {"predicate", term_json(t->predicate)},
+                          {"object", term_json(t->object)}};
+    if (seen.insert(row.dump()).second) rows.push_back(std::move(row));
+  }
+  nlohmann::json out = {{"head", {{"vars", {"subject", "predicate", "object"}}}},
+                        {"results", {{"bindings", std::move(rows)}}}};
+  return out.dump();
+}
+
 }  // namespace
 
-std::string sparql_json(const std::string& query, const std::string& data_turtle, const Prefixes& prefixes,
-                        size_t max_bytes) {
+struct SparqlEngine::Impl {
+  std::unique_ptr<rasqal_world, void (*)(rasqal_world*)> world{rasqal_new_world(), rasqal_free_world};
+  std::unique_ptr<sparql_detail::IndexedGraph> graph;
+  const sparql_detail::IndexedGraph* current = nullptr;  // (what the triples source serves)
+  int64_t version = 0;
+  int64_t reads = 0;
+  std::string* error = nullptr;  // the running query's (the log handler outlives every query)
+};
+
+namespace {
+
+// (`user`: where the running query's error goes, nullptr between queries)
+void on_engine_log(void* user, raptor_log_message* m) {
+  std::string* error = *static_cast<std::string**>(user);
+  if (error) note_error(*error, m);
+}
+
+}  // namespace
+
+SparqlEngine::SparqlEngine() : impl_(std::make_unique<Impl>()) {
+  if (!impl_->world || rasqal_world_open(impl_->world.get())) throw WmError("SPARQL: cannot start Rasqal");
+  rasqal_world_set_log_handler(impl_->world.get(), &impl_->error, on_engine_log);
+  sparql_detail::serve_from(impl_->world.get(), &impl_->current);
+}
+
+SparqlEngine::~SparqlEngine() {
+  impl_->current = nullptr;
+  impl_->graph.reset();  // (its terms belong to the world: freed before it)
+}
+
+int64_t SparqlEngine::graphs_read() const { return impl_->reads; }
+
+std::string SparqlEngine::query_json(const std::string& query, int64_t version,
+                                     const std::function<std::string()>& graph_turtle, const Prefixes& prefixes,
+                                     size_t max_bytes) {
   if (names_a_service(query)) throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
-  QueryState st;
-  std::unique_ptr<rasqal_world, void (*)(rasqal_world*)> world(rasqal_new_world(), rasqal_free_world);
-  if (!world || rasqal_world_open(world.get())) throw WmError("SPARQL: cannot start Rasqal");
-  rasqal_world_set_log_handler(world.get(), &st, on_log);
-  raptor_world* rw = rasqal_world_get_raptor(world.get());
+  std::string error;
+  impl_->error = &error;
+  struct Forget {
+    Impl& impl;
+    ~Forget() { impl.error = nullptr; }
+  } forget{*impl_};
+  rasqal_world* world = impl_->world.get();
+  raptor_world* rw = rasqal_world_get_raptor(world);
   // The prefixes the world model knows are declared for the query, as SkiROS2's ontology
   // server does (a query may say skiros:Product without a PREFIX line).
   std::string text;
   for (const auto& [p, ns] : prefixes.all()) text += "PREFIX " + p + ": <" + ns + ">\n";
   text += query;
-  // (the data graph borrows the stream: it must outlive the query, so it is declared first)
-  std::unique_ptr<raptor_iostream, void (*)(raptor_iostream*)> in(
-      raptor_new_iostream_from_string(rw, const_cast<char*>(data_turtle.data()), data_turtle.size()),
-      raptor_free_iostream);
-  if (!in) throw WmError("SPARQL: cannot read the world");
-  std::unique_ptr<rasqal_query, void (*)(rasqal_query*)> q(rasqal_new_query(world.get(), "sparql", nullptr),
+  std::unique_ptr<rasqal_query, void (*)(rasqal_query*)> q(rasqal_new_query(world, "sparql", nullptr),
                                                           rasqal_free_query);
   std::unique_ptr<raptor_uri, void (*)(raptor_uri*)> base(
       raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world")), raptor_free_uri);
   if (!q || !base) throw WmError("SPARQL: cannot make a query");
   if (rasqal_query_prepare(q.get(), reinterpret_cast<const unsigned char*>(text.c_str()), base.get()) != 0)
-    throw WmError("SPARQL: " + (st.error.empty() ? std::string("the query does not parse") : st.error) +
+    throw WmError("SPARQL: " + (error.empty() ? std::string("the query does not parse") : error) +
                   (has_property_path(query)
                        ? " (the server's SPARQL engine, Rasqal, has no property paths such as rdfs:subClassOf* or "
                          "rdf:type/rdfs:subClassOf: the client's get_sub_classes, get_individuals and "
                          "get_sub_properties answer those questions)"
                        : ""));
+  if (rasqal_query_get_verb(q.get()) == RASQAL_QUERY_VERB_DESCRIBE)
+    throw WmError("SPARQL: DESCRIBE is not answered (the server's SPARQL engine, Rasqal, does not implement it): "
+                  "ask SELECT ?p ?o WHERE { <the element> ?p ?o }");
   raptor_sequence* graphs = rasqal_query_get_data_graph_sequence(q.get());
   if (graphs && raptor_sequence_size(graphs) > 0)
     throw WmError("SPARQL: FROM and FROM NAMED are not allowed: a query reads the world model only");
-  rasqal_data_graph* dg = rasqal_new_data_graph_from_iostream(world.get(), in.get(), base.get(), nullptr,
-                                                              RASQAL_DATA_GRAPH_BACKGROUND, nullptr, "turtle", nullptr);
-  if (!dg) throw WmError("SPARQL: cannot load the world");
-  const int added = rasqal_query_add_data_graph(q.get(), dg);  // (the query owns it now)
-  if (added != 0) throw WmError("SPARQL: cannot load the world");
+  if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
+    impl_->current = nullptr;
+    impl_->graph.reset();
+    impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph_turtle());
+    if (!error.empty()) {  // (Raptor reports some Turtle errors only to the log)
+      impl_->graph.reset();
+      throw WmError("SPARQL: the world's graph does not parse as Turtle (" + error + "; a bug of the server)");
+    }
+    impl_->version = version;
+    ++impl_->reads;
+  }
+  impl_->current = impl_->graph.get();
   std::unique_ptr<rasqal_query_results, void (*)(rasqal_query_results*)> results(rasqal_query_execute(q.get()),
                                                                                 rasqal_free_query_results);
-  if (!results) throw WmError("SPARQL: " + (st.error.empty() ? std::string("the query failed") : st.error));
-  void* out = nullptr;
-  size_t out_len = 0;
-  raptor_iostream* sink = raptor_new_iostream_to_string(rw, &out, &out_len, malloc);
-  if (!sink) throw WmError("SPARQL: cannot write the results");
-  const int w = rasqal_query_results_write(sink, results.get(), "json", nullptr, nullptr, base.get());
-  raptor_free_iostream(sink);  // (finishes the string)
-  std::string json(static_cast<const char*>(out ? out : ""), out_len);
-  std::free(out);
-  if (w != 0) throw WmError("SPARQL: " + (st.error.empty() ? std::string("cannot write the results") : st.error));
+  if (!results) throw WmError("SPARQL: " + (error.empty() ? std::string("the query failed") : error));
+  std::string json;
+  if (rasqal_query_results_is_graph(results.get())) {
+    json = graph_results_json(results.get());
+  } else {
+    void* out = nullptr;
+    size_t out_len = 0;
+    raptor_iostream* sink = raptor_new_iostream_to_string(rw, &out, &out_len, malloc);
+    if (!sink) throw WmError("SPARQL: cannot write the results");
+    const int w = rasqal_query_results_write(sink, results.get(), "json", nullptr, nullptr, base.get());
+    raptor_free_iostream(sink);  // (finishes the string)
+    json.assign(static_cast<const char*>(out ? out : ""), out_len);
+    std::free(out);
+    if (w != 0) throw WmError("SPARQL: " + (error.empty() ? std::string("cannot write the results") : error));
+  }
   if (json.size() > max_bytes)
     throw WmError("SPARQL: the results are " + std::to_string(json.size()) + " bytes, more than a reply carries (" +
                   std::to_string(max_bytes) + "): add LIMIT and OFFSET to the query");

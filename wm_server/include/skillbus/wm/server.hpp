@@ -13,6 +13,7 @@
 #include "skillbus/wm/ontology_files.hpp"
 #include "skillbus/wm/ontology.hpp"
 #include "skillbus/wm/rdf.hpp"
+#include "skillbus/wm/sparql.hpp"
 #include "skillbus/wm/store.hpp"
 #include "skillbus_msgs/wm_change_t.hpp"
 #include "skillbus_msgs/wm_commit_t.hpp"
@@ -118,15 +119,14 @@ class WorldModelServer {
   std::string startup_report_;
   std::string ontology_report_;  // what was loaded from --ontology
   std::vector<Triple> ontology_triples_;  // as loaded from --ontology (the RPC ontology answers them)
-  std::vector<Triple> scene_extra_;
+  std::vector<Triple> scene_extra_;  // the loaded scene's triples that are no elements (Scene::extra)
   OntologyLibrary library_;
   std::vector<Triple> scene_imports_;  // the ontologies the loaded scene imported from library_
   std::string lock_holder_;            // wm.lock ("" free); not kept across a restart
-  // The graph SPARQL queries read (ontology, scene_extra_, elements) as Turtle, made again
-  // when the world's version has changed since.
-  const std::string& sparql_data();
-  std::string sparql_data_;
-  int64_t sparql_data_version_ = -1;  // the loaded scene's triples that are no elements (Scene::extra)
+  // The graph SPARQL queries read (ontology, scene_extra_, elements) as Turtle; the
+  // engine asks for it again only when the world's version has changed since.
+  std::string sparql_graph() const;
+  SparqlEngine sparql_;
   long rejected_ = 0;
   long commits_ = 0;
 };

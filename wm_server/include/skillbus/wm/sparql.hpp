@@ -1,19 +1,44 @@
-// SPARQL queries on the world model, answered by Rasqal (librasqal3): SELECT, ASK,
-// CONSTRUCT and DESCRIBE over one graph given as Turtle (the server gives its ontology,
-// the loaded scene's other triples and the world's elements). The world model's prefixes
+// SPARQL queries on the world model, answered by Rasqal (librasqal3): SELECT, ASK and
+// CONSTRUCT (its triples as rows of subject, predicate and object) over one graph (the
+// server gives its ontology, the loaded scene's other triples and the world's elements, as
+// Turtle); DESCRIBE is refused (Rasqal does not implement it). The world model's prefixes
 // are declared for the query. Nothing else is read: FROM, FROM NAMED and SERVICE are
 // refused.
 #pragma once
 
+#include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 
 #include "skillbus/wm/rdf.hpp"
 
 namespace skillbus::wm {
 
-// The results as SPARQL 1.1 Query Results JSON. Throws WmError naming the problem (the
-// parser's message and line), or results larger than `max_bytes` (naming LIMIT/OFFSET).
-std::string sparql_json(const std::string& query, const std::string& data_turtle, const Prefixes& prefixes,
-                        size_t max_bytes);
+// Answers queries on a graph that it reads once per version of the world: the graph's
+// triples are kept, indexed by subject, predicate and object, as Rasqal's triples source
+// (Rasqal's own reads the data again for every query and scans it for every pattern).
+// One thread at a time.
+class SparqlEngine {
+ public:
+  SparqlEngine();
+  ~SparqlEngine();
+  SparqlEngine(const SparqlEngine&) = delete;
+  SparqlEngine& operator=(const SparqlEngine&) = delete;
+
+  // The results as SPARQL 1.1 Query Results JSON. `graph_turtle` is called for the graph
+  // only when `version` differs from the graph's (or none was read yet). Throws WmError
+  // naming the problem (the parser's message and line), or results larger than
+  // `max_bytes` (naming LIMIT/OFFSET).
+  std::string query_json(const std::string& query, int64_t version, const std::function<std::string()>& graph_turtle,
+                         const Prefixes& prefixes, size_t max_bytes);
+
+  // How many times a graph was read (each new version once).
+  int64_t graphs_read() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace skillbus::wm
