@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 APT_PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
-  libgtest-dev libssl-dev libglib2.0-0
+  libgtest-dev libssl-dev libglib2.0-0 valgrind
   libserd-dev libraptor2-dev librasqal3-dev libeigen3-dev zlib1g-dev
   libdart-dev libdart-collision-bullet-dev libdart-utils-urdf-dev nlohmann-json3-dev libcli11-dev libceres-dev
   liboctomap-dev libompl-dev

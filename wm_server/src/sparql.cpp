@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
+#include <utility>
 
 #include "skillbus/wm/model.hpp"
 #include "sparql_graph.hpp"
@@ -34,6 +35,14 @@ void note_error(std::string& error, raptor_log_message* m) {
 bool names_a_service(const std::string& query) {
   static const std::regex service(R"((^|[^A-Za-z0-9_:<"'#])SERVICE\s*(SILENT\s*)?[<?$])", std::regex::icase);
   return std::regex_search(query, service);
+}
+
+// VALUES with one variable in its short form (VALUES ?x { a b }): Rasqal 0.9.33 reads only
+// the first value and may bind the second to another variable, so such a query would answer
+// wrongly without a word; the form with parentheses (VALUES (?x) { (a) (b) }) is read right.
+bool has_short_values(const std::string& query) {
+  static const std::regex values(R"((^|[^A-Za-z0-9_:<"'#])VALUES\s*[?$][A-Za-z0-9_]+\s*\{)", std::regex::icase);
+  return std::regex_search(query, values);
 }
 
 // A property path (rdfs:subClassOf*, rdf:type/rdfs:subClassOf, ^p): Rasqal parses SPARQL
@@ -120,6 +129,9 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
                                      const std::function<std::string()>& graph_turtle, const Prefixes& prefixes,
                                      size_t max_bytes) {
   if (names_a_service(query)) throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
+  if (has_short_values(query))
+    throw WmError("SPARQL: write VALUES with parentheses, VALUES (?x) { (a) (b) }: the server's SPARQL engine, "
+                  "Rasqal, reads VALUES ?x { a b } wrongly (only its first value)");
   std::string error;
   impl_->error = &error;
   struct Forget {
@@ -154,11 +166,15 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
     impl_->current = nullptr;
     impl_->graph.reset();
-    impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph_turtle());
-    if (!error.empty()) {  // (Raptor reports some Turtle errors only to the log)
+    const std::string logged_before = std::exchange(error, std::string());  // (what Raptor logs now is the graph's)
+    try {
+      impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph_turtle());
+      if (!error.empty()) throw WmError("SPARQL: the world's graph does not parse as Turtle");
+    } catch (const WmError& e) {
       impl_->graph.reset();
-      throw WmError("SPARQL: the world's graph does not parse as Turtle (" + error + "; a bug of the server)");
+      throw WmError(std::string(e.what()) + (error.empty() ? "" : " (" + error + ")") + ": a bug of the server");
     }
+    error = logged_before;
     impl_->version = version;
     ++impl_->reads;
   }
@@ -169,6 +185,7 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   std::string json;
   if (rasqal_query_results_is_graph(results.get())) {
     json = graph_results_json(results.get());
+    if (!error.empty()) throw WmError("SPARQL: " + error);  // (the triples end where the query failed)
   } else {
     void* out = nullptr;
     size_t out_len = 0;

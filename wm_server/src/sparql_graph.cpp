@@ -1,7 +1,10 @@
 // The indexed graph and the Rasqal triples source over it (see sparql_graph.hpp).
 #include "sparql_graph.hpp"
 
+#include <cstdlib>
 #include <cstring>
+#include <new>
+#include <tuple>
 #include <memory>
 #include <optional>
 
@@ -9,7 +12,9 @@
 
 // Exported by librasqal and used by its own triples source, declared only in its internal
 // header: the same conversion of a parsed term and the same RDF term equality as Rasqal's
-// source, so that a query's answers do not depend on which source served it.
+// source, so that a query's answers do not depend on which source served it (the public
+// rasqal_literal_same_term compares by other rules). Were they ever gone, the build would
+// fail to link, not answer otherwise.
 extern "C" {
 rasqal_literal* rasqal_new_literal_from_term(rasqal_world* world, raptor_term* term);
 int rasqal_literal_equals_flags(rasqal_literal* l1, rasqal_literal* l2, int flags, int* error_p);
@@ -19,29 +24,8 @@ namespace skillbus::wm::sparql_detail {
 
 namespace {
 
-// The index key of a term: IRIs and blank nodes only (RDF term equality between them is
-// equality of these strings); a literal has none, a pattern bound to one is narrowed by
-// its other parts and confirmed by Rasqal's comparison.
-std::optional<std::string> key_of(const raptor_term* t) {
-  if (t->type == RAPTOR_TERM_TYPE_URI) {
-    size_t n = 0;
-    const unsigned char* s = raptor_uri_as_counted_string(t->value.uri, &n);
-    return "<" + std::string(reinterpret_cast<const char*>(s), n);
-  }
-  if (t->type == RAPTOR_TERM_TYPE_BLANK)
-    return "_:" + std::string(reinterpret_cast<const char*>(t->value.blank.string), t->value.blank.string_len);
-  return std::nullopt;
-}
-
-std::optional<std::string> key_of(rasqal_literal* l) {
-  if (l->type == RASQAL_LITERAL_URI && l->value.uri) {
-    size_t n = 0;
-    const unsigned char* s = raptor_uri_as_counted_string(l->value.uri, &n);
-    return "<" + std::string(reinterpret_cast<const char*>(s), n);
-  }
-  if (l->type == RASQAL_LITERAL_BLANK && l->string)
-    return "_:" + std::string(reinterpret_cast<const char*>(l->string), l->string_len);
-  return std::nullopt;
+std::string blank_label(const rasqal_literal* l) {
+  return std::string(reinterpret_cast<const char*>(l->string), l->string_len);
 }
 
 bool same_term(rasqal_literal* a, rasqal_literal* b) {
@@ -49,74 +33,126 @@ bool same_term(rasqal_literal* a, rasqal_literal* b) {
   return rasqal_literal_equals_flags(a, b, RASQAL_COMPARE_RDF, &error) && !error;
 }
 
-struct ParseState {
-  IndexedGraph* graph;
-  std::unordered_map<std::string, rasqal_literal*>* terms;
-  bool failed = false;
+}  // namespace
+
+// Raptor's callbacks are C: nothing may throw through them (a failure is noted and the
+// constructor throws after the parse).
+struct IndexedGraph::Parsing {
+  static void on_statement(void* user, raptor_statement* statement) noexcept {
+    auto& g = *static_cast<IndexedGraph*>(user);
+    rasqal_literal* parts[3] = {nullptr, nullptr, nullptr};
+    try {
+      parts[0] = g.term(statement->subject);
+      parts[1] = g.term(statement->predicate);
+      parts[2] = g.term(statement->object);
+      if (parts[0] && parts[1] && parts[2]) {
+        g.add(parts[0], parts[1], parts[2]);  // (takes them, even when it fails)
+        return;
+      }
+    } catch (...) {
+    }
+    for (rasqal_literal* l : parts)
+      if (l) rasqal_free_literal(l);
+    g.failed_ = true;
+  }
+
+  // The data's blank nodes named apart from those Rasqal makes for a query (BNODE(), a
+  // CONSTRUCT's template), as Rasqal's own source names them: a labelled one
+  // "graphid0_<label>", an anonymous one "graphid0-<n>" (numbered per graph, so the same
+  // graph gives the same names).
+  static unsigned char* blank_id(void* user, unsigned char* label) noexcept {
+    auto& g = *static_cast<IndexedGraph*>(user);
+    std::string id;
+    try {
+      id = label ? "graphid0_" + std::string(reinterpret_cast<const char*>(label))
+                 : "graphid0-" + std::to_string(++g.anonymous_);
+    } catch (...) {
+      g.failed_ = true;
+    }
+    if (label) raptor_free_memory(label);
+    auto* out = static_cast<unsigned char*>(std::malloc(id.size() + 1));  // (Raptor frees it)
+    if (!out) {
+      g.failed_ = true;
+      return nullptr;
+    }
+    std::memcpy(out, id.c_str(), id.size() + 1);
+    return out;
+  }
 };
 
-// One Rasqal term per IRI or blank node (shared by reference count), a literal each time.
-rasqal_literal* term(ParseState& st, raptor_term* t) {
-  const auto key = key_of(t);
-  if (key) {
-    auto it = st.terms->find(*key);
-    if (it != st.terms->end()) return rasqal_new_literal_from_literal(it->second);
-  }
-  rasqal_literal* l = rasqal_new_literal_from_term(st.graph->world(), t);
-  if (l && key) (*st.terms)[*key] = rasqal_new_literal_from_literal(l);
+rasqal_literal* IndexedGraph::term(raptor_term* t) {
+  // One Rasqal term per IRI (Raptor interns IRIs: one raptor_uri per IRI in a world) and
+  // per blank node, shared by reference count; a literal each time.
+  rasqal_literal** kept = nullptr;
+  if (t->type == RAPTOR_TERM_TYPE_URI)
+    kept = &iris_[t->value.uri];
+  else if (t->type == RAPTOR_TERM_TYPE_BLANK)
+    kept = &blanks_[std::string(reinterpret_cast<const char*>(t->value.blank.string), t->value.blank.string_len)];
+  if (kept && *kept) return rasqal_new_literal_from_literal(*kept);
+  rasqal_literal* l = rasqal_new_literal_from_term(world_, t);
+  if (l && kept) *kept = rasqal_new_literal_from_literal(l);  // (one reference kept here)
   return l;
 }
 
-void on_statement(void* user, raptor_statement* statement) {
-  auto& st = *static_cast<ParseState*>(user);
-  rasqal_literal* s = term(st, statement->subject);
-  rasqal_literal* p = term(st, statement->predicate);
-  rasqal_literal* o = term(st, statement->object);
-  if (!s || !p || !o) {
-    for (rasqal_literal* l : {s, p, o})
-      if (l) rasqal_free_literal(l);
-    st.failed = true;
-    return;
+IndexedGraph::Key IndexedGraph::key_of(const rasqal_literal* l) const {
+  if (l->type == RASQAL_LITERAL_URI && l->value.uri) return {Key::kIndexed, l->value.uri};
+  if (l->type == RASQAL_LITERAL_BLANK && l->string) {
+    auto it = blanks_.find(blank_label(l));
+    return it == blanks_.end() || !it->second ? Key{Key::kAbsent, nullptr} : Key{Key::kIndexed, it->second};
   }
-  st.graph->add(s, p, o);
+  return {Key::kLiteral, nullptr};
 }
 
-}  // namespace
+void IndexedGraph::add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o) {
+  const auto i = static_cast<uint32_t>(triples_.size());
+  const Key keys[3] = {key_of(s), key_of(p), key_of(o)};  // (before the triple owns the terms)
+  rasqal_triple* t = rasqal_new_triple(s, p, o);         // (frees the three when it fails)
+  if (!t) {
+    failed_ = true;
+    return;
+  }
+  triples_.push_back(t);
+  Index* indexes[3] = {&by_subject_, &by_predicate_, &by_object_};
+  for (int k = 0; k < 3; ++k)
+    if (keys[k].kind == Key::kIndexed) (*indexes[k])[keys[k].id].push_back(i);
+}
 
 IndexedGraph::IndexedGraph(rasqal_world* world, const std::string& turtle) : world_(world) {
   raptor_world* rw = rasqal_world_get_raptor(world);
-  ParseState st{this, &terms_};
   std::unique_ptr<raptor_parser, void (*)(raptor_parser*)> parser(raptor_new_parser(rw, "turtle"),
                                                                   raptor_free_parser);
   std::unique_ptr<raptor_uri, void (*)(raptor_uri*)> base(
       raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world")), raptor_free_uri);
   if (!parser || !base) throw WmError("SPARQL: cannot read the world");
-  raptor_parser_set_statement_handler(parser.get(), &st, on_statement);
+  // The IRI index relies on one raptor_uri per IRI (Raptor's default, URI interning): were
+  // it off, equal IRIs would be told apart and matches missed, so it is checked, not assumed.
+  std::unique_ptr<raptor_uri, void (*)(raptor_uri*)> again(
+      raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world")), raptor_free_uri);
+  if (again.get() != base.get()) throw WmError("SPARQL: Raptor does not intern IRIs in this world");
+  raptor_parser_set_statement_handler(parser.get(), this, Parsing::on_statement);
+  raptor_world_set_generate_bnodeid_handler(rw, this, Parsing::blank_id);
   int rc = raptor_parser_parse_start(parser.get(), base.get());
   if (rc == 0)
     rc = raptor_parser_parse_chunk(parser.get(), reinterpret_cast<const unsigned char*>(turtle.data()), turtle.size(),
                                    1);
-  if (rc != 0 || st.failed) {
-    clear();  // (the destructor does not run for a constructor that throws)
-    throw WmError("SPARQL: the world's graph does not parse as Turtle (a bug of the server)");
+  raptor_world_set_generate_bnodeid_handler(rw, nullptr, nullptr);  // (Raptor's own again, for queries)
+  if (rc != 0 || failed_) {
+    free_terms();  // (the destructor does not run for a constructor that throws)
+    throw WmError("SPARQL: the world's graph does not parse as Turtle");
   }
 }
 
-IndexedGraph::~IndexedGraph() { clear(); }
+IndexedGraph::~IndexedGraph() { free_terms(); }
 
-void IndexedGraph::clear() {
+void IndexedGraph::free_terms() {
   for (rasqal_triple* t : triples_) rasqal_free_triple(t);
   triples_.clear();
-  for (auto& [key, l] : terms_) rasqal_free_literal(l);
-  terms_.clear();
-}
-
-void IndexedGraph::add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o) {
-  const auto i = static_cast<uint32_t>(triples_.size());
-  triples_.push_back(rasqal_new_triple(s, p, o));
-  if (auto k = key_of(s)) by_subject_[*k].push_back(i);
-  if (auto k = key_of(p)) by_predicate_[*k].push_back(i);
-  if (auto k = key_of(o)) by_object_[*k].push_back(i);
+  for (auto& [iri, l] : iris_)
+    if (l) rasqal_free_literal(l);
+  iris_.clear();
+  for (auto& [label, l] : blanks_)
+    if (l) rasqal_free_literal(l);
+  blanks_.clear();
 }
 
 const std::vector<uint32_t>* IndexedGraph::candidates(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o,
@@ -125,9 +161,10 @@ const std::vector<uint32_t>* IndexedGraph::candidates(rasqal_literal* s, rasqal_
   const std::vector<uint32_t>* best = nullptr;
   auto narrow = [&](rasqal_literal* part, const Index& index) -> bool {
     if (!part) return true;
-    const auto key = key_of(part);
-    if (!key) return true;  // (a literal: confirmed later)
-    auto it = index.find(*key);
+    const Key key = key_of(part);
+    if (key.kind == Key::kLiteral) return true;  // (confirmed later)
+    if (key.kind == Key::kAbsent) return false;  // a blank node the graph does not have
+    auto it = index.find(key.id);
     if (it == index.end()) return false;  // no triple has it there
     if (!best || it->second.size() < best->size()) best = &it->second;
     return true;
@@ -211,13 +248,14 @@ void finish_match(rasqal_triples_match* rtm, void*) {
 }
 
 int init_match(rasqal_triples_match* rtm, rasqal_triples_source*, void* user_data, rasqal_triple_meta* meta,
-               rasqal_triple* pattern) {
+               rasqal_triple* pattern) noexcept {
   rtm->bind_match = bind_match;
   rtm->next_match = next_match;
   rtm->is_end = is_end;
   rtm->finish = finish_match;
-  auto* m = new Match;
+  auto* m = new (std::nothrow) Match;
   rtm->user_data = m;
+  if (!m) return -1;  // (Rasqal then finishes the match: finish_match takes no Match)
   const IndexedGraph* graph = static_cast<SourceData*>(user_data)->graph;
   m->graph = graph;
   rasqal_literal* parts[3] = {pattern->subject, pattern->predicate, pattern->object};
@@ -235,23 +273,22 @@ int init_match(rasqal_triples_match* rtm, rasqal_triples_source*, void* user_dat
     meta->bindings[i] = var;
   }
   static const std::vector<uint32_t> nothing;
+  // (No pattern comes with an origin: Rasqal's GRAPH reads the query's named graphs, and
+  // FROM NAMED is refused. One would match nothing: the world is one graph without a name.)
   if (pattern->origin || !graph) {
-    // The world is one graph without a name: a GRAPH pattern matches nothing (as it did
-    // with Rasqal's own source and a background graph).
-    if (pattern->origin) {
-      rasqal_variable* var = rasqal_literal_as_variable(pattern->origin);
-      if (var && (meta->parts & RASQAL_TRIPLE_ORIGIN)) rasqal_variable_set_value(var, nullptr);
-      meta->bindings[3] = var;
-    }
     m->list = &nothing;
     return 0;
   }
-  m->list = graph->candidates(m->want[0], m->want[1], m->want[2], m->all);
+  try {
+    m->list = graph->candidates(m->want[0], m->want[1], m->want[2], m->all);
+  } catch (...) {  // (no exception through Rasqal's C)
+    return -1;
+  }
   m->settle();
   return 0;
 }
 
-int triple_present(rasqal_triples_source*, void* user_data, rasqal_triple* t) {
+int triple_present(rasqal_triples_source*, void* user_data, rasqal_triple* t) noexcept {
   const IndexedGraph* graph = static_cast<SourceData*>(user_data)->graph;
   if (!graph || t->origin) return 0;
   Match m;
@@ -259,10 +296,13 @@ int triple_present(rasqal_triples_source*, void* user_data, rasqal_triple* t) {
   m.want[0] = t->subject;  // (borrowed: not freed, m is not finished)
   m.want[1] = t->predicate;
   m.want[2] = t->object;
-  m.list = graph->candidates(t->subject, t->predicate, t->object, m.all);
+  try {
+    m.list = graph->candidates(t->subject, t->predicate, t->object, m.all);
+  } catch (...) {
+    return 0;
+  }
   m.settle();
-  const bool found = m.pos < m.end();
-  return found ? 1 : 0;
+  return m.pos < m.end() ? 1 : 0;
 }
 
 void free_source(void*) {}  // (the graph is the engine's)

@@ -20,7 +20,7 @@ namespace skillbus::wm::sparql_detail {
 class IndexedGraph {
  public:
   // The triples of `turtle` (one graph) as Rasqal terms of `world`; throws WmError when
-  // the text does not parse.
+  // the text does not parse (Raptor's message goes to the world's log handler).
   IndexedGraph(rasqal_world* world, const std::string& turtle);
   ~IndexedGraph();
   IndexedGraph(const IndexedGraph&) = delete;
@@ -34,17 +34,29 @@ class IndexedGraph {
   // when no bound part narrows them.
   const std::vector<uint32_t>* candidates(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o, bool& all) const;
 
-  // Adds the triple (taking the three terms); used while parsing.
-  void add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o);
-  rasqal_world* world() const { return world_; }
-
  private:
-  void clear();
-  using Index = std::unordered_map<std::string, std::vector<uint32_t>>;
+  struct Parsing;  // Raptor's callbacks while the graph is read (sparql_graph.cpp)
+  // What a term is found by in the indexes: an IRI by its raptor_uri (Raptor interns IRIs,
+  // checked when a graph is read), a blank node by this graph's term for it; a literal is
+  // not indexed (a pattern bound to one is narrowed by its other parts, and every
+  // candidate is confirmed by Rasqal's comparison).
+  struct Key {
+    enum Kind { kIndexed, kLiteral, kAbsent } kind;  // (kAbsent: a blank node not in the graph)
+    const void* id;
+  };
+  Key key_of(const rasqal_literal* l) const;
+  rasqal_literal* term(raptor_term* t);
+  void add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o);
+  void free_terms();
+
+  using Index = std::unordered_map<const void*, std::vector<uint32_t>>;
   rasqal_world* world_;
   std::vector<rasqal_triple*> triples_;
   Index by_subject_, by_predicate_, by_object_;
-  std::unordered_map<std::string, rasqal_literal*> terms_;  // one Rasqal term per IRI or blank node
+  std::unordered_map<const raptor_uri*, rasqal_literal*> iris_;  // one Rasqal term per IRI ...
+  std::unordered_map<std::string, rasqal_literal*> blanks_;      // ... and per blank node
+  int anonymous_ = 0;    // blank nodes without a label, numbered as read
+  bool failed_ = false;  // a term or triple that could not be made, or a callback that threw
 };
 
 // Makes `world` answer every query from `*graph` (the graph current when the query runs;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -27,7 +28,13 @@ skiros:Cube-2 a skiros:Cube ; rdfs:label "red cube" ; skiros:PositionX "0.5"^^xs
   skiros:Size "3"^^xsd:integer .
 skiros:Cube-3 a skiros:Cube ; rdfs:label "green cube", "Wuerfel"@de ; skiros:PositionX "0.10"^^xsd:double .
 skiros:Cube-4 a skiros:Cube ; rdfs:label "blue cube" ; skiros:PositionX "0.25"^^xsd:double ; skiros:Heavy true .
-skiros:Bin-5 a skiros:Bin ; rdfs:label "bin" ; skiros:contain skiros:Bin-5 ; skiros:at [ rdfs:label "a spot" ] .
+skiros:Cube-5 a skiros:Cube ; rdfs:label "spare cube" ; skiros:PositionX "0.25"^^xsd:double .
+skiros:Bin-5 a skiros:Bin ; rdfs:label "bin" ; skiros:contain skiros:Bin-5 ; skiros:at [ rdfs:label "a spot" ] ;
+  skiros:near _:shelf .
+_:shelf rdfs:label "a shelf" .
+rdfs:seeAlso rdfs:seeAlso skiros:Bin-5 .
+skiros:Size rdfs:seeAlso rdfs:seeAlso .
+skiros:Self skiros:Self skiros:Self .
 )";
 
 std::string graph() { return test::read(SKILLBUS_TEST_ONTOLOGY) + "\n" + kScene; }
@@ -95,36 +102,43 @@ std::string ours(SparqlEngine& e, const std::string& query, int64_t version = 1)
 struct Case {
   const char* what;
   const char* query;
-  size_t rows;  // how many rows both must give (so that an empty answer on both sides fails)
+  std::optional<size_t> rows;  // how many rows both must give, where pinned (0 included)
 };
 
 const Case kCases[] = {
-    {"every triple", "SELECT ?s ?p ?o WHERE { ?s ?p ?o }", 0},
-    {"a constant object", "SELECT ?c WHERE { ?c rdfs:subClassOf skiros:Product }", 0},
-    {"a join on the subject", "SELECT ?x ?l WHERE { ?x a skiros:Cube ; rdfs:label ?l }", 4},
+    {"every triple", "SELECT ?s ?p ?o WHERE { ?s ?p ?o }", std::nullopt},
+    {"a constant object", "SELECT ?c WHERE { ?c rdfs:subClassOf skiros:Product }", std::nullopt},
+    {"a join on the subject", "SELECT ?x ?l WHERE { ?x a skiros:Cube ; rdfs:label ?l }", 5},
     {"a join on the object", "SELECT ?t ?x ?l WHERE { ?t skiros:contain ?x . ?x rdfs:label ?l }", 5},
+    {"a join on a literal", "SELECT ?a ?b WHERE { ?a skiros:PositionX ?v . ?b skiros:PositionX ?v FILTER(?a != ?b) }",
+     2},
     {"a plain literal object", "SELECT ?x WHERE { ?x rdfs:label \"red cube\" }", 1},
     {"a language-tagged literal", "SELECT ?x WHERE { ?x rdfs:label \"Wuerfel\"@de }", 1},
     {"a typed literal, its lexical form", "SELECT ?x WHERE { ?x skiros:PositionX \"0.10\"^^xsd:double }", 1},
     {"a typed literal, another lexical form", "SELECT ?x WHERE { ?x skiros:PositionX \"0.1\"^^xsd:double }", 0},
     {"an integer literal", "SELECT ?x WHERE { ?x skiros:Size 3 }", 1},
     {"a boolean literal", "SELECT ?x WHERE { ?x skiros:Heavy true }", 1},
-    {"a filter on numbers", "SELECT ?x ?v WHERE { ?x skiros:PositionX ?v FILTER(?v > 0.2) }", 2},
-    {"one variable twice", "SELECT ?x WHERE { ?x ?p ?x }", 1},
-    {"a variable predicate bound first", "SELECT ?x ?p ?y WHERE { ?p a owl:ObjectProperty . ?x ?p ?y }", 0},
-    {"a variable predicate bound later", "SELECT ?x ?p ?y WHERE { ?x ?p ?y . ?p a owl:ObjectProperty }", 0},
+    {"a filter on numbers", "SELECT ?x ?v WHERE { ?x skiros:PositionX ?v FILTER(?v > 0.2) }", 3},
+    {"one variable as subject and object", "SELECT ?x WHERE { ?x ?p ?x }", 2},
+    {"one variable as subject and predicate", "SELECT ?x ?o WHERE { ?x ?x ?o }", 2},
+    {"one variable as predicate and object", "SELECT ?s ?p WHERE { ?s ?p ?p }", 2},
+    {"one variable three times", "SELECT ?x WHERE { ?x ?x ?x }", 1},
+    {"a variable predicate bound first", "SELECT ?x ?p ?y WHERE { ?p a owl:ObjectProperty . ?x ?p ?y }", std::nullopt},
+    {"a variable predicate bound later", "SELECT ?x ?p ?y WHERE { ?x ?p ?y . ?p a owl:ObjectProperty }", std::nullopt},
     {"a literal where a subject would be", "SELECT ?x WHERE { ?y rdfs:label ?l . ?l ?p ?x }", 0},
+    {"bound by VALUES", "SELECT ?x ?l WHERE { VALUES (?x) { (skiros:Cube-2) (skiros:Bin-5) } ?x rdfs:label ?l }", 2},
+    {"bound by BIND", "SELECT ?l WHERE { BIND(skiros:Cube-4 AS ?x) ?x rdfs:label ?l }", 1},
     {"blank nodes", "SELECT ?r ?c WHERE { ?r owl:onProperty skiros:contain ; owl:someValuesFrom ?c }", 2},
     {"a blank node object joined", "SELECT ?l WHERE { skiros:Bin-5 skiros:at ?s . ?s rdfs:label ?l }", 1},
-    {"optional", "SELECT ?x ?v WHERE { ?x a skiros:Cube OPTIONAL { ?x skiros:Size ?v } }", 3},
+    {"a labelled blank node joined", "SELECT ?l WHERE { skiros:Bin-5 skiros:near ?s . ?s rdfs:label ?l }", 1},
+    {"optional", "SELECT ?x ?v WHERE { ?x a skiros:Cube OPTIONAL { ?x skiros:Size ?v } }", 4},
     {"union", "SELECT ?x WHERE { { ?x a skiros:Bin } UNION { ?x a skiros:Table } }", 2},
     {"unbound after optional",
-     "SELECT ?x WHERE { ?x a skiros:Cube OPTIONAL { ?x skiros:Heavy ?h } FILTER(!BOUND(?h)) }", 2},
+     "SELECT ?x WHERE { ?x a skiros:Cube OPTIONAL { ?x skiros:Heavy ?h } FILTER(!BOUND(?h)) }", 3},
     {"count and group", "SELECT ?t (COUNT(?x) AS ?n) WHERE { ?t skiros:contain ?x } GROUP BY ?t", 2},
     {"an unknown IRI", "SELECT ?p ?o WHERE { skiros:Nothing-9 ?p ?o }", 0},
-    {"a named graph", "SELECT ?s WHERE { GRAPH ?g { ?s ?p ?o } }", 0},
-    {"ask, true", "ASK { skiros:Bin-5 a skiros:Bin }", 0},
-    {"ask, false", "ASK { skiros:Bin-5 a skiros:Cube }", 0},
+    {"ask, true", "ASK { skiros:Bin-5 a skiros:Bin }", std::nullopt},
+    {"ask, false", "ASK { skiros:Bin-5 a skiros:Cube }", std::nullopt},
     {"order, limit and offset", "SELECT ?l WHERE { ?x rdfs:label ?l } ORDER BY ?l LIMIT 3 OFFSET 1", 3},
 };
 
@@ -137,11 +151,20 @@ TEST(SparqlEngine, AnswersAsRasqalsOwnSourceDoes) {
     const std::string theirs = reference(c.query, g);
     ASSERT_EQ(mine.rfind("error:", 0), std::string::npos) << mine;
     EXPECT_EQ(normalized(mine), normalized(theirs)) << mine << "\n" << theirs;
-    if (c.rows > 0) {
-      EXPECT_EQ(normalized(mine)["rows"].size(), c.rows) << mine;
+    if (c.rows) {
+      EXPECT_EQ(normalized(mine)["rows"].size(), *c.rows) << mine;
     }
   }
   EXPECT_EQ(engine.graphs_read(), 1);  // (every query on one version of the world)
+}
+
+TEST(SparqlEngine, NamesTheDatasBlankNodesAsRasqalsOwnSourceDoes) {
+  // (apart from the names Rasqal makes for a query's own blank nodes)
+  SparqlEngine engine;
+  const std::string q = "SELECT ?s WHERE { skiros:Bin-5 skiros:near ?s }";
+  const std::string mine = ours(engine, q);
+  EXPECT_EQ(nlohmann::json::parse(mine), nlohmann::json::parse(reference(q, graph())));
+  EXPECT_NE(mine.find("graphid0_shelf"), std::string::npos) << mine;
 }
 
 TEST(SparqlEngine, AsksAreAnswered) {
@@ -181,9 +204,12 @@ TEST(SparqlEngine, RefusesWhatReadsBeyondTheWorldAndNamesParseErrors) {
   EXPECT_EQ(broken.rfind("error: SPARQL: ", 0), 0u) << broken;
   EXPECT_NE(ours(engine, "SELECT ?c WHERE { ?c rdfs:subClassOf* skiros:Product }").find("property paths"),
             std::string::npos);
+  // Rasqal reads the short form of VALUES wrongly (the first value only): refused, naming the form it reads
+  const std::string values = ours(engine, "SELECT ?x WHERE { VALUES ?x { skiros:Cube-2 skiros:Bin-5 } }");
+  EXPECT_NE(values.find("VALUES (?x) { (a) (b) }"), std::string::npos) << values;
   EXPECT_EQ(engine.graphs_read(), 0) << "a refused query reads no graph";
   // and the engine goes on
-  EXPECT_EQ(normalized(ours(engine, "SELECT ?x WHERE { ?x a skiros:Cube }"))["rows"].size(), 3u);
+  EXPECT_EQ(normalized(ours(engine, "SELECT ?x WHERE { ?x a skiros:Cube }"))["rows"].size(), 4u);
 }
 
 TEST(SparqlEngine, AGraphThatDoesNotParseIsNamedAndTheNextVersionServes) {
@@ -193,9 +219,10 @@ TEST(SparqlEngine, AGraphThatDoesNotParseIsNamedAndTheNextVersionServes) {
     engine.query_json("SELECT ?x WHERE { ?x ?p ?o }", 1, bad, prefixes(), 1 << 20);
     FAIL() << "a graph that does not parse was served";
   } catch (const WmError& e) {
-    EXPECT_NE(std::string(e.what()).find("does not parse"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("does not parse as Turtle (line 1: syntax error"), std::string::npos)
+        << e.what();  // (Raptor's message and line)
   }
-  EXPECT_EQ(normalized(ours(engine, "SELECT ?x WHERE { ?x a skiros:Cube }", 2))["rows"].size(), 3u);
+  EXPECT_EQ(normalized(ours(engine, "SELECT ?x WHERE { ?x a skiros:Cube }", 2))["rows"].size(), 4u);
 }
 
 TEST(SparqlEngine, ResultsLargerThanAReplyNameLimitAndOffset) {
