@@ -4,8 +4,8 @@ queries on, in the same run, on the same graph: the ontology (wm_server/ontology
 and a scene of N elements (bench/wm_query.py's), rdflib holding it parsed in memory as
 SkiROS2 does. The same queries, each repeated; medians and the ratio rdflib/ours.
 
-The server reads the world's graph once per world version and keeps it indexed for Rasqal
-(wm_server/src/sparql_graph.hpp): the first query after a change pays that read, measured
+The server makes the world's graph once per world version and keeps it indexed for Rasqal
+(wm_server/src/sparql_graph.hpp): the first query after a change pays for that, measured
 after the queries (a change, a query, repeated) and printed beside rdflib's parse of the
 same graph.
 
@@ -55,7 +55,7 @@ for name, q in queries.items():
         rows = len(wmi.query_ontology(q))
         times.append((time.perf_counter() - t0) * 1e3)
     out[name] = {"ms": statistics.median(times), "rows": rows}
-# The first query of a world version reads the graph: one after each of `repeats` changes
+# The first query of a world version makes the graph: one after each of `repeats` changes
 # (an element added), after the queries above so that their rows stay rdflib's.
 firsts = []
 for i in range(repeats):
@@ -123,7 +123,7 @@ def main() -> int:
                   f"{r['rows']:>6}{same}")
         g = report[n]["reading the graph"]
         print(f"reading the graph: the server's first query after a change of the world {g['wm_server_first_query_ms']:.1f}"
-              f" ms (median of {args.repeats} changes; it reads the graph once per version); rdflib's parse of the graph "
+              f" ms (median of {args.repeats} changes; it makes the graph once per version); rdflib's parse of the graph "
               f"{g['rdflib_parse_ms']:.1f} ms")
     print(json.dumps({"sparql": report}))
     return 0

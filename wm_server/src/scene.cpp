@@ -111,7 +111,7 @@ void check_scene_types(const Scene& scene, const Ontology& onto, const std::stri
                 "owl:imports of the scene)");
 }
 
-std::string write_scene(const WorldStore& store, const Prefixes& px, const std::vector<Triple>& extra) {
+std::vector<Triple> scene_triples(const WorldStore& store, const Prefixes& px, const std::vector<Triple>& extra) {
   std::vector<Triple> out;
   std::map<std::string, std::vector<const Relation*>> by_subject;
   const std::vector<Relation> relations = store.all_relations();
@@ -126,7 +126,11 @@ std::string write_scene(const WorldStore& store, const Prefixes& px, const std::
     for (const Relation* r : by_subject[id]) out.push_back({s, iri(px.expand(r->predicate)), iri(px.expand(r->object))});
   }
   out.insert(out.end(), extra.begin(), extra.end());
-  return write_turtle(out, px);
+  return out;
+}
+
+std::string write_scene(const WorldStore& store, const Prefixes& px, const std::vector<Triple>& extra) {
+  return write_turtle(scene_triples(store, px, extra), px);
 }
 
 }  // namespace skillbus::wm

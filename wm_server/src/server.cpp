@@ -354,8 +354,11 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method
   return elements_reply(store_.query(q, page), m.ids_only, method, relations);
 }
 
-std::string WorldModelServer::sparql_graph() const {
-  return write_turtle(all_axioms(), prefixes_) + "\n" + write_scene(store_, prefixes_);  // (two documents: one graph)
+std::vector<Triple> WorldModelServer::sparql_graph() const {
+  std::vector<Triple> all = all_axioms();
+  std::vector<Triple> scene = scene_triples(store_, prefixes_);
+  all.insert(all.end(), std::make_move_iterator(scene.begin()), std::make_move_iterator(scene.end()));
+  return all;
 }
 
 bool WorldModelServer::snapshot_on_disk(int64_t version) const {

@@ -1,6 +1,6 @@
 // SPARQL 1.1 queries through Rasqal (the Redland query library): no hand-written query
-// engine. The data is one graph in Turtle (the ontology, the scene's other triples and the
-// world's elements), given by the caller and read once per version (sparql_graph.hpp); the
+// engine. The data is one graph (the ontology, the scene's other triples and the world's
+// elements), given by the caller and taken once per version (sparql_graph.hpp); the
 // query may read nothing else: FROM, FROM NAMED and SERVICE (which would make the engine
 // read files or the network) are refused.
 #include "skillbus/wm/sparql.hpp"
@@ -126,7 +126,7 @@ SparqlEngine::~SparqlEngine() {
 int64_t SparqlEngine::graphs_read() const { return impl_->reads; }
 
 std::string SparqlEngine::query_json(const std::string& query, int64_t version,
-                                     const std::function<std::string()>& graph_turtle, const Prefixes& prefixes,
+                                     const std::function<std::vector<Triple>()>& graph, const Prefixes& prefixes,
                                      size_t max_bytes) {
   if (names_a_service(query)) throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
   if (has_short_values(query))
@@ -166,13 +166,13 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
     impl_->current = nullptr;
     impl_->graph.reset();
-    const std::string logged_before = std::exchange(error, std::string());  // (what Raptor logs now is the graph's)
+    const std::string logged_before = std::exchange(error, std::string());  // (what is logged now is the graph's)
     try {
-      impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph_turtle());
-      if (!error.empty()) throw WmError("SPARQL: the world's graph does not parse as Turtle");
+      impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph());
+      if (!error.empty()) throw WmError("SPARQL: the world's graph cannot be read");
     } catch (const WmError& e) {
       impl_->graph.reset();
-      throw WmError(std::string(e.what()) + (error.empty() ? "" : " (" + error + ")") + ": a bug of the server");
+      throw WmError(std::string(e.what()) + (error.empty() ? "" : " (" + error + ")"));
     }
     error = logged_before;
     impl_->version = version;

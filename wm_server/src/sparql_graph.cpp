@@ -11,12 +11,10 @@
 #include "skillbus/wm/model.hpp"
 
 // Exported by librasqal and used by its own triples source, declared only in its internal
-// header: the same conversion of a parsed term and the same RDF term equality as Rasqal's
-// source, so that a query's answers do not depend on which source served it (the public
-// rasqal_literal_same_term compares by other rules). Were they ever gone, the build would
-// fail to link, not answer otherwise.
+// header: the same RDF term equality as Rasqal's source, so that a query's answers do not
+// depend on which source served it (the public rasqal_literal_same_term compares by other
+// rules). Were it ever gone, the build would fail to link, not answer otherwise.
 extern "C" {
-rasqal_literal* rasqal_new_literal_from_term(rasqal_world* world, raptor_term* term);
 int rasqal_literal_equals_flags(rasqal_literal* l1, rasqal_literal* l2, int flags, int* error_p);
 }
 
@@ -35,62 +33,56 @@ bool same_term(rasqal_literal* a, rasqal_literal* b) {
 
 }  // namespace
 
-// Raptor's callbacks are C: nothing may throw through them (a failure is noted and the
-// constructor throws after the parse).
-struct IndexedGraph::Parsing {
-  static void on_statement(void* user, raptor_statement* statement) noexcept {
-    auto& g = *static_cast<IndexedGraph*>(user);
-    rasqal_literal* parts[3] = {nullptr, nullptr, nullptr};
-    try {
-      parts[0] = g.term(statement->subject);
-      parts[1] = g.term(statement->predicate);
-      parts[2] = g.term(statement->object);
-      if (parts[0] && parts[1] && parts[2]) {
-        g.add(parts[0], parts[1], parts[2]);  // (takes them, even when it fails)
-        return;
-      }
-    } catch (...) {
-    }
-    for (rasqal_literal* l : parts)
-      if (l) rasqal_free_literal(l);
-    g.failed_ = true;
-  }
+namespace {
 
-  // The data's blank nodes named apart from those Rasqal makes for a query (BNODE(), a
-  // CONSTRUCT's template), as Rasqal's own source names them: a labelled one
-  // "graphid0_<label>", an anonymous one "graphid0-<n>" (numbered per graph, so the same
-  // graph gives the same names).
-  static unsigned char* blank_id(void* user, unsigned char* label) noexcept {
-    auto& g = *static_cast<IndexedGraph*>(user);
-    std::string id;
-    try {
-      id = label ? "graphid0_" + std::string(reinterpret_cast<const char*>(label))
-                 : "graphid0-" + std::to_string(++g.anonymous_);
-    } catch (...) {
-      g.failed_ = true;
-    }
-    if (label) raptor_free_memory(label);
-    auto* out = static_cast<unsigned char*>(std::malloc(id.size() + 1));  // (Raptor frees it)
-    if (!out) {
-      g.failed_ = true;
-      return nullptr;
-    }
-    std::memcpy(out, id.c_str(), id.size() + 1);
-    return out;
-  }
-};
+// A copy Rasqal takes and frees (its allocator is malloc's).
+unsigned char* owned_copy(const std::string& text) {
+  auto* out = static_cast<unsigned char*>(std::malloc(text.size() + 1));
+  if (!out) throw std::bad_alloc();
+  std::memcpy(out, text.c_str(), text.size() + 1);
+  return out;
+}
 
-rasqal_literal* IndexedGraph::term(raptor_term* t) {
-  // One Rasqal term per IRI (Raptor interns IRIs: one raptor_uri per IRI in a world) and
-  // per blank node, shared by reference count; a literal each time.
-  rasqal_literal** kept = nullptr;
-  if (t->type == RAPTOR_TERM_TYPE_URI)
-    kept = &iris_[t->value.uri];
-  else if (t->type == RAPTOR_TERM_TYPE_BLANK)
-    kept = &blanks_[std::string(reinterpret_cast<const char*>(t->value.blank.string), t->value.blank.string_len)];
-  if (kept && *kept) return rasqal_new_literal_from_literal(*kept);
-  rasqal_literal* l = rasqal_new_literal_from_term(world_, t);
-  if (l && kept) *kept = rasqal_new_literal_from_literal(l);  // (one reference kept here)
+}  // namespace
+
+rasqal_literal* IndexedGraph::term(const Term& t) {
+  raptor_world* rw = rasqal_world_get_raptor(world_);
+  if (t.kind == Term::Iri) {
+    rasqal_literal*& by_text = iri_texts_[t.value];  // (a text resolved once: most IRIs recur)
+    if (by_text) return rasqal_new_literal_from_literal(by_text);
+    // (as Raptor's Turtle parser makes every IRI it reads: against the base, which leaves
+    // an absolute IRI as it is; one raptor_uri per IRI, Raptor interns them)
+    raptor_uri* iri = raptor_new_uri_relative_to_base(rw, base_, reinterpret_cast<const unsigned char*>(t.value.c_str()));
+    if (!iri) throw WmError("SPARQL: the world's graph has an IRI that Raptor refuses: <" + t.value + ">");
+    rasqal_literal*& kept = iris_[iri];
+    if (kept) {
+      raptor_free_uri(iri);
+    } else {
+      kept = rasqal_new_uri_literal(world_, iri);  // (takes the IRI)
+      if (!kept) throw std::bad_alloc();
+    }
+    by_text = rasqal_new_literal_from_literal(kept);
+    return rasqal_new_literal_from_literal(kept);
+  }
+  if (t.kind == Term::Blank) {
+    const std::string id = "graphid0_" + t.value;
+    rasqal_literal*& kept = blanks_[id];
+    if (kept) return rasqal_new_literal_from_literal(kept);
+    rasqal_literal* l = rasqal_new_simple_literal(world_, RASQAL_LITERAL_BLANK, owned_copy(id));
+    if (!l) throw std::bad_alloc();
+    kept = rasqal_new_literal_from_literal(l);
+    return l;
+  }
+  raptor_uri* datatype = nullptr;
+  if (!t.datatype.empty()) {
+    datatype = raptor_new_uri_relative_to_base(rw, base_, reinterpret_cast<const unsigned char*>(t.datatype.c_str()));
+    if (!datatype) throw WmError("SPARQL: the world's graph has a datatype that Raptor refuses: <" + t.datatype + ">");
+  }
+  // (the string, language and datatype are Rasqal's from here, even when it fails)
+  rasqal_literal* l = rasqal_new_string_literal(world_, owned_copy(t.value),
+                                                t.lang.empty() ? nullptr : reinterpret_cast<char*>(owned_copy(t.lang)),
+                                                datatype, nullptr);
+  if (!l) throw WmError("SPARQL: the world's graph has a literal that Rasqal refuses: \"" + t.value + "\"");
   return l;
 }
 
@@ -107,49 +99,58 @@ void IndexedGraph::add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o) 
   const auto i = static_cast<uint32_t>(triples_.size());
   const Key keys[3] = {key_of(s), key_of(p), key_of(o)};  // (before the triple owns the terms)
   rasqal_triple* t = rasqal_new_triple(s, p, o);         // (frees the three when it fails)
-  if (!t) {
-    failed_ = true;
-    return;
-  }
+  if (!t) throw std::bad_alloc();
   triples_.push_back(t);
   Index* indexes[3] = {&by_subject_, &by_predicate_, &by_object_};
   for (int k = 0; k < 3; ++k)
     if (keys[k].kind == Key::kIndexed) (*indexes[k])[keys[k].id].push_back(i);
 }
 
-IndexedGraph::IndexedGraph(rasqal_world* world, const std::string& turtle) : world_(world) {
+IndexedGraph::IndexedGraph(rasqal_world* world, const std::vector<Triple>& triples) : world_(world) {
   raptor_world* rw = rasqal_world_get_raptor(world);
-  std::unique_ptr<raptor_parser, void (*)(raptor_parser*)> parser(raptor_new_parser(rw, "turtle"),
-                                                                  raptor_free_parser);
-  std::unique_ptr<raptor_uri, void (*)(raptor_uri*)> base(
-      raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world")), raptor_free_uri);
-  if (!parser || !base) throw WmError("SPARQL: cannot read the world");
-  // The IRI index relies on one raptor_uri per IRI (Raptor's default, URI interning): were
-  // it off, equal IRIs would be told apart and matches missed, so it is checked, not assumed.
-  std::unique_ptr<raptor_uri, void (*)(raptor_uri*)> again(
-      raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world")), raptor_free_uri);
-  if (again.get() != base.get()) throw WmError("SPARQL: Raptor does not intern IRIs in this world");
-  raptor_parser_set_statement_handler(parser.get(), this, Parsing::on_statement);
-  raptor_world_set_generate_bnodeid_handler(rw, this, Parsing::blank_id);
-  int rc = raptor_parser_parse_start(parser.get(), base.get());
-  if (rc == 0)
-    rc = raptor_parser_parse_chunk(parser.get(), reinterpret_cast<const unsigned char*>(turtle.data()), turtle.size(),
-                                   1);
-  raptor_world_set_generate_bnodeid_handler(rw, nullptr, nullptr);  // (Raptor's own again, for queries)
-  if (rc != 0 || failed_) {
+  base_ = raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world"));
+  if (!base_) throw WmError("SPARQL: cannot make the world's base IRI");
+  try {
+    // The IRI index relies on one raptor_uri per IRI (Raptor's default, URI interning):
+    // were it off, equal IRIs would be told apart and matches missed; checked, not assumed.
+    raptor_uri* again = raptor_new_uri(rw, reinterpret_cast<const unsigned char*>("http://skillbus.invalid/world"));
+    const bool interned = again == base_;
+    if (again) raptor_free_uri(again);
+    if (!interned) throw WmError("SPARQL: Raptor does not intern IRIs in this world");
+    triples_.reserve(triples.size());
+    for (const Triple& t : triples) {
+      rasqal_literal* s = term(t.s);
+      rasqal_literal* p = nullptr;
+      rasqal_literal* o = nullptr;
+      try {
+        p = term(t.p);
+        o = term(t.o);
+      } catch (...) {
+        for (rasqal_literal* l : {s, p})
+          if (l) rasqal_free_literal(l);
+        throw;
+      }
+      add(s, p, o);  // (takes the three)
+    }
+  } catch (...) {
     free_terms();  // (the destructor does not run for a constructor that throws)
-    throw WmError("SPARQL: the world's graph does not parse as Turtle");
+    throw;
   }
 }
 
 IndexedGraph::~IndexedGraph() { free_terms(); }
 
 void IndexedGraph::free_terms() {
+  if (base_) raptor_free_uri(base_);
+  base_ = nullptr;
   for (rasqal_triple* t : triples_) rasqal_free_triple(t);
   triples_.clear();
   for (auto& [iri, l] : iris_)
     if (l) rasqal_free_literal(l);
   iris_.clear();
+  for (auto& [text, l] : iri_texts_)
+    if (l) rasqal_free_literal(l);
+  iri_texts_.clear();
   for (auto& [label, l] : blanks_)
     if (l) rasqal_free_literal(l);
   blanks_.clear();

@@ -1,4 +1,4 @@
-// The world's graph for SPARQL, parsed once per world version and indexed, served to Rasqal
+// The world's graph for SPARQL, made once per world version and indexed, served to Rasqal
 // as its triples source (internal to sparql.cpp).
 //
 // Why: Rasqal's own triples source parses the data graph again for every query and keeps
@@ -15,13 +15,18 @@
 #include <unordered_map>
 #include <vector>
 
+#include "skillbus/wm/rdf.hpp"
+
 namespace skillbus::wm::sparql_detail {
 
 class IndexedGraph {
  public:
-  // The triples of `turtle` (one graph) as Rasqal terms of `world`; throws WmError when
-  // the text does not parse (Raptor's message goes to the world's log handler).
-  IndexedGraph(rasqal_world* world, const std::string& turtle);
+  // `triples` (one graph) as Rasqal terms of `world`, each as Raptor reads it from the
+  // triples written as Turtle: an IRI resolved against the world's base (a relative one
+  // becomes absolute), a blank node named "graphid0_<label>" (as Rasqal's own source names
+  // the data's, apart from those a query makes), a literal with its datatype or language.
+  // Throws WmError when a term cannot be made.
+  IndexedGraph(rasqal_world* world, const std::vector<Triple>& triples);
   ~IndexedGraph();
   IndexedGraph(const IndexedGraph&) = delete;
   IndexedGraph& operator=(const IndexedGraph&) = delete;
@@ -35,7 +40,6 @@ class IndexedGraph {
   const std::vector<uint32_t>* candidates(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o, bool& all) const;
 
  private:
-  struct Parsing;  // Raptor's callbacks while the graph is read (sparql_graph.cpp)
   // What a term is found by in the indexes: an IRI by its raptor_uri (Raptor interns IRIs,
   // checked when a graph is read), a blank node by this graph's term for it; a literal is
   // not indexed (a pattern bound to one is narrowed by its other parts, and every
@@ -45,7 +49,7 @@ class IndexedGraph {
     const void* id;
   };
   Key key_of(const rasqal_literal* l) const;
-  rasqal_literal* term(raptor_term* t);
+  rasqal_literal* term(const Term& t);
   void add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o);
   void free_terms();
 
@@ -55,8 +59,8 @@ class IndexedGraph {
   Index by_subject_, by_predicate_, by_object_;
   std::unordered_map<const raptor_uri*, rasqal_literal*> iris_;  // one Rasqal term per IRI ...
   std::unordered_map<std::string, rasqal_literal*> blanks_;      // ... and per blank node
-  int anonymous_ = 0;    // blank nodes without a label, numbered as read
-  bool failed_ = false;  // a term or triple that could not be made, or a callback that threw
+  std::unordered_map<std::string, rasqal_literal*> iri_texts_;   // the term of each IRI text met
+  raptor_uri* base_ = nullptr;                                   // what relative IRIs resolve against
 };
 
 // Makes `world` answer every query from `*graph` (the graph current when the query runs;

@@ -34,6 +34,10 @@ Scene read_scene(const std::string& turtle, Ontology& ontology, Prefixes& prefix
 // (some of) its elements, at once: the store would stop at the first, and a scene written
 // for ontologies that are not loaded should show all it needs.
 void check_scene_types(const Scene& scene, const Ontology& ontology, const std::string& source);
+// The scene's triples (every element: its types, label, properties and relations; then
+// `extra`), full IRIs; write_scene writes them as Turtle.
+std::vector<Triple> scene_triples(const WorldStore& store, const Prefixes& prefixes,
+                                  const std::vector<Triple>& extra = {});
 std::string write_scene(const WorldStore& store, const Prefixes& prefixes, const std::vector<Triple>& extra = {});
 
 }  // namespace skillbus::wm

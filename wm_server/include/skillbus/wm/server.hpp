@@ -123,10 +123,10 @@ class WorldModelServer {
   OntologyLibrary library_;
   std::vector<Triple> scene_imports_;  // the ontologies the loaded scene imported from library_
   std::string lock_holder_;            // wm.lock ("" free); not kept across a restart
-  // The graph SPARQL queries read (ontology, scene_extra_, scene_imports_, elements) as
-  // Turtle; the engine asks for it again only when store_.version() has changed since: so
-  // whatever changes that graph must change the version (apply and change_scene do).
-  std::string sparql_graph() const;
+  // The graph SPARQL queries read (ontology, scene_extra_, scene_imports_, elements); the
+  // engine asks for it again only when store_.version() has changed since: so whatever
+  // changes that graph must change the version (apply and change_scene do).
+  std::vector<Triple> sparql_graph() const;
   SparqlEngine sparql_;
   long rejected_ = 0;
   long commits_ = 0;

@@ -1,7 +1,7 @@
 // SPARQL queries on the world model, answered by Rasqal (librasqal3): SELECT, ASK and
 // CONSTRUCT (its triples as rows of subject, predicate and object) over one graph (the
-// server gives its ontology, the loaded scene's other triples and the world's elements, as
-// Turtle); DESCRIBE is refused (Rasqal does not implement it). The world model's prefixes
+// server gives its ontology, the loaded scene's other triples and the world's elements);
+// DESCRIBE is refused (Rasqal does not implement it). The world model's prefixes
 // are declared for the query. Nothing else is read: FROM, FROM NAMED and SERVICE are
 // refused.
 #pragma once
@@ -10,12 +10,13 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "skillbus/wm/rdf.hpp"
 
 namespace skillbus::wm {
 
-// Answers queries on a graph that it reads once per version of the world: the graph's
+// Answers queries on a graph that it takes once per version of the world: the graph's
 // triples are kept, indexed by subject, predicate and object, as Rasqal's triples source
 // (Rasqal's own reads the data again for every query and scans it for every pattern).
 // One thread at a time.
@@ -26,11 +27,13 @@ class SparqlEngine {
   SparqlEngine(const SparqlEngine&) = delete;
   SparqlEngine& operator=(const SparqlEngine&) = delete;
 
-  // The results as SPARQL 1.1 Query Results JSON. `graph_turtle` is called for the graph
-  // only when `version` differs from the graph's (or none was read yet). Throws WmError
-  // naming the problem (the parser's message and line), or results larger than
-  // `max_bytes` (naming LIMIT/OFFSET).
-  std::string query_json(const std::string& query, int64_t version, const std::function<std::string()>& graph_turtle,
+  // The results as SPARQL 1.1 Query Results JSON. `graph` is called for the graph's
+  // triples only when `version` differs from the graph's (or none was read yet); its terms
+  // become Rasqal's as Raptor would read them from the triples written as Turtle (a
+  // relative IRI resolved against the world's base). Throws WmError naming the problem
+  // (the parser's message and line), or results larger than `max_bytes` (naming
+  // LIMIT/OFFSET).
+  std::string query_json(const std::string& query, int64_t version, const std::function<std::vector<Triple>()>& graph,
                          const Prefixes& prefixes, size_t max_bytes);
 
   // How many times a graph was read (each new version once).
