@@ -5,6 +5,8 @@
 #include <cctype>
 #include <cstdarg>
 #include <cstdio>
+#include <regex>
+#include <string>
 
 #include "skillbus/wm/model.hpp"
 
@@ -168,6 +170,23 @@ SerdNode resource_node(const Term& t, const Prefixes& prefixes, std::string& sto
   return term_node(t);
 }
 
+// serd writes a literal typed xsd:integer, xsd:decimal or xsd:boolean bare (42, 1.5, true)
+// without looking at its text: "1 . <a> <b> <c>"^^xsd:integer would come out as Turtle with
+// a triple more, "abc"^^xsd:integer as Turtle that does not read, "1.0"^^xsd:integer read
+// back as a decimal. Such a literal keeps its quotes: its datatype goes to serd as a prefixed
+// name, which serd does not abbreviate. (A text that is the datatype's own Turtle token is
+// written bare, as before.)
+bool written_bare_safely(const Term& o) {
+  static const std::string xsd = kXsd;
+  if (o.kind != Term::Literal || o.datatype.compare(0, xsd.size(), xsd) != 0) return true;
+  const std::string type = o.datatype.substr(xsd.size());
+  static const std::regex integer(R"([+-]?[0-9]+)"), decimal(R"([+-]?[0-9]*\.[0-9]+)");
+  if (type == "integer") return std::regex_match(o.value, integer);
+  if (type == "decimal") return std::regex_match(o.value, decimal);
+  if (type == "boolean") return o.value == "true" || o.value == "false";
+  return true;  // (serd abbreviates no other datatype)
+}
+
 }  // namespace
 
 std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& prefixes) {
@@ -181,10 +200,17 @@ std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& pre
     serd_env_set_prefix(env, &name, &uri);
     serd_writer_set_prefix(w, &name, &uri);
   }
+  const bool xsd_declared = prefixes.expand("xsd:integer") == std::string(kXsd) + "integer";
   for (const auto& t : triples) {
     std::string s_name, o_name;
     SerdNode s = resource_node(t.s, prefixes, s_name), p = term_node(t.p), o = resource_node(t.o, prefixes, o_name);
-    SerdNode dt = t.o.datatype.empty() ? SERD_NODE_NULL : uri_node(t.o.datatype);
+    const std::string quoted_type = written_bare_safely(t.o) || !xsd_declared
+                                        ? ""
+                                        : "xsd:" + t.o.datatype.substr(std::string(kXsd).size());
+    SerdNode dt = t.o.datatype.empty() ? SERD_NODE_NULL
+                  : quoted_type.empty()
+                      ? uri_node(t.o.datatype)
+                      : serd_node_from_string(SERD_CURIE, reinterpret_cast<const uint8_t*>(quoted_type.c_str()));
     SerdNode lang =
         t.o.lang.empty() ? SERD_NODE_NULL : serd_node_from_string(SERD_LITERAL, reinterpret_cast<const uint8_t*>(t.o.lang.c_str()));
     serd_writer_write_statement(w, 0, nullptr, &s, &p, &o, t.o.datatype.empty() ? nullptr : &dt,

@@ -30,10 +30,10 @@ void note_error(std::string& error, raptor_log_message* m) {
   error = where + (m->text ? m->text : "error");
 }
 
-// SERVICE as a keyword (outside IRIs and strings it is the only use of the word); a false
-// alarm on a literal "service" only refuses a harmless query.
+// SERVICE as a keyword (outside IRIs, strings and variable names such as ?service it is the
+// only use of the word); a false alarm on a literal "service" only refuses a harmless query.
 bool names_a_service(const std::string& query) {
-  static const std::regex service(R"((^|[^A-Za-z0-9_:<"'#])SERVICE\s*(SILENT\s*)?[<?$])", std::regex::icase);
+  static const std::regex service(R"((^|[^A-Za-z0-9_:<"'#?$])SERVICE\s*(SILENT\s*)?[<?$])", std::regex::icase);
   return std::regex_search(query, service);
 }
 
@@ -41,7 +41,7 @@ bool names_a_service(const std::string& query) {
 // the first value and may bind the second to another variable, so such a query would answer
 // wrongly without a word; the form with parentheses (VALUES (?x) { (a) (b) }) is read right.
 bool has_short_values(const std::string& query) {
-  static const std::regex values(R"((^|[^A-Za-z0-9_:<"'#])VALUES\s*[?$][A-Za-z0-9_]+\s*\{)", std::regex::icase);
+  static const std::regex values(R"((^|[^A-Za-z0-9_:<"'#?$])VALUES\s*[?$][A-Za-z0-9_]+\s*\{)", std::regex::icase);
   return std::regex_search(query, values);
 }
 
@@ -96,7 +96,7 @@ std::string graph_results_json(rasqal_query_results* results) {
 struct SparqlEngine::Impl {
   std::unique_ptr<rasqal_world, void (*)(rasqal_world*)> world{rasqal_new_world(), rasqal_free_world};
   std::unique_ptr<sparql_detail::IndexedGraph> graph;
-  const sparql_detail::IndexedGraph* current = nullptr;  // (what the triples source serves)
+  sparql_detail::Served served;  // (what the triples source serves)
   int64_t version = 0;
   int64_t reads = 0;
   std::string* error = nullptr;  // the running query's (the log handler outlives every query)
@@ -105,9 +105,12 @@ struct SparqlEngine::Impl {
 namespace {
 
 // (`user`: where the running query's error goes, nullptr between queries)
-void on_engine_log(void* user, raptor_log_message* m) {
+void on_engine_log(void* user, raptor_log_message* m) noexcept {
   std::string* error = *static_cast<std::string**>(user);
-  if (error) note_error(*error, m);
+  try {
+    if (error) note_error(*error, m);
+  } catch (...) {  // (nothing through Raptor's C; a message lost to a full memory)
+  }
 }
 
 }  // namespace
@@ -115,11 +118,11 @@ void on_engine_log(void* user, raptor_log_message* m) {
 SparqlEngine::SparqlEngine() : impl_(std::make_unique<Impl>()) {
   if (!impl_->world || rasqal_world_open(impl_->world.get())) throw WmError("SPARQL: cannot start Rasqal");
   rasqal_world_set_log_handler(impl_->world.get(), &impl_->error, on_engine_log);
-  sparql_detail::serve_from(impl_->world.get(), &impl_->current);
+  sparql_detail::serve_from(impl_->world.get(), &impl_->served);
 }
 
 SparqlEngine::~SparqlEngine() {
-  impl_->current = nullptr;
+  impl_->served.graph = nullptr;
   impl_->graph.reset();  // (its terms belong to the world: freed before it)
 }
 
@@ -164,7 +167,7 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   if (graphs && raptor_sequence_size(graphs) > 0)
     throw WmError("SPARQL: FROM and FROM NAMED are not allowed: a query reads the world model only");
   if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
-    impl_->current = nullptr;
+    impl_->served.graph = nullptr;
     impl_->graph.reset();
     const std::string logged_before = std::exchange(error, std::string());  // (what is logged now is the graph's)
     try {
@@ -178,14 +181,14 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
     impl_->version = version;
     ++impl_->reads;
   }
-  impl_->current = impl_->graph.get();
+  impl_->served.graph = impl_->graph.get();
+  impl_->served.failed = false;
   std::unique_ptr<rasqal_query_results, void (*)(rasqal_query_results*)> results(rasqal_query_execute(q.get()),
                                                                                 rasqal_free_query_results);
   if (!results) throw WmError("SPARQL: " + (error.empty() ? std::string("the query failed") : error));
   std::string json;
   if (rasqal_query_results_is_graph(results.get())) {
     json = graph_results_json(results.get());
-    if (!error.empty()) throw WmError("SPARQL: " + error);  // (the triples end where the query failed)
   } else {
     void* out = nullptr;
     size_t out_len = 0;
@@ -197,6 +200,10 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
     std::free(out);
     if (w != 0) throw WmError("SPARQL: " + (error.empty() ? std::string("cannot write the results") : error));
   }
+  // (a pattern that could not be matched, or an error Rasqal logged while the rows came,
+  // ends the rows early without failing the writer: partial results are no answer)
+  if (impl_->served.failed || !error.empty())
+    throw WmError("SPARQL: the query failed while it ran" + (error.empty() ? std::string() : ": " + error));
   if (json.size() > max_bytes)
     throw WmError("SPARQL: the results are " + std::to_string(json.size()) + " bytes, more than a reply carries (" +
                   std::to_string(max_bytes) + "): add LIMIT and OFFSET to the query");

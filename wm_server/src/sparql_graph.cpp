@@ -54,7 +54,14 @@ rasqal_literal* IndexedGraph::term(const Term& t) {
     // an absolute IRI as it is; one raptor_uri per IRI, Raptor interns them)
     raptor_uri* iri = raptor_new_uri_relative_to_base(rw, base_, reinterpret_cast<const unsigned char*>(t.value.c_str()));
     if (!iri) throw WmError("SPARQL: the world's graph has an IRI that Raptor refuses: <" + t.value + ">");
-    rasqal_literal*& kept = iris_[iri];
+    rasqal_literal** slot = nullptr;
+    try {
+      slot = &iris_[iri];
+    } catch (...) {
+      raptor_free_uri(iri);
+      throw;
+    }
+    rasqal_literal*& kept = *slot;
     if (kept) {
       raptor_free_uri(iri);
     } else {
@@ -73,14 +80,16 @@ rasqal_literal* IndexedGraph::term(const Term& t) {
     kept = rasqal_new_literal_from_literal(l);
     return l;
   }
+  // (the copies are made before the datatype, and all three are Rasqal's from the call on,
+  // even when it fails)
+  std::unique_ptr<unsigned char, void (*)(void*)> text(owned_copy(t.value), std::free);
+  std::unique_ptr<unsigned char, void (*)(void*)> lang(t.lang.empty() ? nullptr : owned_copy(t.lang), std::free);
   raptor_uri* datatype = nullptr;
   if (!t.datatype.empty()) {
     datatype = raptor_new_uri_relative_to_base(rw, base_, reinterpret_cast<const unsigned char*>(t.datatype.c_str()));
     if (!datatype) throw WmError("SPARQL: the world's graph has a datatype that Raptor refuses: <" + t.datatype + ">");
   }
-  // (the string, language and datatype are Rasqal's from here, even when it fails)
-  rasqal_literal* l = rasqal_new_string_literal(world_, owned_copy(t.value),
-                                                t.lang.empty() ? nullptr : reinterpret_cast<char*>(owned_copy(t.lang)),
+  rasqal_literal* l = rasqal_new_string_literal(world_, text.release(), reinterpret_cast<char*>(lang.release()),
                                                 datatype, nullptr);
   if (!l) throw WmError("SPARQL: the world's graph has a literal that Rasqal refuses: \"" + t.value + "\"");
   return l;
@@ -97,10 +106,20 @@ IndexedGraph::Key IndexedGraph::key_of(const rasqal_literal* l) const {
 
 void IndexedGraph::add(rasqal_literal* s, rasqal_literal* p, rasqal_literal* o) {
   const auto i = static_cast<uint32_t>(triples_.size());
-  const Key keys[3] = {key_of(s), key_of(p), key_of(o)};  // (before the triple owns the terms)
-  rasqal_triple* t = rasqal_new_triple(s, p, o);         // (frees the three when it fails)
+  rasqal_triple* t = nullptr;
+  Key keys[3];
+  try {
+    keys[0] = key_of(s);  // (before the triple owns the terms)
+    keys[1] = key_of(p);
+    keys[2] = key_of(o);
+    triples_.reserve(triples_.size() + 1);
+  } catch (...) {
+    for (rasqal_literal* l : {s, p, o}) rasqal_free_literal(l);
+    throw;
+  }
+  t = rasqal_new_triple(s, p, o);  // (frees the three when it fails)
   if (!t) throw std::bad_alloc();
-  triples_.push_back(t);
+  triples_.push_back(t);  // (room reserved: does not throw)
   Index* indexes[3] = {&by_subject_, &by_predicate_, &by_object_};
   for (int k = 0; k < 3; ++k)
     if (keys[k].kind == Key::kIndexed) (*indexes[k])[keys[k].id].push_back(i);
@@ -181,7 +200,7 @@ namespace {
 // -- Rasqal's triples source API (rasqal.h: rasqal_triples_source, rasqal_triples_match) --
 
 struct SourceData {
-  const IndexedGraph* graph;
+  Served* served;
 };
 
 // One triple pattern being matched: the candidates and what each part must equal.
@@ -254,10 +273,14 @@ int init_match(rasqal_triples_match* rtm, rasqal_triples_source*, void* user_dat
   rtm->next_match = next_match;
   rtm->is_end = is_end;
   rtm->finish = finish_match;
+  Served* served = static_cast<SourceData*>(user_data)->served;
   auto* m = new (std::nothrow) Match;
   rtm->user_data = m;
-  if (!m) return -1;  // (Rasqal then finishes the match: finish_match takes no Match)
-  const IndexedGraph* graph = static_cast<SourceData*>(user_data)->graph;
+  if (!m) {
+    served->failed = true;
+    return -1;  // (Rasqal then finishes the match: finish_match takes no Match)
+  }
+  const IndexedGraph* graph = served->graph;
   m->graph = graph;
   rasqal_literal* parts[3] = {pattern->subject, pattern->predicate, pattern->object};
   const rasqal_triple_parts bits[3] = {RASQAL_TRIPLE_SUBJECT, RASQAL_TRIPLE_PREDICATE, RASQAL_TRIPLE_OBJECT};
@@ -283,6 +306,7 @@ int init_match(rasqal_triples_match* rtm, rasqal_triples_source*, void* user_dat
   try {
     m->list = graph->candidates(m->want[0], m->want[1], m->want[2], m->all);
   } catch (...) {  // (no exception through Rasqal's C)
+    served->failed = true;
     return -1;
   }
   m->settle();
@@ -290,7 +314,8 @@ int init_match(rasqal_triples_match* rtm, rasqal_triples_source*, void* user_dat
 }
 
 int triple_present(rasqal_triples_source*, void* user_data, rasqal_triple* t) noexcept {
-  const IndexedGraph* graph = static_cast<SourceData*>(user_data)->graph;
+  Served* served = static_cast<SourceData*>(user_data)->served;
+  const IndexedGraph* graph = served->graph;
   if (!graph || t->origin) return 0;
   Match m;
   m.graph = graph;
@@ -300,6 +325,7 @@ int triple_present(rasqal_triples_source*, void* user_data, rasqal_triple* t) no
   try {
     m.list = graph->candidates(t->subject, t->predicate, t->object, m.all);
   } catch (...) {
+    served->failed = true;
     return 0;
   }
   m.settle();
@@ -312,7 +338,7 @@ int support_feature(void*, rasqal_triples_source_feature) { return 0; }
 
 int init_source(rasqal_query*, void* factory_user_data, void* user_data, rasqal_triples_source* rts,
                 rasqal_triples_error_handler) {
-  static_cast<SourceData*>(user_data)->graph = *static_cast<const IndexedGraph* const*>(factory_user_data);
+  static_cast<SourceData*>(user_data)->served = static_cast<Served*>(factory_user_data);
   rts->version = 2;
   rts->init_triples_match = init_match;
   rts->triple_present = triple_present;
@@ -330,8 +356,8 @@ int register_factory(rasqal_triples_source_factory* factory) {
 
 }  // namespace
 
-void serve_from(rasqal_world* world, const IndexedGraph* const* graph) {
-  if (rasqal_set_triples_source_factory(world, register_factory, const_cast<IndexedGraph**>(graph)) != 0)
+void serve_from(rasqal_world* world, Served* served) {
+  if (rasqal_set_triples_source_factory(world, register_factory, served) != 0)
     throw WmError("SPARQL: Rasqal refused the world's triples source");
 }
 

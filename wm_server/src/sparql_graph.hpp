@@ -45,8 +45,8 @@ class IndexedGraph {
   // not indexed (a pattern bound to one is narrowed by its other parts, and every
   // candidate is confirmed by Rasqal's comparison).
   struct Key {
-    enum Kind { kIndexed, kLiteral, kAbsent } kind;  // (kAbsent: a blank node not in the graph)
-    const void* id;
+    enum Kind { kIndexed, kLiteral, kAbsent } kind = kLiteral;  // (kAbsent: a blank node not in the graph)
+    const void* id = nullptr;
   };
   Key key_of(const rasqal_literal* l) const;
   rasqal_literal* term(const Term& t);
@@ -63,8 +63,15 @@ class IndexedGraph {
   raptor_uri* base_ = nullptr;                                   // what relative IRIs resolve against
 };
 
-// Makes `world` answer every query from `*graph` (the graph current when the query runs;
-// nullptr: an empty graph). Call after rasqal_world_open.
-void serve_from(rasqal_world* world, const IndexedGraph* const* graph);
+// What the triples source serves, and whether a pattern could not be matched while a query
+// ran (out of memory: Rasqal then ends the query's rows quietly, so the engine asks this).
+struct Served {
+  const IndexedGraph* graph = nullptr;  // nullptr: an empty graph
+  bool failed = false;
+};
+
+// Makes `world` answer every query from `served->graph`, the graph current when the query
+// runs. Call after rasqal_world_open.
+void serve_from(rasqal_world* world, Served* served);
 
 }  // namespace skillbus::wm::sparql_detail

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "skillbus/wm/rdf.hpp"
 #include "skillbus/wm/scene.hpp"
 #include "wm_test_util.hpp"
 
@@ -106,6 +107,33 @@ TEST(Scene, ExactFloatsSurviveTheRoundTrip) {
   Prefixes px;
   Scene s = read_scene(write_scene(a, px), onto, px, "saved");
   EXPECT_EQ(s.elements[0].properties, a.get("skiros:Cube-1")->properties);
+}
+
+TEST(Turtle, ALiteralNotItsDatatypesTokenIsWrittenQuotedAndReadsBackAsItWas) {
+  // serd writes xsd:integer, xsd:decimal and xsd:boolean literals bare: one whose text is
+  // no such token would add a triple, not read, or change its type (saved scenes, the
+  // journal's scene files and the ontology RPC are this Turtle).
+  const std::string xsd = kXsd;
+  auto lit = [](const std::string& v, const std::string& dt) { return Term{Term::Literal, v, dt, ""}; };
+  const Term s{Term::Iri, "http://rvmi.aau.dk/ontologies/skiros.owl#Note-1", "", ""};
+  const Term p{Term::Iri, "http://rvmi.aau.dk/ontologies/skiros.owl#value", "", ""};
+  const std::vector<Term> objects = {
+      lit("1 . <http://x/a> <http://x/b> <http://x/c>", xsd + "integer"), lit("abc", xsd + "integer"),
+      lit("1.0", xsd + "integer"), lit("1", xsd + "boolean"), lit("1.5e3", xsd + "decimal"), lit("", xsd + "integer"),
+      lit("42", xsd + "integer"), lit("-1.5", xsd + "decimal"), lit("true", xsd + "boolean")};
+  std::vector<Triple> triples;
+  for (const Term& o : objects) triples.push_back({s, p, o});
+  Prefixes px;
+  const std::string text = write_turtle(triples, px);
+  Prefixes read_px;
+  const std::vector<Triple> back = parse_turtle(text, read_px, "written");
+  ASSERT_EQ(back.size(), triples.size()) << text;
+  for (size_t i = 0; i < triples.size(); ++i) {
+    EXPECT_EQ(back[i].o.value, triples[i].o.value) << text;
+    EXPECT_EQ(back[i].o.datatype, triples[i].o.datatype) << text;
+  }
+  EXPECT_EQ(text.find("\"42\""), std::string::npos) << "a datatype's own token is still written bare: " << text;
+  EXPECT_EQ(text.find("\"true\""), std::string::npos) << text;
 }
 
 TEST(Scene, BadValuesAreNamed) {
