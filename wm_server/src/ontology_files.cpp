@@ -52,7 +52,7 @@ OntologyLoad load_ontology_files(Ontology& ontology, Prefixes& prefixes, const s
     for (const auto& file : expand(path)) {
       std::vector<Triple> triples = parse_file(file, prefixes);
       ontology.add_triples(triples, prefixes);
-      out.triples.insert(out.triples.end(), triples.begin(), triples.end());
+      append_apart(out.triples, triples);  // (written as one document later: its blank nodes kept apart)
       out.files.push_back(file.string());
     }
   }
@@ -88,7 +88,7 @@ OntologyLoad OntologyLibrary::resolve(Ontology& ontology, Prefixes& prefixes) co
     for (const auto& file : found) {
       std::vector<Triple> triples = parse_file(file, prefixes);
       ontology.add_triples(triples, prefixes);
-      out.triples.insert(out.triples.end(), triples.begin(), triples.end());
+      append_apart(out.triples, triples);
       out.files.push_back(file);
     }
   }

@@ -5,7 +5,9 @@
 #include <cctype>
 #include <cstdarg>
 #include <cstdio>
+#include <map>
 #include <regex>
+#include <set>
 #include <string>
 
 #include "skillbus/wm/model.hpp"
@@ -188,6 +190,34 @@ bool written_bare_safely(const Term& o) {
 }
 
 }  // namespace
+
+void append_apart(std::vector<Triple>& into, const std::vector<Triple>& more) {
+  std::set<std::string> taken;
+  for (const Triple& t : into)
+    for (const Term* x : {&t.s, &t.o})
+      if (x->kind == Term::Blank) taken.insert(x->value);
+  std::set<std::string> own;  // (the labels of `more`: a new one must not be one of them either)
+  for (const Triple& t : more)
+    for (const Term* x : {&t.s, &t.o})
+      if (x->kind == Term::Blank) own.insert(x->value);
+  std::map<std::string, std::string> renamed;
+  for (const std::string& label : own) {
+    if (!taken.count(label)) continue;
+    std::string fresh;
+    for (int n = 2; fresh.empty() || taken.count(fresh) || own.count(fresh); ++n) fresh = label + "_" + std::to_string(n);
+    taken.insert(fresh);
+    renamed[label] = fresh;
+  }
+  into.reserve(into.size() + more.size());
+  for (Triple t : more) {
+    for (Term* x : {&t.s, &t.o}) {
+      if (x->kind != Term::Blank) continue;
+      auto it = renamed.find(x->value);
+      if (it != renamed.end()) x->value = it->second;
+    }
+    into.push_back(std::move(t));
+  }
+}
 
 std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& prefixes) {
   SerdEnv* env = serd_env_new(nullptr);

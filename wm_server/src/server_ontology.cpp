@@ -63,8 +63,8 @@ bool same(const Triple& a, const Triple& b) { return same(a.s, b.s) && same(a.p,
 
 std::vector<Triple> WorldModelServer::all_axioms() const {
   std::vector<Triple> all = ontology_triples_;
-  all.insert(all.end(), scene_imports_.begin(), scene_imports_.end());
-  all.insert(all.end(), scene_extra_.begin(), scene_extra_.end());
+  append_apart(all, scene_imports_);  // (three sources, each with blank nodes of its own: one document)
+  append_apart(all, scene_extra_);
   return all;
 }
 
@@ -141,7 +141,7 @@ wm_scene_t WorldModelServer::on_add_axioms(const wm_scene_t& req) {
     std::vector<Triple> imports = scene_imports_;
     if (!imported.triples.empty()) {
       onto.add_triples(extra, px);
-      imports.insert(imports.end(), imported.triples.begin(), imported.triples.end());
+      append_apart(imports, imported.triples);
       for (const auto& f : imported.files) out.report += "; imported the ontology " + f;
     }
     SceneChange change;

@@ -130,6 +130,39 @@ TEST(OntologyFiles, AFolderLoadsEveryOntologyFileInItAndImportsAreResolvedAmongT
   std::filesystem::remove_all(dir);
 }
 
+TEST(OntologyFiles, BlankNodesOfTwoFilesStayApartWhenTheirTriplesAreWrittenTogether) {
+  // Each file's reader names its blank nodes from b1 on: the files' triples, written as one
+  // Turtle document (the ontology RPC every process reads, the journal's imports, the
+  // SPARQL graph), must not make one restriction of two.
+  const auto dir = std::filesystem::temp_directory_path() / "skillbus-onto-blanks";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string head = "@prefix owl: <http://www.w3.org/2002/07/owl#> .\n"
+                           "@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .\n"
+                           "@prefix skiros: <http://rvmi.aau.dk/ontologies/skiros.owl#> .\n"
+                           "@prefix kit: <http://example.org/kit#> .\n";
+  std::ofstream(dir / "a.ttl") << head << "kit:A a owl:Class ; rdfs:subClassOf skiros:Location, "
+                                          "[ a owl:Restriction ; owl:onProperty skiros:contain ; owl:someValuesFrom kit:X ] .\n"
+                                          "kit:X a owl:Class ; rdfs:subClassOf skiros:Product .\n";
+  std::ofstream(dir / "b.ttl") << head << "kit:B a owl:Class ; rdfs:subClassOf skiros:Device, "
+                                          "[ a owl:Restriction ; owl:onProperty skiros:hasA ; owl:someValuesFrom kit:Y ] .\n"
+                                          "kit:Y a owl:Class ; rdfs:subClassOf skiros:Device .\n";
+  Ontology live = test::ontology();
+  Prefixes px;
+  const OntologyLoad r = load_ontology_files(live, px, {dir.string()});
+  ASSERT_EQ(r.files.size(), 2u);
+  ASSERT_TRUE(live.may_relate("kit:A", "skiros:contain", "kit:X"));
+  ASSERT_TRUE(live.may_relate("kit:B", "skiros:hasA", "kit:Y"));
+  Ontology again = test::ontology();
+  Prefixes px2;
+  again.add_triples(parse_turtle(write_turtle(r.triples, px), px2, "written"), px2);
+  EXPECT_TRUE(again.may_relate("kit:A", "skiros:contain", "kit:X"));
+  EXPECT_TRUE(again.may_relate("kit:B", "skiros:hasA", "kit:Y"));
+  EXPECT_FALSE(again.may_relate("kit:A", "skiros:hasA", "kit:Y"));
+  EXPECT_FALSE(again.may_relate("kit:B", "skiros:contain", "kit:X"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Containment, AnElementHasOneContainerAndNoCycle) {
   WorldStore s(test::ontology());
   s.apply({Op{Op::AddElement, Element{"skiros:Table-1", "skiros:Table", "t", {}}, {}},

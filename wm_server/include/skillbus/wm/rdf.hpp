@@ -55,6 +55,12 @@ bool looks_like_rdf_xml(const std::string& text);
 std::vector<Triple> parse_rdf(const std::string& text, Prefixes& prefixes, const std::string& source,
                               const std::string& base_iri);
 
+// Appends `more` to `into`, a blank node of `more` whose label `into` already has renamed
+// (consistently, to a label neither has): each reader names its blank nodes from b1 on, so
+// the triples of two files written as one document would make one node of two (two
+// restrictions into one). Labels that do not clash are kept.
+void append_apart(std::vector<Triple>& into, const std::vector<Triple>& more);
+
 // Writes triples as Turtle with the given prefixes, subjects grouped in input order.
 std::string write_turtle(const std::vector<Triple>& triples, const Prefixes& prefixes);
 
