@@ -3,10 +3,8 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <new>
-#include <tuple>
 #include <memory>
-#include <optional>
+#include <new>
 
 #include "skillbus/wm/model.hpp"
 
