@@ -13,7 +13,6 @@
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
-#include <utility>
 
 #include "skillbus/wm/model.hpp"
 #include "sparql_graph.hpp"
@@ -166,18 +165,15 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   raptor_sequence* graphs = rasqal_query_get_data_graph_sequence(q.get());
   if (graphs && raptor_sequence_size(graphs) > 0)
     throw WmError("SPARQL: FROM and FROM NAMED are not allowed: a query reads the world model only");
+  error.clear();  // (the query is prepared: what is logged from here on is the graph's or the run's)
   if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
     impl_->served.graph = nullptr;
     impl_->graph.reset();
-    const std::string logged_before = std::exchange(error, std::string());  // (what is logged now is the graph's)
-    try {
-      impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph());
-      if (!error.empty()) throw WmError("SPARQL: the world's graph cannot be read");
-    } catch (const WmError& e) {
+    impl_->graph = std::make_unique<sparql_detail::IndexedGraph>(world, graph());  // (throws naming what it could not make)
+    if (!error.empty()) {  // (a term Rasqal logged as bad while it was made)
       impl_->graph.reset();
-      throw WmError(std::string(e.what()) + (error.empty() ? "" : " (" + error + ")"));
+      throw WmError("SPARQL: the world's graph cannot be made: " + error);
     }
-    error = logged_before;
     impl_->version = version;
     ++impl_->reads;
   }
