@@ -278,8 +278,9 @@ def test_a_master_polling_for_acks_sleeps_far_less_and_gives_the_same_digests(sa
         runs[poll_us] = (s["digest"], digests, last_json(clock.stderr())["sleeps"])
     (plain_digest, plain_parts, plain_sleeps), (poll_digest, poll_parts, poll_sleeps) = runs[0], runs[200_000]
     assert poll_digest == plain_digest and poll_parts == plain_parts
-    assert plain_sleeps > frames / 2, runs  # sleeping on the socket: about once a frame
-    assert poll_sleeps < frames / 10, runs  # the joins and the end, not the frames
+    # sleeping on the socket: about once a frame on an idle machine, a third of the frames when
+    # a loaded one has the acks already there (seen in CI); polling: the joins and the end only
+    assert plain_sleeps > frames / 10 > poll_sleeps, runs
 
 
 def test_a_master_refuses_a_negative_or_huge_ack_poll(sandbox, binary):
