@@ -11,6 +11,7 @@ APT_PACKAGES=(
   libgtest-dev libssl-dev libglib2.0-0 valgrind
   libserd-dev libraptor2-dev librasqal3-dev libeigen3-dev zlib1g-dev
   libdart-dev libdart-collision-bullet-dev libdart-utils-urdf-dev nlohmann-json3-dev libcli11-dev libceres-dev
+  libgoogle-perftools-dev
   liboctomap-dev libompl-dev
   cyclonedds-dev cyclonedds-tools
   xvfb imagemagick

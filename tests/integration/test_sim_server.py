@@ -291,6 +291,24 @@ def test_the_benchmarks_grasp_and_carry_touches_no_obstacle_and_puts_the_cube_ba
     assert math.dist(out["objects"]["green"], CUBE) < 0.002, out["objects"]  # (put back where it was taken)
 
 
+def test_the_physics_runs_on_tcmalloc_and_glibcs_malloc_gives_the_same_physics(sandbox, tmp_path):
+    """sim_server is linked with tcmalloc (a faster step: docs/sim_server.md). Where a block
+    of memory lands must change no number: glibc's malloc, put first with LD_PRELOAD (what
+    bench/sim_physics.py compares with), grasps and carries to the same state bit for bit."""
+    script = tmp_path / "carry.json"
+    script.write_text(json.dumps(grasp_and_carry()))
+    runs = {}
+    for name, env in (("tcmalloc", None), ("glibc", {"LD_PRELOAD": "libc.so.6"})):
+        p = sandbox.start(f"carry-{name}", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                            "--script", str(script), "--duration-s", "13"], env=env)
+        assert sandbox.wait(p, 120) == 0, p.stderr()[-2000:]
+        runs[name] = last_json(p.stdout())
+    assert runs["tcmalloc"]["allocator"].startswith("libtcmalloc"), runs["tcmalloc"]["allocator"]
+    assert runs["glibc"]["allocator"] == "libc.so.6", runs["glibc"]["allocator"]
+    assert runs["tcmalloc"]["state_digest"] == runs["glibc"]["state_digest"]
+    assert runs["tcmalloc"]["session_digest"] == runs["glibc"]["session_digest"]
+
+
 def test_an_ack_timeout_for_someone_who_is_no_participant_stops_the_start_naming_it(sandbox):
     # Before, the lockstep master refused it only when the session began: an uncaught
     # exception that terminated sim_server.
