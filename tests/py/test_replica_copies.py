@@ -125,8 +125,10 @@ def test_a_fresh_element_is_completed_as_one_that_carried_relations_would_be(wmi
 
 
 def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeypatch):
-    """A tick's element values are decoded afresh at every tick (skillbus.skill.convert):
-    completing them took a copy and remembered what they were loaded as twice."""
+    """A tick's element values are made afresh at every tick (skillbus.skill.convert):
+    completing them took a copy and remembered what they were loaded as twice. Now each is
+    a reader's copy of the decoded element (WorldModelInterface.tick_element): what it was
+    loaded as is the decoded element's, never copied nor marked again."""
     from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
     from skillbus.skill.convert import apply_param_msgs, param_msg
 
@@ -151,7 +153,7 @@ def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeyp
     monkeypatch.setattr(Element, "clone", lambda e: pytest.fail("a tick's fresh element was copied"))
     apply_param_msgs(skill, msgs)
     got = skill.params["Object"].value
-    assert marks == ["skiros:Cube-2"]
+    assert marks == []
     assert got.getProperty("skiros:Size").value == 0.07 and got.loaded()[2]["skiros:Size"].value == 0.07
     assert {(r["src"], r["type"], r["dst"]) for r in got.getRelations()} == {
         ("skiros:Table-1", "skiros:contain", "skiros:Cube-2")}
@@ -181,3 +183,82 @@ def test_without_a_world_model_client_a_ticks_element_is_marked_loaded_as_it_cam
     assert got.loaded() is not None and not got.changed_since_loaded()
     assert got.getProperty("skiros:Size").value == 0.07 and got.loaded()[2]["skiros:Size"].value == 0.07
     assert got.getRelations() == []  # (a tick carries properties only; no replica to add relations)
+
+
+def hold_skill():
+    from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
+
+    class Hold(SkillDescription):
+        def createDescription(self):
+            self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
+
+    class hold(PrimitiveBase):
+        def createDescription(self):
+            self.setDescription(Hold(), "hold")
+
+    return hold
+
+
+def test_the_same_ticks_message_is_decoded_once_yet_every_tick_gets_an_element_of_its_own(wmi, monkeypatch):
+    """The skill process's tick decoder hands over the same parameter messages while their
+    bytes repeat (skillbus.skill.tick_decode): the element is decoded once, and each tick
+    gets a new element, the same as a fresh decode, that shares nothing that can change."""
+    import skillbus.skill.convert as skill_convert
+    import skillbus.world.client as client
+    from skillbus.skill.convert import apply_param_msgs, param_msg
+    from skillbus.world.convert import element_from_msg
+
+    decodes = []
+
+    def counting(m):
+        decodes.append(m.id)
+        return element_from_msg(m)
+
+    monkeypatch.setattr(client, "element_from_msg", counting)
+    monkeypatch.setattr(skill_convert, "element_from_msg", counting, raising=False)
+    hold = hold_skill()
+    sender = hold()
+    cube = Element("skiros:Cube", "red", "skiros:Cube-2")
+    cube.setProperty("skiros:Size", [0.07, 0.08])
+    sender.params["Object"].setValue(cube)
+    msgs = [param_msg(sender.params["Object"])]
+    skill = hold()
+    skill.wmi = wmi
+
+    def tick() -> Element:
+        apply_param_msgs(skill, msgs)
+        return skill.params["Object"].value
+
+    def as_decoded_afresh() -> Element:
+        e = element_from_msg(msgs[0].values[0].element)
+        return wmi.add_relations(e)
+
+    first = tick()
+    first.getProperty("skiros:Size").setValue(9.0, 0)  # what a skill does to its tick's element
+    first.addRelation("-1", "skiros:contain", "skiros:Table-1")
+    first.label = "changed"
+    second = tick()
+    assert decodes == ["skiros:Cube-2"], decodes  # once for both ticks
+    assert second is not first
+    expected = as_decoded_afresh()
+    assert second == expected and second.loaded() == expected.loaded() and not second.changed_since_loaded()
+    assert second.getRelations() == expected.getRelations() == [
+        {"src": "skiros:Table-1", "type": "skiros:contain", "dst": "skiros:Cube-2", "state": True, "abstract": False}]
+    assert first.changed_since_loaded() and first.loaded() == expected.loaded()
+
+    # the replica's relations of the element change: the next tick's element has them
+    wmi._elements["skiros:Gripper-5"] = Element("skiros:Gripper", "", "skiros:Gripper-5")
+    wmi._add_rel(("skiros:Gripper-5", "skiros:contain", "skiros:Cube-2"))
+    third = tick()
+    assert {r["src"] for r in third.getRelations()} == {"skiros:Table-1", "skiros:Gripper-5"}
+    assert third == as_decoded_afresh() and third.loaded() == as_decoded_afresh().loaded()
+    # the element leaves the replica: as it came, with no relations
+    del wmi._elements["skiros:Cube-2"]
+    gone = tick()
+    assert gone.getRelations() == [] and gone.getProperty("skiros:Size").values == [0.07, 0.08]
+    assert not gone.changed_since_loaded()
+    # another message with the same bytes (the decoder forgot them, or no decoder): decoded again
+    wmi._elements["skiros:Cube-2"] = cube
+    msgs = [param_msg(sender.params["Object"])]
+    n = len(decodes)
+    assert tick() == as_decoded_afresh() and len(decodes) > n

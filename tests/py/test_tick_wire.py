@@ -164,6 +164,42 @@ def test_a_reader_copy_encodes_what_it_holds_without_copying_its_properties():
     assert src.getProperty("skiros:Size").value == 0.05
 
 
+def test_an_untouched_reader_copy_is_encoded_once_per_source_and_a_change_is_never_missed():
+    """A tick's element parameters are reader copies of the same source tick after tick:
+    their bytes are kept by the source's properties, and given again only while the copy
+    has neither handed out a property nor changed its names."""
+    src = Element("skiros:Cube", "red", "skiros:Cube-2")
+    src.setProperty("skiros:Size", [0.05, 0.06])
+    src.setProperty("skiros:Name", "a")
+
+    def fresh():
+        return Element._reader_copy(src, ())
+
+    def truth(e):
+        return wm_element_t.encode(element_msg(e.clone()))[8:]
+
+    first = element_bytes(fresh())
+    assert first == truth(fresh())
+    assert element_bytes(fresh()) is first  # kept: not encoded again
+    relabelled = fresh()
+    relabelled.label = "blue"
+    assert element_bytes(relabelled) == truth(relabelled) != first
+    handed = fresh()
+    handed.getProperty("skiros:Size").setValue(0.5, 0)
+    assert element_bytes(handed) == truth(handed) != first
+    read_only = fresh()
+    read_only.getProperty("skiros:Name")  # handed out, unchanged: encoded again, the same bytes
+    assert element_bytes(read_only) == first
+    copied = fresh()
+    copied.setProperty("skiros:Mass", 1.0)  # every property copied, one added
+    assert element_bytes(copied) == truth(copied) != first
+    other = Element("skiros:Cube", "red", "skiros:Cube-2")  # another source: its own bytes
+    other.setProperty("skiros:Size", 0.9)
+    assert element_bytes(Element._reader_copy(other, ())) == truth(other) != first
+    again = element_bytes(fresh())  # (the relabelled copy's bytes were kept in between)
+    assert again == first and element_bytes(fresh()) is again
+
+
 # -- skillbus_native's element encoder (py_tick_wire.cpp) ----------------------------------
 
 import math  # noqa: E402

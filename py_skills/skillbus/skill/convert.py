@@ -75,16 +75,24 @@ def apply_param_msgs(skill: SkillCore, params: list[skill_param_t]) -> None:
     Element values come with the properties the manager has; with a world-model client
     they also get the relations of this process's replica. Either way they remember what
     they carried, so an update writes only what the skill changed."""
+    wmi = skill.wmi
+    # (a world-model client's: a new element each tick, decoded once per message)
+    tick_element = getattr(wmi, "tick_element", None)
     for m in params:
         if skill.params.hasParam(m.key):
             p = skill.params[m.key]
-            values = [value_from_msg(v) for v in m.values]
-            for v in values:  # (each made afresh just now: completed in place, not copied)
-                if isinstance(v, Element) and not v.isAbstract():
-                    if skill.wmi is not None:
-                        skill.wmi.add_relations(v)
+            values = []
+            for msg in m.values:
+                if tick_element is not None and msg.type == skill_value_t.ELEMENT and msg.element.id:
+                    values.append(tick_element(msg.element))
+                    continue
+                v = value_from_msg(msg)
+                if isinstance(v, Element) and not v.isAbstract():  # (made afresh just now: completed in place)
+                    if wmi is not None:
+                        wmi.add_relations(v)
                     else:
                         v.mark_loaded()
+                values.append(v)
             p._values = values  # from the blackboard, already checked by the manager
 
 

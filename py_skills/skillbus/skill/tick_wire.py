@@ -156,11 +156,35 @@ def element_bytes(e: Element) -> bytes:
     return python_element_bytes(e)
 
 
+# The bytes of reader copies whose properties are all still their source's, by that source's
+# properties dict: id(dict) -> (the dict, (id, type, label), bytes). A source's dict is never
+# changed in place (the replica replaces an element that changes; a tick's decoded element is
+# nobody's to change: WorldModelInterface.tick_element), and it is kept alive here, so its id
+# names no other dict. A tick's element parameters are such copies, the same tick after tick.
+_UNREAD_BYTES: dict[int, tuple[dict, tuple[str, str, str], bytes]] = {}
+_UNREAD_BYTES_KEPT = 256
+
+
 def python_element_bytes(e: Element) -> bytes:
     """element_bytes in Python: for what the native encoder leaves (a reader copy, a value
     of a subclass or of a type that cannot be stored, text that is not UTF-8)."""
     d = e.__dict__
-    props = d["_properties"].values() if "_properties" in d else e._wire_properties()
+    if "_properties" not in d and not d.get("_handed"):
+        unread = e._unread()
+        if unread is not None:  # (a reader copy that has handed out no property)
+            names = (e._id, e._type, e._label)
+            kept = _UNREAD_BYTES.get(id(unread))
+            if kept is not None and kept[0] is unread and kept[1] == names:
+                return kept[2]
+            b = _element_bytes_of(e, unread.values())
+            if len(_UNREAD_BYTES) >= _UNREAD_BYTES_KEPT:
+                _UNREAD_BYTES.clear()
+            _UNREAD_BYTES[id(unread)] = (unread, names, b)
+            return b
+    return _element_bytes_of(e, d["_properties"].values() if "_properties" in d else e._wire_properties())
+
+
+def _element_bytes_of(e: Element, props: Any) -> bytes:
     text = _text
     if not props:  # (abstract parameters' elements, most defaults: nothing but the names)
         return text(e._id) + text(e._type) + text(e._label) + _NO_PROPERTIES

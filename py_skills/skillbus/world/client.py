@@ -20,8 +20,8 @@ from typing import Any
 
 from skillbus import startup_heap
 from skillbus.bus import Bus, channel
-from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_elements_t, wm_op_t, wm_query_t,
-                           wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
+from skillbus.msgs import (decode, header_t, wm_change_t, wm_commit_t, wm_element_t, wm_elements_t, wm_op_t,
+                           wm_query_t, wm_scene_t, wm_transform_t, wm_txn_t, wm_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError
 from skillbus.validate import BadValue, Rejects, integer
 from skillbus.waiting import poll_until
@@ -31,6 +31,10 @@ from skillbus.world.ontology_view import OntologyView
 from skillbus.world.skiros2_queries import SkiROS2Queries
 from skillbus.world.sparql import SparqlQueries
 from skillbus.world.wire import ElementsPage, decode_elements, query_all
+
+# tick_element's decoded elements kept (a process runs a few primitives at once, each with
+# a few element parameters; the tick decoder keeps 32 distinct parameter encodings)
+_TICK_ELEMENTS_KEPT = 256
 
 __all__ = ["WorldModelError", "WorldModelInterface", "query_all"]
 
@@ -52,6 +56,8 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         # process's string hashing), made when first read and kept sorted as they change:
         # an element with 10,000 relations is not sorted again at every read
         self._rel_cache: dict[str, tuple[Relation, ...]] = {}
+        # tick_element: id(message) -> (message, its element, the relations it was made with)
+        self._tick_elements: dict[int, tuple[wm_element_t, Element, tuple[Relation, ...]]] = {}
         self._ontology_cache: OntologyView | None = None  # the server's hierarchy and templates (ontology_view)
         self.version = -1
         self._txn_ids = 0
@@ -263,6 +269,32 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
         replica does not have: with what it carries)."""
         self._fresh()
         return self._complete(e)
+
+    def tick_element(self, m: wm_element_t) -> Element:
+        """A tick parameter's element from its message: what element_from_msg(m) then
+        add_relations give (its properties from `m`, the replica's relations of its id,
+        marked as loaded), a new element every call that shares nothing that can change.
+
+        A task's parameters come back in the same bytes tick after tick, and the skill
+        process's tick decoder then hands over the same message objects
+        (skillbus.skill.tick_decode): the element is decoded once per message and relations
+        of the replica (the same tuple while they have not changed), and each tick gets a
+        reader's copy of it (Element._reader_copy: a property is copied when first read).
+        The decoded element is kept here only, never handed out, so nothing changes it."""
+        self._fresh()
+        kept = self._tick_elements.get(id(m))
+        if kept is not None and kept[0] is m and m.id in self._elements and self._relations_of(m.id) is kept[2]:
+            return Element._reader_copy(kept[1], kept[2])
+        e = element_from_msg(m)
+        if not e.id or e.id not in self._elements:
+            return self._complete(e)
+        rels = self._relations_of(e.id)
+        if any(s == "-1" or o == "-1" for s, _, o in rels):
+            return self._complete(e)
+        if len(self._tick_elements) >= _TICK_ELEMENTS_KEPT:
+            self._tick_elements.clear()
+        self._tick_elements[id(m)] = (m, e, rels)  # (m kept alive: its id names no other message)
+        return Element._reader_copy(e, rels)
 
     def _complete(self, e: Element) -> Element:
         """`e` with the replica's relations of its id that it lacks, marked as loaded."""
