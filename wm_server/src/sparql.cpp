@@ -16,6 +16,7 @@
 
 #include "skillbus/wm/model.hpp"
 #include "sparql_graph.hpp"
+#include "sparql_text.hpp"
 
 namespace skillbus::wm {
 
@@ -29,26 +30,43 @@ void note_error(std::string& error, raptor_log_message* m) {
   error = where + (m->text ? m->text : "error");
 }
 
-// SERVICE as a keyword (outside IRIs, strings and variable names such as ?service it is the
-// only use of the word); a false alarm on a literal "service" only refuses a harmless query.
-bool names_a_service(const std::string& query) {
-  static const std::regex service(R"((^|[^A-Za-z0-9_:<"'#?$])SERVICE\s*(SILENT\s*)?[<?$])", std::regex::icase);
-  return std::regex_search(query, service);
+// The checks below read a query's code (sparql_code: its comments, strings and IRIs
+// emptied), where a word is a keyword unless it is part of a name (?service, skiros:SERVICE).
+
+// SERVICE as a keyword, followed by an IRI, a prefixed name or a variable: refused before
+// the query is parsed. The parsed query's patterns are checked too (has_service_pattern);
+// this check also finds a SERVICE inside FILTER EXISTS, which those patterns do not hold.
+bool names_a_service(const std::string& code) {
+  static const std::regex service(R"((^|[^A-Za-z0-9_:?$])SERVICE\s*(SILENT\s*)?([<?$:]|[A-Za-z_][A-Za-z0-9_.-]*:))",
+                                  std::regex::icase);
+  return std::regex_search(code, service);
 }
 
 // VALUES with one variable in its short form (VALUES ?x { a b }): Rasqal 0.9.33 reads only
 // the first value and may bind the second to another variable, so such a query would answer
 // wrongly without a word; the form with parentheses (VALUES (?x) { (a) (b) }) is read right.
-bool has_short_values(const std::string& query) {
-  static const std::regex values(R"((^|[^A-Za-z0-9_:<"'#?$])VALUES\s*[?$][A-Za-z0-9_]+\s*\{)", std::regex::icase);
-  return std::regex_search(query, values);
+bool has_short_values(const std::string& code) {
+  static const std::regex values(R"((^|[^A-Za-z0-9_:?$])VALUES\s*[?$][A-Za-z0-9_]+\s*\{)", std::regex::icase);
+  return std::regex_search(code, values);
 }
 
 // A property path (rdfs:subClassOf*, rdf:type/rdfs:subClassOf, ^p): Rasqal parses SPARQL
 // 1.1 but has no property paths, so such a query fails with a bare syntax error.
-bool has_property_path(const std::string& query) {
+bool has_property_path(const std::string& code) {
   static const std::regex path(R"([A-Za-z0-9_>][*+][\s.;}]|[A-Za-z0-9_>]/[A-Za-z<]|\s\^[A-Za-z<])");
-  return std::regex_search(query, path);
+  return std::regex_search(code, path);
+}
+
+// A SERVICE pattern anywhere in the parsed query's graph patterns (Rasqal would fetch it
+// when the query runs).
+bool has_service_pattern(rasqal_graph_pattern* gp) {
+  if (gp == nullptr) return false;
+  if (rasqal_graph_pattern_get_operator(gp) == RASQAL_GRAPH_PATTERN_OPERATOR_SERVICE) return true;
+  for (int i = 0;; ++i) {
+    rasqal_graph_pattern* sub = rasqal_graph_pattern_get_sub_graph_pattern(gp, i);
+    if (sub == nullptr) return false;
+    if (has_service_pattern(sub)) return true;
+  }
 }
 
 // A term of a graph result as SPARQL 1.1 JSON writes a binding's value.
@@ -130,8 +148,9 @@ int64_t SparqlEngine::graphs_read() const { return impl_->reads; }
 std::string SparqlEngine::query_json(const std::string& query, int64_t version,
                                      const std::function<std::vector<Triple>()>& graph, const Prefixes& prefixes,
                                      size_t max_bytes) {
-  if (names_a_service(query)) throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
-  if (has_short_values(query))
+  const std::string code = sparql_detail::sparql_code(query);
+  if (names_a_service(code)) throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
+  if (has_short_values(code))
     throw WmError("SPARQL: write VALUES with parentheses, VALUES (?x) { (a) (b) }: the server's SPARQL engine, "
                   "Rasqal, reads VALUES ?x { a b } wrongly (only its first value)");
   std::string error;
@@ -147,6 +166,7 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   std::string text;
   for (const auto& [p, ns] : prefixes.all()) text += "PREFIX " + p + ": <" + ns + ">\n";
   text += query;
+  text += '\n';  // (Rasqal's lexer takes a comment only up to a line break: one on the last line was a syntax error)
   std::unique_ptr<rasqal_query, void (*)(rasqal_query*)> q(rasqal_new_query(world, "sparql", nullptr),
                                                           rasqal_free_query);
   std::unique_ptr<raptor_uri, void (*)(raptor_uri*)> base(
@@ -154,11 +174,13 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   if (!q || !base) throw WmError("SPARQL: cannot make a query");
   if (rasqal_query_prepare(q.get(), reinterpret_cast<const unsigned char*>(text.c_str()), base.get()) != 0)
     throw WmError("SPARQL: " + (error.empty() ? std::string("the query does not parse") : error) +
-                  (has_property_path(query)
+                  (has_property_path(code)
                        ? " (the server's SPARQL engine, Rasqal, has no property paths such as rdfs:subClassOf* or "
                          "rdf:type/rdfs:subClassOf: the client's get_sub_classes, get_individuals and "
                          "get_sub_properties answer those questions)"
                        : ""));
+  if (has_service_pattern(rasqal_query_get_query_graph_pattern(q.get())))
+    throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
   if (rasqal_query_get_verb(q.get()) == RASQAL_QUERY_VERB_DESCRIBE)
     throw WmError("SPARQL: DESCRIBE is not answered (the server's SPARQL engine, Rasqal, does not implement it): "
                   "ask SELECT ?p ?o WHERE { <the element> ?p ?o }");

@@ -235,6 +235,40 @@ TEST(SparqlEngine, RefusesWhatReadsBeyondTheWorldAndNamesParseErrors) {
   EXPECT_EQ(normalized(ours(engine, "SELECT ?x WHERE { ?x a skiros:Cube }"))["rows"].size(), 4u);
 }
 
+TEST(SparqlEngine, KeywordsInCommentsStringsAndIrisAreNoKeywords) {
+  SparqlEngine engine;
+  auto answered = [&](const std::string& q) {
+    const std::string out = ours(engine, q);
+    EXPECT_EQ(out.rfind("error:", 0), std::string::npos) << q << "\n" << out;
+    return out.rfind("error:", 0) == std::string::npos ? normalized(out)["rows"].size() : size_t{999};
+  };
+  EXPECT_EQ(answered("# SERVICE <http://example.org/q> and VALUES ?x { a b }\nSELECT ?x WHERE { ?x a skiros:Cube }"), 4u);
+  EXPECT_EQ(answered("SELECT ?x WHERE { ?x a skiros:Cube } # SERVICE <http://example.org/q> { }"), 4u);
+  EXPECT_EQ(answered("SELECT ?x WHERE { ?x rdfs:label \"VALUES ?y { a b }\" }"), 0u);
+  const size_t labels = answered("SELECT ?x WHERE { ?x rdfs:label ?l }");  // (no label is one of these strings)
+  EXPECT_EQ(answered("SELECT ?x WHERE { ?x rdfs:label ?l FILTER(?l != 'SERVICE <http://example.org/q>') }"), labels);
+  EXPECT_EQ(answered("SELECT ?x WHERE { ?x rdfs:label ?l FILTER(?l != \"\"\"a \"quoted\" SERVICE ?s {\"\"\") }"), labels);
+  // a comparison's '<' starts no IRI: the comment after it is still a comment (and a comment
+  // on the query's last line is one: Rasqal took it as a syntax error)
+  EXPECT_EQ(answered("SELECT ?x WHERE { ?x skiros:PositionX ?v FILTER(?v < 0.3) } # SERVICE <http://example.org/q>"),
+            answered("SELECT ?x WHERE { ?x skiros:PositionX ?v FILTER(?v < 0.3) }"));
+  EXPECT_EQ(answered("SELECT ?x WHERE { ?x a <http://rvmi.aau.dk/ontologies/skiros.owl#Cube> } # VALUES ?x { a }"), 4u);
+  // and a keyword after them is still one
+  auto refused = [&](const std::string& q, const std::string& why) {
+    const std::string out = ours(engine, q);
+    EXPECT_EQ(out.rfind("error:", 0), 0u) << q;
+    EXPECT_NE(out.find(why), std::string::npos) << q << "\n" << out;
+  };
+  refused("SELECT ?x WHERE { ?x a <http://e.org/a#b> . SERVICE <http://example.org/q> { ?x ?p ?o } }", "SERVICE");
+  refused("SELECT ?x WHERE { ?x rdfs:label \"#\" . SERVICE <http://example.org/q> { ?x ?p ?o } }", "SERVICE");
+  refused("PREFIX ex: <http://example.org/>\nSELECT ?x WHERE { SERVICE ex:q { ?x ?p ?o } }", "SERVICE");
+  refused("SELECT ?x WHERE { SERVICE # a comment\n <http://example.org/q> { ?x ?p ?o } }", "SERVICE");
+  refused("SELECT ?x WHERE { ?x ?p ?o FILTER EXISTS { SERVICE <http://example.org/q> { ?x ?p ?o } } }", "SERVICE");
+  refused("SELECT ?x WHERE { { SELECT ?x WHERE { SERVICE SILENT <http://example.org/q> { ?x ?p ?o } } } }", "SERVICE");
+  refused("SELECT ?x WHERE { ?x rdfs:label 'a' . VALUES ?x { skiros:Cube-2 skiros:Bin-5 } }", "VALUES (?x)");
+  EXPECT_EQ(engine.graphs_read(), 1) << "refused queries read no graph";
+}
+
 TEST(SparqlEngine, AGraphThatCannotBeMadeIsNamedAndTheNextVersionServes) {
   SparqlEngine engine;
   auto bad = []() -> std::vector<Triple> { throw WmError("the store cannot be read"); };
