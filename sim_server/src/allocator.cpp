@@ -4,15 +4,25 @@
 
 namespace skillbus::sim {
 
-std::string allocator_in_use() {
-  // Asked of the running process, not of the build: the `malloc` the dynamic linker binds
-  // calls to, and the file it comes from (a library found at build time but not loaded, or
-  // another one preloaded by hand, shows here as it is).
-  void* m = dlsym(RTLD_DEFAULT, "malloc");
+namespace {
+
+// The file name of the library the dynamic linker binds `symbol` to in this process.
+std::string library_of(const char* symbol) {
+  void* f = dlsym(RTLD_DEFAULT, symbol);
   Dl_info info{};
-  if (m == nullptr || dladdr(m, &info) == 0 || info.dli_fname == nullptr) return "unknown";
+  if (f == nullptr || dladdr(f, &info) == 0 || info.dli_fname == nullptr) return "unknown";
   const std::string file = info.dli_fname;
   return file.substr(file.find_last_of('/') + 1);
+}
+
+}  // namespace
+
+std::string allocator_in_use() {
+  // Asked of the running process, not of the build (a library found at build time but not
+  // loaded, or another one preloaded by hand, shows here as it is). C++'s operator new is
+  // bound on its own: preloading glibc alone puts its malloc first, not its operator new.
+  const std::string c = library_of("malloc"), cxx = library_of("_Znwm");
+  return c == cxx ? c : c + " (operator new: " + cxx + ")";
 }
 
 }  // namespace skillbus::sim

@@ -5,8 +5,10 @@
 
 namespace skillbus::sim {
 
-// The file name of the library whose `malloc` this process calls: "libtcmalloc_minimal.so.4"
-// when tcmalloc is in use, "libc.so.6" for glibc's, whatever LD_PRELOAD put first otherwise.
+// The file name of the library whose `malloc` (and C++ operator new) this process calls:
+// "libtcmalloc_minimal.so.4" when tcmalloc is in use; when the two differ, both, as
+// "libc.so.6 (operator new: libstdc++.so.6)" (glibc's malloc, and libstdc++'s operator new,
+// which calls it).
 std::string allocator_in_use();
 
 }  // namespace skillbus::sim

@@ -280,7 +280,7 @@ def test_a_master_polling_for_acks_sleeps_far_less_and_gives_the_same_digests(sa
     assert poll_digest == plain_digest and poll_parts == plain_parts
     # sleeping on the socket: about once a frame on an idle machine, a third of the frames when
     # a loaded one has the acks already there (seen in CI); polling: the joins and the end only
-    assert plain_sleeps > frames / 10 > poll_sleeps, runs
+    assert poll_sleeps < frames / 10 and plain_sleeps > max(frames / 10, 5 * poll_sleeps), runs
 
 
 def test_a_master_refuses_a_negative_or_huge_ack_poll(sandbox, binary):

@@ -291,22 +291,35 @@ def test_the_benchmarks_grasp_and_carry_touches_no_obstacle_and_puts_the_cube_ba
     assert math.dist(out["objects"]["green"], CUBE) < 0.002, out["objects"]  # (put back where it was taken)
 
 
-def test_the_physics_runs_on_tcmalloc_and_glibcs_malloc_gives_the_same_physics(sandbox, tmp_path):
+def tcmalloc_linked() -> bool:
+    """Whether the build links sim_server with tcmalloc (SKILLBUS_SIM_TCMALLOC, on unless
+    configured off; sim_server/CMakeLists.txt)."""
+    cache = (paths.build_dir() / "CMakeCache.txt").read_text()
+    return "SKILLBUS_SIM_TCMALLOC:BOOL=OFF" not in cache
+
+
+def test_the_physics_runs_on_tcmalloc_and_glibcs_allocator_gives_the_same_physics(sandbox, tmp_path):
     """sim_server is linked with tcmalloc (a faster step: docs/sim_server.md). Where a block
-    of memory lands must change no number: glibc's malloc, put first with LD_PRELOAD (what
-    bench/sim_physics.py compares with), grasps and carries to the same state bit for bit."""
+    of memory lands must change no number: glibc's allocator (its malloc and libstdc++'s
+    operator new put first with LD_PRELOAD, as bench/sim_physics.py compares with) grasps
+    and carries to the same state bit for bit."""
     script = tmp_path / "carry.json"
     script.write_text(json.dumps(grasp_and_carry()))
     runs = {}
-    for name, env in (("tcmalloc", None), ("glibc", {"LD_PRELOAD": "libc.so.6"})):
+    for name, env in (("linked", None), ("glibc", {"LD_PRELOAD": "libc.so.6 libstdc++.so.6"})):
         p = sandbox.start(f"carry-{name}", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
                                             "--script", str(script), "--duration-s", "13"], env=env)
         assert sandbox.wait(p, 120) == 0, p.stderr()[-2000:]
         runs[name] = last_json(p.stdout())
-    assert runs["tcmalloc"]["allocator"].startswith("libtcmalloc"), runs["tcmalloc"]["allocator"]
-    assert runs["glibc"]["allocator"] == "libc.so.6", runs["glibc"]["allocator"]
-    assert runs["tcmalloc"]["state_digest"] == runs["glibc"]["state_digest"]
-    assert runs["tcmalloc"]["session_digest"] == runs["glibc"]["session_digest"]
+    if tcmalloc_linked():
+        assert runs["linked"]["allocator"] == "libtcmalloc_minimal.so.4", (
+            f"{runs['linked']['allocator']}: sim_server is not on tcmalloc (deploy/setup.sh installs "
+            f"libgoogle-perftools-dev; CMake warned if it found no tcmalloc_minimal)")
+    else:
+        assert runs["linked"]["allocator"] == "libc.so.6 (operator new: libstdc++.so.6)", runs["linked"]
+    assert runs["glibc"]["allocator"] == "libc.so.6 (operator new: libstdc++.so.6)", runs["glibc"]["allocator"]
+    assert runs["linked"]["state_digest"] == runs["glibc"]["state_digest"]
+    assert runs["linked"]["session_digest"] == runs["glibc"]["session_digest"]
 
 
 def test_an_ack_timeout_for_someone_who_is_no_participant_stops_the_start_naming_it(sandbox):

@@ -273,7 +273,8 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
     def tick_element(self, m: wm_element_t) -> Element:
         """A tick parameter's element from its message: what element_from_msg(m) then
         add_relations give (its properties from `m`, the replica's relations of its id,
-        marked as loaded), a new element every call that shares nothing that can change.
+        marked as loaded), a new element every call that shares nothing that can change
+        (what it was loaded as, loaded(), is read only, as every reader copy's).
 
         A task's parameters come back in the same bytes tick after tick, and the skill
         process's tick decoder then hands over the same message objects

@@ -158,6 +158,8 @@ class Element:
                         frozenset(self._resolved_relations()) if resolved is None else resolved)
 
     def loaded(self) -> tuple[str, str, dict[str, Property], frozenset] | None:
+        """What it was loaded as (type, label, properties, relations), or None: to read,
+        never to change (a reader copy shares it with the element it was copied from)."""
         return self._loaded
 
     def changed_since_loaded(self) -> bool:
