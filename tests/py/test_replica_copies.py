@@ -124,13 +124,9 @@ def test_a_fresh_element_is_completed_as_one_that_carried_relations_would_be(wmi
         assert fresh.changed_since_loaded()
 
 
-def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeypatch):
-    """A tick's element values are made afresh at every tick (skillbus.skill.convert):
-    completing them took a copy and remembered what they were loaded as twice. Now each is
-    a reader's copy of the decoded element (WorldModelInterface.tick_element): what it was
-    loaded as is the decoded element's, never copied nor marked again."""
+def hold_skill():
+    """A primitive with one element parameter, Object (a tick's parameters are made for it)."""
     from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
-    from skillbus.skill.convert import apply_param_msgs, param_msg
 
     class Hold(SkillDescription):
         def createDescription(self):
@@ -140,6 +136,17 @@ def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeyp
         def createDescription(self):
             self.setDescription(Hold(), "hold")
 
+    return hold
+
+
+def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeypatch):
+    """A tick's element values are made afresh at every tick (skillbus.skill.convert):
+    completing them took a copy and remembered what they were loaded as twice. Now each is
+    a reader's copy of the decoded element (WorldModelInterface.tick_element): what it was
+    loaded as is the decoded element's, never copied nor marked again."""
+    from skillbus.skill.convert import apply_param_msgs, param_msg
+
+    hold = hold_skill()
     sender = hold()
     cube = Element("skiros:Cube", "red", "skiros:Cube-2")
     cube.setProperty("skiros:Size", 0.07)
@@ -161,17 +168,9 @@ def test_a_ticks_element_parameter_is_completed_once_and_not_copied(wmi, monkeyp
 
 
 def test_without_a_world_model_client_a_ticks_element_is_marked_loaded_as_it_came(monkeypatch):
-    from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
     from skillbus.skill.convert import apply_param_msgs, param_msg
 
-    class Hold(SkillDescription):
-        def createDescription(self):
-            self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
-
-    class hold(PrimitiveBase):
-        def createDescription(self):
-            self.setDescription(Hold(), "hold")
-
+    hold = hold_skill()
     sender = hold()
     cube = Element("skiros:Cube", "red", "skiros:Cube-2")
     cube.setProperty("skiros:Size", 0.07)
@@ -183,20 +182,6 @@ def test_without_a_world_model_client_a_ticks_element_is_marked_loaded_as_it_cam
     assert got.loaded() is not None and not got.changed_since_loaded()
     assert got.getProperty("skiros:Size").value == 0.07 and got.loaded()[2]["skiros:Size"].value == 0.07
     assert got.getRelations() == []  # (a tick carries properties only; no replica to add relations)
-
-
-def hold_skill():
-    from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
-
-    class Hold(SkillDescription):
-        def createDescription(self):
-            self.addParam("Object", Element("skiros:Product"), ParamTypes.Required)
-
-    class hold(PrimitiveBase):
-        def createDescription(self):
-            self.setDescription(Hold(), "hold")
-
-    return hold
 
 
 def test_the_same_ticks_message_is_decoded_once_yet_every_tick_gets_an_element_of_its_own(wmi, monkeypatch):
@@ -252,6 +237,10 @@ def test_the_same_ticks_message_is_decoded_once_yet_every_tick_gets_an_element_o
     third = tick()
     assert {r["src"] for r in third.getRelations()} == {"skiros:Table-1", "skiros:Gripper-5"}
     assert third == as_decoded_afresh() and third.loaded() == as_decoded_afresh().loaded()
+    # a resync makes the relations anew (resync: new sets and caches): decoded again, the same element
+    n = len(decodes)
+    wmi._rel_cache = {}
+    assert tick() == third and len(decodes) == n + 1
     # the element leaves the replica: as it came, with no relations
     del wmi._elements["skiros:Cube-2"]
     gone = tick()
