@@ -101,6 +101,15 @@ std::string FrameInbox::missing(const std::vector<ChannelCount>& expected) const
   return "";
 }
 
+std::string sender_of_missing(const std::string& missing_text) {
+  static const std::string from = " from sender ", in = " in frame ";
+  const auto a = missing_text.find(from);
+  if (a == std::string::npos) return "";
+  const auto b = missing_text.find(in, a + from.size());
+  if (b == std::string::npos) return "";
+  return missing_text.substr(a + from.size(), b - a - from.size());
+}
+
 std::vector<StampedMessage> FrameInbox::take(const std::vector<ChannelCount>& expected, int64_t frame) {
   std::vector<StampedMessage> out;
   for (const auto& e : expected) {

@@ -282,7 +282,11 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   last_acker_.clear();
   for (const auto& [name, ack] : acks_)
     if (!ack.error.empty()) {
-      error = "lockstep: participant " + name + " failed in frame " + std::to_string(frame) + ": " + ack.error;
+      // A lost message is the sender's (or its link's) failure, not that of who noticed it.
+      const std::string sender = sender_of_missing(ack.error);
+      error = sender.empty() || sender == name
+                  ? "lockstep: participant " + name + " failed in frame " + std::to_string(frame) + ": " + ack.error
+                  : "lockstep: participant(s) " + sender + ": " + ack.error;
       return false;
     }
 
@@ -295,7 +299,8 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   for (std::string miss = inbox_.missing(expected); !miss.empty(); miss = inbox_.missing(expected)) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(msg_deadline - steady::now());
     if (left.count() <= 0) {
-      error = "lockstep: message lost on " + miss + " (master " + cfg_.name + ")";
+      error = "lockstep: participant(s) " + sender_of_missing(miss) + ": message lost on " + miss + " (noticed by master " +
+              cfg_.name + ")";
       return false;
     }
     bus_.handle(polling() ? std::chrono::milliseconds(0) : std::min(left, std::chrono::milliseconds(50)));

@@ -75,6 +75,15 @@ TEST(FrameInbox, NamesWhatIsMissing) {
   EXPECT_EQ(inbox.missing({count("p1", "SB_X", 5, 2)}), "channel SB_X from sender p1 in frame 5: got 1 of 2");
 }
 
+TEST(FrameInbox, TheSenderOfAMissingMessageIsReadBackFromItsText) {
+  BadInputCounter bad("t");
+  FrameInbox inbox("me", bad);
+  EXPECT_EQ(sender_of_missing(inbox.missing({count("arm_2", "SB_X", 7, 1)})), "arm_2");
+  EXPECT_EQ(sender_of_missing("message lost on " + inbox.missing({count("p", "SB_Y", 0, 3)}) + " (noticed by q)"), "p");
+  EXPECT_EQ(sender_of_missing("frame handler failed: boom"), "");
+  EXPECT_EQ(sender_of_missing("text from sender without the frame"), "");
+}
+
 TEST(FrameInbox, DropsOwnDuplicateStaleAndUnstampedMessages) {
   BadInputCounter bad("t");
   FrameInbox inbox("me", bad);

@@ -99,6 +99,8 @@ def test_a_lost_python_message_is_reported_with_channel_sender_and_frame(sandbox
     assert sandbox.wait(clock, 60) == 1
     error = last_json(clock.stdout())["error"]
     assert "message lost on channel SB_DEMO_CMD from sender py1 in frame 50: got 0 of 1" in error, error
+    # the sender is named, not the participant that noticed the loss
+    assert error.startswith("lockstep: participant(s) py1: message lost"), error
 
 
 def test_a_lost_cpp_message_is_reported_with_channel_sender_and_frame(sandbox, binary):
@@ -109,6 +111,8 @@ def test_a_lost_cpp_message_is_reported_with_channel_sender_and_frame(sandbox, b
     assert sandbox.wait(clock, 60) == 1
     error = last_json(clock.stdout())["error"]
     assert "message lost on channel SB_DEMO_CMD from sender cpp1 in frame 30: got 0 of 1" in error, error
+    # the sender is named, not the participant that noticed the loss
+    assert error.startswith("lockstep: participant(s) cpp1: message lost"), error
 
 
 def test_a_participant_that_never_joins_is_named(sandbox, binary):

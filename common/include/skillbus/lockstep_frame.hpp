@@ -81,6 +81,11 @@ class FrameOutbox {
   Sha256 hash_;
 };
 
+// The participant whose message a FrameInbox::missing() text names ("p1" above), or "".
+// A participant that reports a lost message is not the one at fault: the sender (or the
+// link from it) is, and the master's error names the sender.
+std::string sender_of_missing(const std::string& missing_text);
+
 class FrameInbox {
  public:
   FrameInbox(std::string self, BadInputCounter& bad) : self_(std::move(self)), bad_(bad) {}
