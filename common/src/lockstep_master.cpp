@@ -126,6 +126,11 @@ void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) 
   const auto i = static_cast<size_t>(std::lower_bound(expected_.begin(), expected_.end(), j.participant) -
                                      expected_.begin());
   if (pid_of_[i] == 0) pid_of_[i] = j.pid;
+  if (j.pid != 0 && j.pid != pid_of_[i] && restarted_.empty())
+    restarted_ = "lockstep: participant(s) " + j.participant + " started again (pid " + std::to_string(pid_of_[i]) +
+                 ", now " + std::to_string(j.pid) + ") " +
+                 (frame_begun_ < 0 ? std::string("before frame 0") : "in frame " + std::to_string(frame_begun_)) +
+                 ": what was set up with it before is lost, and this session with it";
   if (awaiting_frame_ >= 0 && j.pid == pid_of_[i]) alive_at_[i] = steady::now();
 }
 
@@ -169,7 +174,11 @@ bool LockstepMaster::wait_for_joins(std::string& error) {
   waiting.stop = false;
   const Bytes waiting_clock = encode_msg(waiting);
   auto say_waiting_at = steady::now();
-  while (!all_joined()) {
+  while (!all_joined() || !restarted_.empty()) {
+    if (!restarted_.empty()) {
+      error = restarted_;
+      return false;
+    }
     if (steady::now() >= say_waiting_at) {
       bus_.publish(clock_channel(), waiting_clock.data(), waiting_clock.size());
       say_waiting_at = steady::now() + cfg_.resend_interval;
@@ -229,7 +238,7 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   const Bytes clock = encode_msg(c);
 
   acks_.clear();
-  awaiting_frame_ = frame;
+  awaiting_frame_ = frame_begun_ = frame;
   const auto start = steady::now();
   clock_sent_ = own_work_done_ = start;
   auto resend_at = start;
@@ -248,6 +257,10 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
           late_after = ack_timeouts_[i];
         }
       }
+    if (!restarted_.empty()) {
+      error = restarted_;
+      return false;
+    }
     if (!late.empty()) {
       error = "lockstep: no ack for frame " + std::to_string(frame) + " from participant(s) " + join_names(late) +
               " within " + secs_text(late_after);

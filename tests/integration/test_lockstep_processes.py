@@ -246,6 +246,44 @@ def test_a_master_restarted_before_frame_0_is_waited_for_and_the_session_runs(sa
         assert last_json(p.stdout())["frames"] == 50
 
 
+@pytest.mark.parametrize("name", ["py1", "cpp1"])
+def test_a_participant_started_again_before_frame_0_ends_the_session_naming_it(sandbox, binary, name):
+    # A skill manager that died after the skill processes had registered with it, and was
+    # started again (supervisord) while the master still waited for joins, knew no skills
+    # in the session that followed. What a participant was told before frame 0 is lost with
+    # it: the master ends the session at once, naming it, and supervisord starts them all.
+    clock = sandbox.start("clock", [binary("sb_clock"), "--demo", "--frames", "50", "--participants",
+                                    f"{name},cpp2", "--join-timeout-ms", "60000"])
+    first = sandbox.start(name, participant_argv(binary, name, clock_timeout_s=60))
+    clock.wait_for(f"participant '{name}'", 30)
+    sandbox.kill(first)
+    started = time.monotonic()
+    sandbox.start(f"{name}-again", participant_argv(binary, name, clock_timeout_s=60))
+    assert sandbox.wait(clock, 30) == 1, clock.stdout() + clock.stderr()[-2000:]
+    assert time.monotonic() - started < 15  # its start-up, not the master's 60 s join timeout
+    s = last_json(clock.stdout())
+    assert s["frames"] == 0
+    assert re.search(rf"participant\(s\) {name} started again \(pid \d+, now \d+\) before frame 0: ", s["error"]), \
+        s["error"]
+
+
+def test_a_participant_started_again_mid_session_is_named_at_once(sandbox, binary):
+    # Before its ack timeout (here 60 s): the new process's join says the old one is gone.
+    clock, parts = start(sandbox, binary, ["py1", "py2", "cpp1"], frames=10_000_000,
+                         clock_args=["--ack-timeout-ms", "60000"])
+    clock.wait_for("starting frames", 30)
+    time.sleep(0.5)
+    sandbox.kill(parts["py2"])
+    started = time.monotonic()
+    sandbox.start("py2-again", python_participant_argv("py2"))
+    assert sandbox.wait(clock, 30) == 1, clock.stdout() + clock.stderr()[-2000:]
+    assert time.monotonic() - started < 15
+    s = last_json(clock.stdout())
+    assert re.search(r"participant\(s\) py2 started again \(pid \d+, now \d+\) in frame \d+: ", s["error"]), s["error"]
+    for n in ("py1", "cpp1"):  # told to stop, with the reason
+        assert sandbox.wait(parts[n], 15) == 1
+
+
 # Runs a command and prints, on stderr once it has ended, how often it slept (voluntary
 # context switches, from its rusage).
 SLEEPS = ("import json, resource, subprocess, sys\n"

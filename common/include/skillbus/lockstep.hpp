@@ -125,6 +125,11 @@ class LockstepMaster {
   // awaited (a join sent while it works on the frame: it is alive, however long it takes).
   std::vector<std::chrono::steady_clock::time_point> alive_at_;
   std::vector<int64_t> pid_of_;  // the pid each joined with: a join from another is a restart, no sign of life
+  // A participant started again (a join from another pid) ends the session at once: what
+  // it was told before (a skill process's registration with the manager, before frame 0 as
+  // well) is lost with the process. The error, once one is heard; the latest frame begun.
+  std::string restarted_;
+  int64_t frame_begun_ = -1;
   bool stop_requested_ = false;
   std::string stop_reason_;
   int64_t end_at_ = -1;  // a participant asked to end after this frame (lockstep_end_t)
