@@ -130,7 +130,7 @@ void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) 
     restarted_ = "lockstep: participant(s) " + j.participant + " started again (pid " + std::to_string(pid_of_[i]) +
                  ", now " + std::to_string(j.pid) + ") " +
                  (frame_begun_ < 0 ? std::string("before frame 0") : "in frame " + std::to_string(frame_begun_)) +
-                 ": what was set up with it before is lost, and this session with it";
+                 ": what was set up with it before is lost, and this session with it (or a second process uses its name)";
   if (awaiting_frame_ >= 0 && j.pid == pid_of_[i]) alive_at_[i] = steady::now();
 }
 
