@@ -2,7 +2,8 @@
 Rasqal: over the ontology (subclass paths), the loaded scene's elements and their
 relations, in SkiROS2's answer form; a CONSTRUCT's triples as rows; a query that may read
 other files or hosts (FROM, SERVICE), a DESCRIBE and a malformed one are refused naming
-why; the server goes on, and a query after a change of the world sees the change (the
+why; so are queries whose results or work have no bound (patterns joined by no
+variable); the server goes on, and a query after a change of the world sees the change (the
 server keeps the world's graph between queries of one version)."""
 
 import json
@@ -43,6 +44,12 @@ QUERIES = {
     "from": "SELECT ?x FROM <file:///etc/passwd> WHERE { ?x ?p ?o }",
     "service": "SELECT ?x WHERE { SERVICE <http://example.org/sparql> { ?x ?p ?o } }",
     "broken": "SELECT ?x WHERE { ?x a }",
+    # patterns that share no variable: rows by the graph's size cubed. The results took
+    # the server's memory (2 GB in 10 s) and it answered nothing more; now they stop at
+    # the reply's size, the work at its bound, a sort at its lower one.
+    "cross": "SELECT * WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i }",
+    "cross_count": "SELECT (COUNT(*) AS ?n) WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i . ?j ?k ?l }",
+    "cross_sorted": "SELECT ?a WHERE { ?a ?b ?c . ?d ?e ?f } ORDER BY ?a",
 }
 
 
@@ -63,4 +70,7 @@ def test_sparql_on_the_world_model(sandbox, tmp_path):
     assert r["from"].startswith("error:") and "FROM" in r["from"], r
     assert r["service"].startswith("error:") and "SERVICE" in r["service"], r
     assert r["broken"].startswith("error: SPARQL"), r
+    assert "more than a reply carries: add LIMIT and OFFSET" in r["cross"], r
+    assert "looked at more than 2000000 triples" in r["cross_count"], r
+    assert "looked at more than 5000 triples" in r["cross_sorted"] and "sort on the client" in r["cross_sorted"], r
     assert wm.returncode is None

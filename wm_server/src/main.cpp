@@ -33,6 +33,10 @@ int main(int argc, char** argv) {
   app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");
   app.add_option("--period-ms", period_ms, "wall clock: the frame period, ms")->check(apps::positive());
   app.add_option("--snapshot-every", o.snapshot_every, "commits between snapshots");
+  app.add_option("--sparql-max-examined", o.sparql_max_examined,
+                 "a SPARQL query that looks at more candidate triples than this is stopped and refused, naming why")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--crash-after-commits", o.crash_after_commits,
                  "tests: die after this many durable commits, before replying (-1: never)");
   bool repair = false;

@@ -86,7 +86,7 @@ void WorldModelServer::add_ontology_methods() {
     try {
       // (a large result comes in chunks, docs/rpc.md; the server's reply memory bounds it)
       out.turtle = sparql_.query_json(req.turtle, store_.version(), [this] { return sparql_graph(); }, prefixes_,
-                                      opt_.rpc_memory_bytes / 2);
+                                      opt_.rpc_memory_bytes / 2, opt_.sparql_max_examined);
     } catch (const WmError& e) {
       throw RpcBadRequest(e.what());
     }

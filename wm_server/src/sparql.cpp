@@ -7,6 +7,7 @@
 
 #include <rasqal.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <memory>
@@ -93,20 +94,57 @@ nlohmann::json term_json(const raptor_term* t) {
 // A CONSTRUCT's triples, each once, as SPARQL 1.1 JSON results with the variables subject,
 // predicate and object (the JSON results format has no graphs; SkiROS2's query_ontology
 // gives a CONSTRUCT's triples as rows of three values, as rdflib iterates its graph).
-std::string graph_results_json(rasqal_query_results* results) {
+// Stops (returns "" with `over` set) once the rows pass `max_bytes`.
+std::string graph_results_json(rasqal_query_results* results, size_t max_bytes, bool& over) {
   nlohmann::json rows = nlohmann::json::array();
   std::set<std::string> seen;  // (a graph is a set: Rasqal gives a triple once per solution that makes it)
+  size_t bytes = 0;
   for (const raptor_statement* t = rasqal_query_results_get_triple(results); t;
        t = rasqal_query_results_next_triple(results) ? nullptr : rasqal_query_results_get_triple(results)) {
     nlohmann::json row = {{"subject", term_json(t->subject)},
                           {"predicate", term_json(t->predicate)},
                           {"object", term_json(t->object)}};
-    if (seen.insert(row.dump()).second) rows.push_back(std::move(row));
+    std::string text = row.dump();
+    const size_t size = text.size();
+    if (seen.insert(std::move(text)).second) {
+      rows.push_back(std::move(row));
+      if ((bytes += size + 1) > max_bytes) {
+        over = true;
+        return "";
+      }
+    }
   }
   nlohmann::json out = {{"head", {{"vars", {"subject", "predicate", "object"}}}},
                         {"results", {{"bindings", std::move(rows)}}}};
   return out.dump();
 }
+
+// Raptor writes the results here: kept up to `max` bytes, then counted only (a query whose
+// results no reply carries must not take the server's memory first).
+// Past it the triples source is told to stop, so that the rows end soon (Rasqal's writer
+// goes on while rows come, whatever the stream says).
+struct BoundedText {
+  std::string text;
+  size_t max = 0;
+  size_t bytes = 0;  // written, kept or not
+  sparql_detail::Served* served = nullptr;
+
+  static int write_bytes(void* self, const void* ptr, size_t size, size_t nmemb) {
+    auto* b = static_cast<BoundedText*>(self);
+    const size_t n = size * nmemb;
+    b->bytes += n;
+    if (b->bytes <= b->max)
+      b->text.append(static_cast<const char*>(ptr), n);
+    else
+      b->served->stop = true;
+    return static_cast<int>(nmemb);
+  }
+  static int write_byte(void* self, const int byte) {
+    const char c = static_cast<char>(byte);
+    return write_bytes(self, &c, 1, 1) == 1 ? 0 : 1;
+  }
+  bool over() const { return bytes > max; }
+};
 
 }  // namespace
 
@@ -147,7 +185,7 @@ int64_t SparqlEngine::graphs_read() const { return impl_->reads; }
 
 std::string SparqlEngine::query_json(const std::string& query, int64_t version,
                                      const std::function<std::vector<Triple>()>& graph, const Prefixes& prefixes,
-                                     size_t max_bytes) {
+                                     size_t max_bytes, uint64_t max_examined) {
   const std::string code = sparql_detail::sparql_code(query);
   if (names_a_service(code)) throw WmError("SPARQL: SERVICE is not allowed: a query reads the world model only");
   if (has_short_values(code))
@@ -187,6 +225,13 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   raptor_sequence* graphs = rasqal_query_get_data_graph_sequence(q.get());
   if (graphs && raptor_sequence_size(graphs) > 0)
     throw WmError("SPARQL: FROM and FROM NAMED are not allowed: a query reads the world model only");
+  // Rasqal sorts ORDER BY and DISTINCT rows into an unbalanced binary tree (rasqal_map),
+  // which rows in order or with equal keys make a list: time grows with the square of the
+  // rows (20,000 rows with one key took 11 s here), and the tree is walked recursively.
+  // Such a query may look at fewer triples (kMaxExaminedSorted).
+  raptor_sequence* order = rasqal_query_get_order_conditions_sequence(q.get());
+  const bool sorts = (order && raptor_sequence_size(order) > 0) || rasqal_query_get_distinct(q.get()) != 0;
+  const uint64_t budget = sorts ? std::min(max_examined, kMaxExaminedSorted) : max_examined;
   error.clear();  // (the query is prepared: what is logged from here on is the graph's or the run's)
   if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
     impl_->served.graph = nullptr;
@@ -200,31 +245,47 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
     ++impl_->reads;
   }
   impl_->served.graph = impl_->graph.get();
-  impl_->served.failed = false;
+  impl_->served.failed = impl_->served.over_budget = impl_->served.stop = false;
+  impl_->served.examined = 0;
+  impl_->served.budget = budget;
   std::unique_ptr<rasqal_query_results, void (*)(rasqal_query_results*)> results(rasqal_query_execute(q.get()),
                                                                                 rasqal_free_query_results);
   if (!results) throw WmError("SPARQL: " + (error.empty() ? std::string("the query failed") : error));
   std::string json;
+  bool too_large = false;
   if (rasqal_query_results_is_graph(results.get())) {
-    json = graph_results_json(results.get());
+    json = graph_results_json(results.get(), max_bytes, too_large);
   } else {
-    void* out = nullptr;
-    size_t out_len = 0;
-    raptor_iostream* sink = raptor_new_iostream_to_string(rw, &out, &out_len, malloc);
+    BoundedText out;
+    out.max = max_bytes;
+    out.served = &impl_->served;
+    raptor_iostream_handler handler{};
+    handler.version = 2;
+    handler.write_byte = &BoundedText::write_byte;
+    handler.write_bytes = &BoundedText::write_bytes;
+    raptor_iostream* sink = raptor_new_iostream_from_handler(rw, &out, &handler);
     if (!sink) throw WmError("SPARQL: cannot write the results");
     const int w = rasqal_query_results_write(sink, results.get(), "json", nullptr, nullptr, base.get());
-    raptor_free_iostream(sink);  // (finishes the string)
-    json.assign(static_cast<const char*>(out ? out : ""), out_len);
-    std::free(out);
+    raptor_free_iostream(sink);
     if (w != 0) throw WmError("SPARQL: " + (error.empty() ? std::string("cannot write the results") : error));
+    too_large = out.over();
+    json = std::move(out.text);
   }
+  if (impl_->served.over_budget)
+    throw WmError("SPARQL: the query looked at more than " + std::to_string(budget) +
+                  " triples of the world and was stopped (a pattern that shares no variable with the others "
+                  "multiplies the rows by the whole graph): join its patterns by variables, or narrow them" +
+                  (budget < max_examined ? std::string("; with ORDER BY or DISTINCT the bound is lower: the server's "
+                                                       "SPARQL engine, Rasqal, sorts in time that grows with the "
+                                                       "square of the rows (sort on the client instead)")
+                                         : std::string()));
+  if (too_large)
+    throw WmError("SPARQL: the results are over " + std::to_string(max_bytes) +
+                  " bytes, more than a reply carries: add LIMIT and OFFSET to the query");
   // (a pattern that could not be matched, or an error Rasqal logged while the rows came,
   // ends the rows early without failing the writer: partial results are no answer)
   if (impl_->served.failed || !error.empty())
     throw WmError("SPARQL: the query failed while it ran" + (error.empty() ? std::string() : ": " + error));
-  if (json.size() > max_bytes)
-    throw WmError("SPARQL: the results are " + std::to_string(json.size()) + " bytes, more than a reply carries (" +
-                  std::to_string(max_bytes) + "): add LIMIT and OFFSET to the query");
   return json;
 }
 

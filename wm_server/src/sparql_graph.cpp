@@ -203,6 +203,7 @@ struct SourceData {
 
 // One triple pattern being matched: the candidates and what each part must equal.
 struct Match {
+  Served* served = nullptr;  // (counts the candidates looked at)
   const IndexedGraph* graph = nullptr;
   const std::vector<uint32_t>* list = nullptr;  // (with `all`: every triple)
   bool all = false;
@@ -217,8 +218,14 @@ struct Match {
       if (want[i] && !same_term(parts[i], want[i])) return false;
     return true;
   }
-  void settle() {  // on to the first candidate from `pos` that matches
-    while (pos < end() && !matches(triple())) ++pos;
+  void settle() {  // on to the first candidate from `pos` that matches (or the end, past the budget)
+    for (; pos < end(); ++pos) {
+      if (!served->examine()) {
+        pos = end();
+        return;
+      }
+      if (matches(triple())) return;
+    }
   }
 };
 
@@ -279,6 +286,7 @@ int init_match(rasqal_triples_match* rtm, rasqal_triples_source*, void* user_dat
     return -1;  // (Rasqal then finishes the match: finish_match takes no Match)
   }
   const IndexedGraph* graph = served->graph;
+  m->served = served;
   m->graph = graph;
   rasqal_literal* parts[3] = {pattern->subject, pattern->predicate, pattern->object};
   const rasqal_triple_parts bits[3] = {RASQAL_TRIPLE_SUBJECT, RASQAL_TRIPLE_PREDICATE, RASQAL_TRIPLE_OBJECT};
@@ -316,6 +324,7 @@ int triple_present(rasqal_triples_source*, void* user_data, rasqal_triple* t) no
   const IndexedGraph* graph = served->graph;
   if (!graph || t->origin) return 0;
   Match m;
+  m.served = served;
   m.graph = graph;
   m.want[0] = t->subject;  // (borrowed: not freed, m is not finished)
   m.want[1] = t->predicate;

@@ -11,6 +11,7 @@
 
 #include <rasqal.h>
 
+#include <cstdint>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -65,9 +66,24 @@ class IndexedGraph {
 
 // What the triples source serves, and whether a pattern could not be matched while a query
 // ran (out of memory: Rasqal then ends the query's rows quietly, so the engine asks this).
+//
+// And how much work the query has done: every candidate triple a pattern looks at counts,
+// and past `budget` every pattern ends, the query with `over_budget`. A count, not a
+// clock: the same query on the same world fails the same way on any machine (lockstep).
 struct Served {
   const IndexedGraph* graph = nullptr;  // nullptr: an empty graph
   bool failed = false;
+  uint64_t examined = 0;
+  uint64_t budget = UINT64_MAX;
+  bool over_budget = false;
+  bool stop = false;  // set from outside (the results are too large already): every pattern ends
+  // One more candidate looked at: false (and failed, over_budget) once past the budget.
+  bool examine() {
+    if (stop) return false;
+    if (++examined <= budget) return true;
+    failed = over_budget = true;
+    return false;
+  }
 };
 
 // Makes `world` answer every query from `served->graph`, the graph current when the query

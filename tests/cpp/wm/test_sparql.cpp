@@ -295,6 +295,91 @@ TEST(SparqlEngine, ResultsLargerThanAReplyNameLimitAndOffset) {
   }
 }
 
+// A query that Rasqal sorts, over the sort's bound at the default bound for the rest.
+void expect_the_sort_bound(SparqlEngine& engine, const char* sorted) {
+  try {
+    engine.query_json(sorted, 1, graph, prefixes(), 1 << 24);
+    FAIL() << "answered: " << sorted;
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("looked at more than " + std::to_string(SparqlEngine::kMaxExaminedSorted) +
+                                         " triples"),
+              std::string::npos)
+        << sorted << ": " << e.what();
+    EXPECT_NE(std::string(e.what()).find("sort on the client"), std::string::npos) << e.what();
+  }
+}
+
+// A pattern that shares no variable with the others multiplies the rows by the graph's
+// size: four of them over this small graph are millions of rows, over the demo's world
+// they took the server's memory (gigabytes in seconds) before any check on the reply.
+TEST(SparqlEngine, AQueryThatLooksAtTooManyTriplesIsStoppedNamingWhy) {
+  SparqlEngine engine;
+  const auto size = [&](uint64_t budget) {
+    return nlohmann::json::parse(engine.query_json("SELECT (COUNT(*) AS ?n) WHERE { ?s ?p ?o }", 1, graph, prefixes(),
+                                                   1 << 20, budget))["results"]["bindings"][0]["n"]["value"]
+        .get<std::string>();
+  };
+  const uint64_t triples = std::stoull(size(SparqlEngine::kMaxExamined));
+  ASSERT_GT(triples, 20u);
+  // One scan looks at every triple once: the graph's size is just enough, one less is not.
+  EXPECT_EQ(size(triples), std::to_string(triples));
+  try {
+    size(triples - 1);
+    FAIL() << "a query over its budget was answered";
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("looked at more than " + std::to_string(triples - 1) + " triples"),
+              std::string::npos)
+        << e.what();
+  }
+  for (const char* cross : {"SELECT * WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i . ?j ?k ?l } ORDER BY ?a ?l",
+                            "SELECT (COUNT(*) AS ?n) WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i . ?j ?k ?l }",
+                            "CONSTRUCT { ?a ?e ?i } WHERE { ?a ?b ?c . ?d ?e ?f . ?g ?h ?i . ?j ?k ?l }"}) {
+    try {
+      engine.query_json(cross, 1, graph, prefixes(), 1 << 24, 100000);
+      FAIL() << "answered: " << cross;
+    } catch (const WmError& e) {
+      EXPECT_NE(std::string(e.what()).find("shares no variable"), std::string::npos) << cross << ": " << e.what();
+    }
+  }
+  // The engine goes on: the next query has its own budget.
+  EXPECT_EQ(size(triples), std::to_string(triples));
+  // ORDER BY (Rasqal's sort: time with the square of the rows) has a lower one.
+  expect_the_sort_bound(engine, "SELECT ?s WHERE { ?s ?p ?o . ?a ?b ?c . ?d ?e ?f } ORDER BY ?s");
+  EXPECT_NO_THROW(engine.query_json("SELECT ?p WHERE { ?s ?p ?o } ORDER BY ?p", 1, graph, prefixes(), 1 << 20));
+}
+
+// DISTINCT too (the same sort). Apart, because Rasqal 0.9.33 leaks a DISTINCT query's
+// rowsource and its rows (Valgrind; with Rasqal's own triples source as well): the
+// memcheck run leaves out the tests whose names end in LeaksInRasqal.
+TEST(SparqlEngine, DistinctHasTheSortsLowerBound_LeaksInRasqal) {
+  SparqlEngine engine;
+  expect_the_sort_bound(engine, "SELECT DISTINCT ?s ?c ?f WHERE { ?s ?p ?o . ?a ?b ?c . ?d ?e ?f }");
+  EXPECT_NO_THROW(engine.query_json("SELECT DISTINCT ?p WHERE { ?s ?p ?o } ORDER BY ?p", 1, graph, prefixes(), 1 << 20));
+}
+
+
+// Results past the reply's size are not kept (the rows stop there), and are refused naming the size.
+TEST(SparqlEngine, ResultsPastTheReplySizeAreRefusedWithTheirSize) {
+  SparqlEngine engine;
+  const std::string all = engine.query_json("SELECT ?s ?p ?o WHERE { ?s ?p ?o }", 1, graph, prefixes(), 1 << 20);
+  try {
+    engine.query_json("SELECT ?s ?p ?o WHERE { ?s ?p ?o }", 1, graph, prefixes(), all.size() - 1);
+    FAIL() << "results one byte over the limit were returned";
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("the results are over " + std::to_string(all.size() - 1) + " bytes"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(engine.query_json("SELECT ?s ?p ?o WHERE { ?s ?p ?o }", 1, graph, prefixes(), all.size()), all);
+  try {
+    engine.query_json("CONSTRUCT { ?s ?p ?o } WHERE { ?s ?p ?o }", 1, graph, prefixes(), 200);
+    FAIL() << "a construct over the limit was returned";
+  } catch (const WmError& e) {
+    EXPECT_NE(std::string(e.what()).find("over 200 bytes, more than a reply carries: add LIMIT"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(SparqlEngine, AConstructGivesItsTriplesAsRowsOfThree) {
   SparqlEngine engine;
   const nlohmann::json j = nlohmann::json::parse(

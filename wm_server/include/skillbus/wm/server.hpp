@@ -43,6 +43,8 @@ struct ServerOptions {
   size_t max_reply_bytes = 128 * 1024;
   // The RPC server's memory of replies (answering retries) is bounded by bytes too.
   size_t rpc_memory_bytes = 16 * 1024 * 1024;
+  // A SPARQL query's work: the candidate triples its patterns may look at (SparqlEngine).
+  uint64_t sparql_max_examined = SparqlEngine::kMaxExamined;
 };
 
 class WorldModelServer {
