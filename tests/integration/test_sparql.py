@@ -37,6 +37,11 @@ QUERIES = {
     "on_table": "SELECT ?x WHERE { ?t a skiros:Table . ?t skiros:contain ?x . ?x a ?c . "
                 "?c rdfs:subClassOf skiros:Product } ORDER BY ?x",
     "labels": "SELECT ?x ?l WHERE { ?x a skiros:Cube ; rdfs:label ?l } ORDER BY ?l",
+    # an OPTIONAL that binds nothing: the value is left out (the client raised TypeError on
+    # the "type": "unbound" value Rasqal's writer gave)
+    "optional": "SELECT ?x ?w WHERE { ?x a skiros:Cube OPTIONAL { ?x skiros:NoSuchProperty ?w } } ORDER BY ?x",
+    # DISTINCT, with OFFSET and LIMIT after it (applied by the server, not by Rasqal)
+    "distinct": "SELECT DISTINCT ?c WHERE { ?t a skiros:Table ; skiros:contain ?x . ?x a ?c } ORDER BY ?c LIMIT 5",
     "ask": "ASK { skiros:Bin-5 a skiros:Bin }",
     "construct": "CONSTRUCT { ?x skiros:near ?t } WHERE { ?t a skiros:Table . ?t skiros:contain ?x . "
                  "?x a skiros:Cube }",
@@ -63,6 +68,8 @@ def test_sparql_on_the_world_model(sandbox, tmp_path):
     assert "skiros:Cube" in r["products"] and "skiros:Table" not in r["products"], r
     assert r["on_table"] == ["skiros:Cube-2", "skiros:Cube-3", "skiros:Cube-4"], r
     assert r["labels"] == ["skiros:Cube-4 blue ", "skiros:Cube-3 green ", "skiros:Cube-2 red "], r
+    assert r["optional"] == ["skiros:Cube-2 ", "skiros:Cube-3 ", "skiros:Cube-4 "], r
+    assert r["distinct"] == ["skiros:Cube", "owl:NamedIndividual"], r  # (ORDER BY: by IRI)
     assert r["ask"] == ["true"], r
     assert sorted(r["construct"]) == [f"skiros:Cube-{i} skiros:near skiros:Table-1 " for i in (2, 3, 4)], r
     assert r["describe"].startswith("error:") and "DESCRIBE is not answered" in r["describe"], r

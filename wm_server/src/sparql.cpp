@@ -14,6 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
+#include <unordered_set>
+#include <vector>
 
 #include "skillbus/wm/model.hpp"
 #include "sparql_graph.hpp"
@@ -119,32 +121,122 @@ std::string graph_results_json(rasqal_query_results* results, size_t max_bytes, 
   return out.dump();
 }
 
-// Raptor writes the results here: kept up to `max` bytes, then counted only (a query whose
-// results no reply carries must not take the server's memory first).
-// Past it the triples source is told to stop, so that the rows end soon (Rasqal's writer
-// goes on while rows come, whatever the stream says).
-struct BoundedText {
-  std::string text;
-  size_t max = 0;
-  size_t bytes = 0;  // written, kept or not
-  sparql_detail::Served* served = nullptr;
-
-  static int write_bytes(void* self, const void* ptr, size_t size, size_t nmemb) {
-    auto* b = static_cast<BoundedText*>(self);
-    const size_t n = size * nmemb;
-    b->bytes += n;
-    if (b->bytes <= b->max)
-      b->text.append(static_cast<const char*>(ptr), n);
-    else
-      b->served->stop = true;
-    return static_cast<int>(nmemb);
-  }
-  static int write_byte(void* self, const int byte) {
-    const char c = static_cast<char>(byte);
-    return write_bytes(self, &c, 1, 1) == 1 ? 0 : 1;
-  }
-  bool over() const { return bytes > max; }
+// A SELECT's DISTINCT, OFFSET and LIMIT, taken out of the query before it runs and applied
+// to its rows here: Rasqal 0.9.33 leaks a DISTINCT query's rows, and tells them apart with
+// an unbalanced tree (time with the square of the rows when they come in order).
+struct Slice {
+  int distinct = 0;  // the query's: 0 none, 1 DISTINCT, 2 REDUCED (here as DISTINCT: allowed)
+  int offset = -1;   // -1: none
+  int limit = -1;
 };
+
+Slice lift_slice(rasqal_query* q) {
+  Slice s;
+  if (rasqal_query_get_verb(q) != RASQAL_QUERY_VERB_SELECT) return s;
+  s.distinct = rasqal_query_get_distinct(q);
+  if (s.distinct == 0) return s;  // (Rasqal's own OFFSET and LIMIT serve)
+  s.offset = rasqal_query_get_offset(q);
+  s.limit = rasqal_query_get_limit(q);
+  rasqal_query_set_distinct(q, 0);
+  rasqal_query_set_offset(q, -1);
+  rasqal_query_set_limit(q, -1);
+  return s;
+}
+
+// A binding's value as SPARQL 1.1 JSON writes it (as Rasqal's writer does); false for a
+// value that has no such form.
+bool literal_json(rasqal_literal* l, nlohmann::json& out) {
+  auto text = [](const unsigned char* s, size_t n) { return std::string(reinterpret_cast<const char*>(s), n); };
+  size_t n = 0;
+  switch (l->type) {
+    case RASQAL_LITERAL_URI: {
+      const unsigned char* s = raptor_uri_as_counted_string(l->value.uri, &n);
+      out = {{"type", "uri"}, {"value", text(s, n)}};
+      return true;
+    }
+    case RASQAL_LITERAL_BLANK:
+      out = {{"type", "bnode"}, {"value", text(l->string, l->string_len)}};
+      return true;
+    case RASQAL_LITERAL_STRING:
+      out = {{"type", "literal"}, {"value", text(l->string, l->string_len)}};
+      if (l->language) out["xml:lang"] = l->language;
+      if (l->datatype) {
+        const unsigned char* s = raptor_uri_as_counted_string(l->datatype, &n);
+        out["datatype"] = text(s, n);
+      }
+      return true;
+    default: {  // (a typed value: as the RDF term it stands for)
+      std::unique_ptr<rasqal_literal, void (*)(rasqal_literal*)> node(rasqal_literal_as_node(l), rasqal_free_literal);
+      return node && node->type == RASQAL_LITERAL_STRING && literal_json(node.get(), out);
+    }
+  }
+}
+
+// A SELECT's rows (or an ASK's answer) as SPARQL 1.1 JSON results, written here rather than
+// by Rasqal's writer: `slice` applied to the rows; an unbound value left out of its row (the
+// format's rule; Rasqal wrote "type": "unbound", which SkiROS2's clients do not expect);
+// the rows stop once past `max_bytes` (`over`). "" with `error` set for a value with no
+// JSON form.
+std::string bindings_json(rasqal_query_results* results, rasqal_query* q, const Slice& slice, size_t max_bytes,
+                          bool& over, std::string& error) {
+  if (rasqal_query_results_is_boolean(results))
+    return nlohmann::json{{"head", nlohmann::json::object()},
+                          {"boolean", rasqal_query_results_get_boolean(results) > 0}}
+        .dump();
+  const int columns = rasqal_query_results_get_bindings_count(results);
+  std::vector<std::string> names;
+  for (int i = 0; i < columns; ++i)
+    names.emplace_back(reinterpret_cast<const char*>(rasqal_query_results_get_binding_name(results, i)));
+  const nlohmann::json flags = {{"ordered", rasqal_query_get_order_condition(q, 0) != nullptr},
+                                {"distinct", slice.distinct != 0}};
+  // The rows are written into the text as they come (each row dumped once).
+  std::string out = "{\"head\":" + nlohmann::json{{"vars", names}}.dump() + ",\"results\":" + flags.dump();
+  out.back() = ',';  // (the flags' closing brace)
+  out += "\"bindings\":[";
+  const std::string end = "]}}";
+  std::unordered_set<std::string> seen;  // (DISTINCT: the rows met, skipped ones too)
+  size_t seen_bytes = 0;
+  long skipped = 0, kept = 0;
+  for (; !rasqal_query_results_finished(results); rasqal_query_results_next(results)) {
+    if (slice.limit >= 0 && kept >= slice.limit) break;
+    nlohmann::json row = nlohmann::json::object();
+    for (int i = 0; i < columns; ++i) {
+      rasqal_literal* l = rasqal_query_results_get_binding_value(results, i);
+      if (!l) continue;
+      nlohmann::json v;
+      if (!literal_json(l, v)) {
+        error = "the value of ?" + names[i] + " has no SPARQL JSON form";
+        return "";
+      }
+      row[names[i]] = std::move(v);
+    }
+    std::string text = row.dump();
+    if (slice.distinct) {
+      if (seen.count(text)) continue;
+      if ((seen_bytes += text.size()) > max_bytes) {  // (the rows told apart are held: as many as a reply)
+        over = true;
+        return "";
+      }
+      seen.insert(text);
+    }
+    if (slice.offset > 0 && skipped < slice.offset) {
+      ++skipped;
+      continue;
+    }
+    if (out.size() + 1 + text.size() + end.size() > max_bytes) {
+      over = true;
+      return "";
+    }
+    if (kept++ > 0) out += ',';
+    out += text;
+  }
+  out += end;
+  if (out.size() > max_bytes) {  // (no row: the head alone)
+    over = true;
+    return "";
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -225,13 +317,14 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   raptor_sequence* graphs = rasqal_query_get_data_graph_sequence(q.get());
   if (graphs && raptor_sequence_size(graphs) > 0)
     throw WmError("SPARQL: FROM and FROM NAMED are not allowed: a query reads the world model only");
-  // Rasqal sorts ORDER BY and DISTINCT rows into an unbalanced binary tree (rasqal_map),
-  // which rows in order or with equal keys make a list: time grows with the square of the
-  // rows (20,000 rows with one key took 11 s here), and the tree is walked recursively.
-  // Such a query may look at fewer triples (kMaxExaminedSorted).
+  // Rasqal sorts ORDER BY's rows into an unbalanced binary tree (rasqal_map), which rows in
+  // order or with equal keys make a list: time grows with the square of the rows (20,000
+  // rows with one key took 11 s here), and the tree is walked recursively. Such a query may
+  // look at fewer triples (kMaxExaminedSorted). (A DISTINCT is done here: lift_slice.)
   raptor_sequence* order = rasqal_query_get_order_conditions_sequence(q.get());
-  const bool sorts = (order && raptor_sequence_size(order) > 0) || rasqal_query_get_distinct(q.get()) != 0;
+  const bool sorts = order && raptor_sequence_size(order) > 0;
   const uint64_t budget = sorts ? std::min(max_examined, kMaxExaminedSorted) : max_examined;
+  const Slice slice = lift_slice(q.get());
   error.clear();  // (the query is prepared: what is logged from here on is the graph's or the run's)
   if (!impl_->graph || impl_->version != version) {  // (a query that does not parse reads no graph)
     impl_->served.graph = nullptr;
@@ -245,7 +338,7 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
     ++impl_->reads;
   }
   impl_->served.graph = impl_->graph.get();
-  impl_->served.failed = impl_->served.over_budget = impl_->served.stop = false;
+  impl_->served.failed = impl_->served.over_budget = false;
   impl_->served.examined = 0;
   impl_->served.budget = budget;
   std::unique_ptr<rasqal_query_results, void (*)(rasqal_query_results*)> results(rasqal_query_execute(q.get()),
@@ -256,26 +349,15 @@ std::string SparqlEngine::query_json(const std::string& query, int64_t version,
   if (rasqal_query_results_is_graph(results.get())) {
     json = graph_results_json(results.get(), max_bytes, too_large);
   } else {
-    BoundedText out;
-    out.max = max_bytes;
-    out.served = &impl_->served;
-    raptor_iostream_handler handler{};
-    handler.version = 2;
-    handler.write_byte = &BoundedText::write_byte;
-    handler.write_bytes = &BoundedText::write_bytes;
-    raptor_iostream* sink = raptor_new_iostream_from_handler(rw, &out, &handler);
-    if (!sink) throw WmError("SPARQL: cannot write the results");
-    const int w = rasqal_query_results_write(sink, results.get(), "json", nullptr, nullptr, base.get());
-    raptor_free_iostream(sink);
-    if (w != 0) throw WmError("SPARQL: " + (error.empty() ? std::string("cannot write the results") : error));
-    too_large = out.over();
-    json = std::move(out.text);
+    std::string unwritable;
+    json = bindings_json(results.get(), q.get(), slice, max_bytes, too_large, unwritable);
+    if (!unwritable.empty()) throw WmError("SPARQL: cannot write the results: " + unwritable);
   }
   if (impl_->served.over_budget)
     throw WmError("SPARQL: the query looked at more than " + std::to_string(budget) +
                   " triples of the world and was stopped (a pattern that shares no variable with the others "
                   "multiplies the rows by the whole graph): join its patterns by variables, or narrow them" +
-                  (budget < max_examined ? std::string("; with ORDER BY or DISTINCT the bound is lower: the server's "
+                  (budget < max_examined ? std::string("; with ORDER BY the bound is lower: the server's "
                                                        "SPARQL engine, Rasqal, sorts in time that grows with the "
                                                        "square of the rows (sort on the client instead)")
                                          : std::string()));

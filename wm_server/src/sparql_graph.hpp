@@ -76,10 +76,8 @@ struct Served {
   uint64_t examined = 0;
   uint64_t budget = UINT64_MAX;
   bool over_budget = false;
-  bool stop = false;  // set from outside (the results are too large already): every pattern ends
   // One more candidate looked at: false (and failed, over_budget) once past the budget.
   bool examine() {
-    if (stop) return false;
     if (++examined <= budget) return true;
     failed = over_budget = true;
     return false;

@@ -11,6 +11,15 @@ with its datatype when not cut); unbound values left out. An ASK answers ["true"
     ...     {"x": {"type": "uri", "value": "http://rvmi.aau.dk/ontologies/skiros.owl#Cube"}}]}},
     ...     {"skiros": "http://rvmi.aau.dk/ontologies/skiros.owl#"}, cut_prefix=True)
     ['skiros:Cube']
+
+An unbound value (an OPTIONAL that matched nothing) is left out of its row:
+
+    >>> rows_as_strings({"head": {"vars": ["x", "v"]}, "results": {"bindings": [
+    ...     {"x": {"type": "uri", "value": "http://rvmi.aau.dk/ontologies/skiros.owl#Cube-3"}},
+    ...     {"x": {"type": "uri", "value": "http://rvmi.aau.dk/ontologies/skiros.owl#Cube-4"},
+    ...      "v": {"type": "unbound", "value": None}}]}},
+    ...     {"skiros": "http://rvmi.aau.dk/ontologies/skiros.owl#"}, cut_prefix=True)
+    ['skiros:Cube-3 ', 'skiros:Cube-4 ']
 """
 
 from __future__ import annotations
@@ -48,8 +57,8 @@ def rows_as_strings(results: dict[str, Any], prefixes: dict[str, str], cut_prefi
     for row in results.get("results", {}).get("bindings", []):
         line = ""
         for name in names:
-            if name not in row:
-                continue  # (unbound: SkiROS2 leaves it out)
+            if name not in row or row[name].get("type") == "unbound":
+                continue  # (unbound: SkiROS2 leaves it out; the server's rows have no key for it)
             line += value_text(row[name], prefixes, cut_prefix) + (" " if len(names) > 1 else "")
         out.append(line)
     return out
