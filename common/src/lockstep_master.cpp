@@ -130,7 +130,8 @@ void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) 
     restarted_ = "lockstep: participant(s) " + j.participant + " started again (pid " + std::to_string(pid_of_[i]) +
                  ", now " + std::to_string(j.pid) + ") " +
                  (frame_begun_ < 0 ? std::string("before frame 0") : "in frame " + std::to_string(frame_begun_)) +
-                 ": what was set up with it before is lost, and this session with it (or a second process uses its name)";
+                 ": what was set up with it before is lost, and this session with it (or a second process uses "
+                 "its name)";
   if (awaiting_frame_ >= 0 && j.pid == pid_of_[i]) alive_at_[i] = steady::now();
 }
 
@@ -312,8 +313,8 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
   for (std::string miss = inbox_.missing(expected); !miss.empty(); miss = inbox_.missing(expected)) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(msg_deadline - steady::now());
     if (left.count() <= 0) {
-      error = "lockstep: participant(s) " + sender_of_missing(miss) + ": message lost on " + miss + " (noticed by master " +
-              cfg_.name + ")";
+      error = "lockstep: participant(s) " + sender_of_missing(miss) + ": message lost on " + miss +
+              " (noticed by master " + cfg_.name + ")";
       return false;
     }
     bus_.handle(polling() ? std::chrono::milliseconds(0) : std::min(left, std::chrono::milliseconds(50)));

@@ -72,6 +72,12 @@ bool has_service_pattern(rasqal_graph_pattern* gp) {
   }
 }
 
+// JSON text of `j`; bytes that are not UTF-8 (a value may hold any) become U+FFFD rather
+// than an exception.
+std::string json_text(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 // A term of a graph result as SPARQL 1.1 JSON writes a binding's value.
 nlohmann::json term_json(const raptor_term* t) {
   auto text = [](const unsigned char* s, size_t n) { return std::string(reinterpret_cast<const char*>(s), n); };
@@ -106,7 +112,7 @@ std::string graph_results_json(rasqal_query_results* results, size_t max_bytes, 
     nlohmann::json row = {{"subject", term_json(t->subject)},
                           {"predicate", term_json(t->predicate)},
                           {"object", term_json(t->object)}};
-    std::string text = row.dump();
+    std::string text = json_text(row);
     const size_t size = text.size();
     if (seen.insert(std::move(text)).second) {
       rows.push_back(std::move(row));
@@ -118,7 +124,7 @@ std::string graph_results_json(rasqal_query_results* results, size_t max_bytes, 
   }
   nlohmann::json out = {{"head", {{"vars", {"subject", "predicate", "object"}}}},
                         {"results", {{"bindings", std::move(rows)}}}};
-  return out.dump();
+  return json_text(out);
 }
 
 // A SELECT's DISTINCT, OFFSET and LIMIT, taken out of the query before it runs and applied
@@ -167,7 +173,9 @@ bool literal_json(rasqal_literal* l, nlohmann::json& out) {
       return true;
     default: {  // (a typed value: as the RDF term it stands for)
       std::unique_ptr<rasqal_literal, void (*)(rasqal_literal*)> node(rasqal_literal_as_node(l), rasqal_free_literal);
-      return node && node->type == RASQAL_LITERAL_STRING && literal_json(node.get(), out);
+      const bool term = node && (node->type == RASQAL_LITERAL_URI || node->type == RASQAL_LITERAL_BLANK ||
+                                 node->type == RASQAL_LITERAL_STRING);
+      return term && literal_json(node.get(), out);
     }
   }
 }
@@ -190,7 +198,7 @@ std::string bindings_json(rasqal_query_results* results, rasqal_query* q, const 
   const nlohmann::json flags = {{"ordered", rasqal_query_get_order_condition(q, 0) != nullptr},
                                 {"distinct", slice.distinct != 0}};
   // The rows are written into the text as they come (each row dumped once).
-  std::string out = "{\"head\":" + nlohmann::json{{"vars", names}}.dump() + ",\"results\":" + flags.dump();
+  std::string out = "{\"head\":" + json_text(nlohmann::json{{"vars", names}}) + ",\"results\":" + flags.dump();
   out.back() = ',';  // (the flags' closing brace)
   out += "\"bindings\":[";
   const std::string end = "]}}";
@@ -210,7 +218,7 @@ std::string bindings_json(rasqal_query_results* results, rasqal_query* q, const 
       }
       row[names[i]] = std::move(v);
     }
-    std::string text = row.dump();
+    std::string text = json_text(row);
     if (slice.distinct) {
       if (seen.count(text)) continue;
       if ((seen_bytes += text.size()) > max_bytes) {  // (the rows told apart are held: as many as a reply)

@@ -434,6 +434,21 @@ TEST(SparqlEngine, ResultsPastTheReplySizeAreRefusedWithTheirSize) {
   }
 }
 
+// A value whose bytes are not UTF-8 (a world model string may hold any): answered with
+// U+FFFD in their place, never an exception of the JSON library's.
+TEST(SparqlEngine, BytesThatAreNotUtf8AreReplacedInTheAnswer) {
+  const std::vector<Triple> g = {{Term{Term::Iri, "http://x.invalid/a", "", ""},
+                                  Term{Term::Iri, "http://x.invalid/p", "", ""},
+                                  Term{Term::Literal, "bad \xff byte", "", ""}}};
+  SparqlEngine engine;
+  for (const char* q : {"SELECT ?o WHERE { ?s ?p ?o }", "CONSTRUCT { ?s ?p ?o } WHERE { ?s ?p ?o }"}) {
+    SCOPED_TRACE(q);
+    std::string json;
+    ASSERT_NO_THROW(json = engine.query_json(q, 1, [&] { return g; }, prefixes(), 1 << 20));
+    EXPECT_NE(nlohmann::json::parse(json).dump().find("bad \xEF\xBF\xBD byte"), std::string::npos) << json;
+  }
+}
+
 TEST(SparqlEngine, AConstructGivesItsTriplesAsRowsOfThree) {
   SparqlEngine engine;
   const nlohmann::json j = nlohmann::json::parse(
