@@ -9,11 +9,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cstdlib>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <regex>
-#include <set>
 #include <unordered_set>
 #include <vector>
 
@@ -78,53 +76,115 @@ std::string json_text(const nlohmann::json& j) {
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-// A term of a graph result as SPARQL 1.1 JSON writes a binding's value.
-nlohmann::json term_json(const raptor_term* t) {
-  auto text = [](const unsigned char* s, size_t n) { return std::string(reinterpret_cast<const char*>(s), n); };
-  if (t->type == RAPTOR_TERM_TYPE_URI) {
-    size_t n = 0;
-    const unsigned char* s = raptor_uri_as_counted_string(t->value.uri, &n);
-    return {{"type", "uri"}, {"value", text(s, n)}};
-  }
-  if (t->type == RAPTOR_TERM_TYPE_BLANK)
-    return {{"type", "bnode"}, {"value", text(t->value.blank.string, t->value.blank.string_len)}};
-  nlohmann::json v = {{"type", "literal"}, {"value", text(t->value.literal.string, t->value.literal.string_len)}};
-  if (t->value.literal.language)
-    v["xml:lang"] = text(t->value.literal.language, t->value.literal.language_len);
-  if (t->value.literal.datatype) {
-    size_t n = 0;
-    const unsigned char* s = raptor_uri_as_counted_string(t->value.literal.datatype, &n);
-    v["datatype"] = text(s, n);
-  }
+std::string text_of(const unsigned char* s, size_t n) { return std::string(reinterpret_cast<const char*>(s), n); }
+
+std::string text_of(raptor_uri* uri) {
+  size_t n = 0;
+  const unsigned char* s = raptor_uri_as_counted_string(uri, &n);
+  return text_of(s, n);
+}
+
+// A value as SPARQL 1.1 JSON results write it: {"type": "uri"|"bnode"|"literal", "value"},
+// a literal with its "xml:lang" or "datatype" when it has one.
+nlohmann::json value_json(const char* type, std::string value, std::string lang = "", raptor_uri* datatype = nullptr) {
+  nlohmann::json v = {{"type", type}, {"value", std::move(value)}};
+  if (!lang.empty()) v["xml:lang"] = std::move(lang);
+  if (datatype) v["datatype"] = text_of(datatype);
   return v;
 }
+
+// A term of a graph result (Raptor's).
+nlohmann::json term_json(const raptor_term* t) {
+  if (t->type == RAPTOR_TERM_TYPE_URI) return value_json("uri", text_of(t->value.uri));
+  if (t->type == RAPTOR_TERM_TYPE_BLANK)
+    return value_json("bnode", text_of(t->value.blank.string, t->value.blank.string_len));
+  const raptor_term_literal_value& l = t->value.literal;
+  return value_json("literal", text_of(l.string, l.string_len), l.language ? text_of(l.language, l.language_len) : "",
+                    l.datatype);
+}
+
+// A binding's value (Rasqal's); false for one that has no such form.
+bool literal_json(rasqal_literal* l, nlohmann::json& out) {
+  switch (l->type) {
+    case RASQAL_LITERAL_URI:
+      out = value_json("uri", text_of(l->value.uri));
+      return true;
+    case RASQAL_LITERAL_BLANK:
+      out = value_json("bnode", text_of(l->string, l->string_len));
+      return true;
+    case RASQAL_LITERAL_STRING:
+      out = value_json("literal", text_of(l->string, l->string_len), l->language ? l->language : "", l->datatype);
+      return true;
+    default: {  // (a typed value: as the RDF term it stands for)
+      std::unique_ptr<rasqal_literal, void (*)(rasqal_literal*)> node(rasqal_literal_as_node(l), rasqal_free_literal);
+      const bool term = node && (node->type == RASQAL_LITERAL_URI || node->type == RASQAL_LITERAL_BLANK ||
+                                 node->type == RASQAL_LITERAL_STRING);
+      return term && literal_json(node.get(), out);
+    }
+  }
+}
+
+// SPARQL 1.1 JSON results written row by row, for a SELECT's rows and a CONSTRUCT's
+// triples: each row's text made once and put in place, rows told apart where asked (a
+// DISTINCT, a graph's set of triples), and never more than `max_bytes` held (over()).
+class JsonRows {
+ public:
+  // `flags`: what "results" says beside its bindings ({} for nothing).
+  JsonRows(const std::vector<std::string>& vars, const nlohmann::json& flags, size_t max_bytes) : max_(max_bytes) {
+    text_ = "{\"head\":" + json_text(nlohmann::json{{"vars", vars}}) + ",\"results\":" + json_text(flags);
+    text_.pop_back();  // (the flags' closing brace)
+    text_ += flags.empty() ? "\"bindings\":[" : ",\"bindings\":[";
+  }
+  // Whether a row of this text came before (it is remembered; the rows remembered are held
+  // too, up to `max_bytes` of them).
+  bool met(const std::string& row) {
+    if (seen_.count(row)) return true;
+    if ((seen_bytes_ += row.size()) > max_) over_ = true;
+    else seen_.insert(row);
+    return false;
+  }
+  // Adds a row; false once the text would pass `max_bytes` (over()).
+  bool add(const std::string& row) {
+    if (over_ || text_.size() + 1 + row.size() + kEnd.size() > max_) return !(over_ = true);
+    if (rows_++ > 0) text_ += ',';
+    text_ += row;
+    return true;
+  }
+  long rows() const { return rows_; }
+  bool over() const { return over_; }
+  std::string finish() {
+    text_ += kEnd;
+    over_ = over_ || text_.size() > max_;  // (no row: the head alone)
+    return over_ ? "" : std::move(text_);
+  }
+
+ private:
+  static inline const std::string kEnd = "]}}";
+  size_t max_;
+  std::string text_;
+  std::unordered_set<std::string> seen_;
+  size_t seen_bytes_ = 0;
+  long rows_ = 0;
+  bool over_ = false;
+};
 
 // A CONSTRUCT's triples, each once, as SPARQL 1.1 JSON results with the variables subject,
 // predicate and object (the JSON results format has no graphs; SkiROS2's query_ontology
 // gives a CONSTRUCT's triples as rows of three values, as rdflib iterates its graph).
 // Stops (returns "" with `over` set) once the rows pass `max_bytes`.
 std::string graph_results_json(rasqal_query_results* results, size_t max_bytes, bool& over) {
-  nlohmann::json rows = nlohmann::json::array();
-  std::set<std::string> seen;  // (a graph is a set: Rasqal gives a triple once per solution that makes it)
-  size_t bytes = 0;
-  for (const raptor_statement* t = rasqal_query_results_get_triple(results); t;
+  JsonRows out({"subject", "predicate", "object"}, nlohmann::json::object(), max_bytes);
+  for (const raptor_statement* t = rasqal_query_results_get_triple(results); t && !out.over();
        t = rasqal_query_results_next_triple(results) ? nullptr : rasqal_query_results_get_triple(results)) {
-    nlohmann::json row = {{"subject", term_json(t->subject)},
-                          {"predicate", term_json(t->predicate)},
-                          {"object", term_json(t->object)}};
-    std::string text = json_text(row);
-    const size_t size = text.size();
-    if (seen.insert(std::move(text)).second) {
-      rows.push_back(std::move(row));
-      if ((bytes += size + 1) > max_bytes) {
-        over = true;
-        return "";
-      }
-    }
+    const std::string row = json_text({{"subject", term_json(t->subject)},
+                                       {"predicate", term_json(t->predicate)},
+                                       {"object", term_json(t->object)}});
+    // (a graph is a set: Rasqal gives a triple once per solution that makes it)
+    if (!out.met(row)) out.add(row);
   }
-  nlohmann::json out = {{"head", {{"vars", {"subject", "predicate", "object"}}}},
-                        {"results", {{"bindings", std::move(rows)}}}};
-  return json_text(out);
+  std::string json = out.finish();
+  over = out.over();
+  return json;
 }
 
 // A SELECT's DISTINCT, OFFSET and LIMIT, taken out of the query before it runs and applied
@@ -149,37 +209,6 @@ Slice lift_slice(rasqal_query* q) {
   return s;
 }
 
-// A binding's value as SPARQL 1.1 JSON writes it (as Rasqal's writer does); false for a
-// value that has no such form.
-bool literal_json(rasqal_literal* l, nlohmann::json& out) {
-  auto text = [](const unsigned char* s, size_t n) { return std::string(reinterpret_cast<const char*>(s), n); };
-  size_t n = 0;
-  switch (l->type) {
-    case RASQAL_LITERAL_URI: {
-      const unsigned char* s = raptor_uri_as_counted_string(l->value.uri, &n);
-      out = {{"type", "uri"}, {"value", text(s, n)}};
-      return true;
-    }
-    case RASQAL_LITERAL_BLANK:
-      out = {{"type", "bnode"}, {"value", text(l->string, l->string_len)}};
-      return true;
-    case RASQAL_LITERAL_STRING:
-      out = {{"type", "literal"}, {"value", text(l->string, l->string_len)}};
-      if (l->language) out["xml:lang"] = l->language;
-      if (l->datatype) {
-        const unsigned char* s = raptor_uri_as_counted_string(l->datatype, &n);
-        out["datatype"] = text(s, n);
-      }
-      return true;
-    default: {  // (a typed value: as the RDF term it stands for)
-      std::unique_ptr<rasqal_literal, void (*)(rasqal_literal*)> node(rasqal_literal_as_node(l), rasqal_free_literal);
-      const bool term = node && (node->type == RASQAL_LITERAL_URI || node->type == RASQAL_LITERAL_BLANK ||
-                                 node->type == RASQAL_LITERAL_STRING);
-      return term && literal_json(node.get(), out);
-    }
-  }
-}
-
 // A SELECT's rows (or an ASK's answer) as SPARQL 1.1 JSON results, written here rather than
 // by Rasqal's writer: `slice` applied to the rows; an unbound value left out of its row (the
 // format's rule; Rasqal wrote "type": "unbound", which SkiROS2's clients do not expect);
@@ -190,23 +219,17 @@ std::string bindings_json(rasqal_query_results* results, rasqal_query* q, const 
   if (rasqal_query_results_is_boolean(results))
     return nlohmann::json{{"head", nlohmann::json::object()},
                           {"boolean", rasqal_query_results_get_boolean(results) > 0}}
-        .dump();
+        .dump();  // (no text of a value)
   const int columns = rasqal_query_results_get_bindings_count(results);
   std::vector<std::string> names;
   for (int i = 0; i < columns; ++i)
     names.emplace_back(reinterpret_cast<const char*>(rasqal_query_results_get_binding_name(results, i)));
   const nlohmann::json flags = {{"ordered", rasqal_query_get_order_condition(q, 0) != nullptr},
                                 {"distinct", slice.distinct != 0}};
-  // The rows are written into the text as they come (each row dumped once).
-  std::string out = "{\"head\":" + json_text(nlohmann::json{{"vars", names}}) + ",\"results\":" + flags.dump();
-  out.back() = ',';  // (the flags' closing brace)
-  out += "\"bindings\":[";
-  const std::string end = "]}}";
-  std::unordered_set<std::string> seen;  // (DISTINCT: the rows met, skipped ones too)
-  size_t seen_bytes = 0;
-  long skipped = 0, kept = 0;
-  for (; !rasqal_query_results_finished(results); rasqal_query_results_next(results)) {
-    if (slice.limit >= 0 && kept >= slice.limit) break;
+  JsonRows out(names, flags, max_bytes);
+  long skipped = 0;
+  for (; !rasqal_query_results_finished(results) && !out.over(); rasqal_query_results_next(results)) {
+    if (slice.limit >= 0 && out.rows() >= slice.limit) break;
     nlohmann::json row = nlohmann::json::object();
     for (int i = 0; i < columns; ++i) {
       rasqal_literal* l = rasqal_query_results_get_binding_value(results, i);
@@ -218,32 +241,17 @@ std::string bindings_json(rasqal_query_results* results, rasqal_query* q, const 
       }
       row[names[i]] = std::move(v);
     }
-    std::string text = json_text(row);
-    if (slice.distinct) {
-      if (seen.count(text)) continue;
-      if ((seen_bytes += text.size()) > max_bytes) {  // (the rows told apart are held: as many as a reply)
-        over = true;
-        return "";
-      }
-      seen.insert(text);
-    }
+    const std::string text = json_text(row);
+    if (slice.distinct && out.met(text)) continue;  // (the rows skipped by OFFSET are met too)
     if (slice.offset > 0 && skipped < slice.offset) {
       ++skipped;
       continue;
     }
-    if (out.size() + 1 + text.size() + end.size() > max_bytes) {
-      over = true;
-      return "";
-    }
-    if (kept++ > 0) out += ',';
-    out += text;
+    out.add(text);
   }
-  out += end;
-  if (out.size() > max_bytes) {  // (no row: the head alone)
-    over = true;
-    return "";
-  }
-  return out;
+  std::string json = out.finish();
+  over = out.over();
+  return json;
 }
 
 }  // namespace
