@@ -3,10 +3,11 @@
 For each physics step (1 ms and 2 ms, 10 ms frames) and collision detector:
   * physics µs per step (time inside DART's World::step) with the arm at rest, and while
     it grasps a cube, carries it on a fast swing and puts it down (grasp_and_carry);
-  * at the demo's setting (2 ms, Bullet), that carry again in interleaved pairs on the
-    allocator sim_server is linked with (tcmalloc) and on glibc's (its malloc and
-    libstdc++'s operator new put first by LD_PRELOAD), the median of each (the target's
-    figure) and their ratio;
+  * at the demo's setting (2 ms, Bullet), that carry again in interleaved rounds: as
+    sim_server runs it (tcmalloc, DART built without assertions), on glibc's allocator (its
+    malloc and libstdc++'s operator new put first by LD_PRELOAD) and on Debian's build of
+    DART (with its assertions; put first by LD_LIBRARY_PATH), the median of each (the
+    first is the target's figure) and their ratios;
   * the real-time factor of the server alone (the script played in-process, no
     participant) and with one lockstep participant playing the same script over LCM;
   * how well the grasp holds: the largest displacement of the cube in the tool frame
@@ -21,6 +22,7 @@ import json
 import math
 import statistics
 import sys
+import sysconfig
 import tempfile
 from pathlib import Path
 
@@ -35,12 +37,14 @@ DURATION = 13.0
 # The grasp quality a faster physics must keep (the 2 ms step's figures when the target was
 # set, with room for the run-to-run spread; docs/benchmarks.md, "Physics server").
 MAX_SLIP_MM, MAX_PUT_DOWN_MM = 2.0, 2.0
-# The demo's setting's carry is measured again this many times on each allocator (one run
+# The demo's setting's carry is measured again this many times on each variant (one run
 # moves by 20 % with this machine's hour; the median of five is the target's figure).
-ALLOCATOR_PAIRS = 5
+ROUNDS = 5
 # glibc's allocator for a program linked with tcmalloc: its malloc, and libstdc++'s operator
 # new (which calls malloc), both before tcmalloc's.
 GLIBC = "libc.so.6 libstdc++.so.6"
+# Debian's libdart (with assertions) before the build's copy without them.
+DEBIAN_LIBS = str(Path("/usr/lib") / (sysconfig.get_config_var("MULTIARCH") or "x86_64-linux-gnu"))
 
 
 def slip(record) -> float:
@@ -68,21 +72,21 @@ def alone(box: Sandbox, scene: Path, script: Path | None, duration: float, env: 
     return last_json(p.stdout())
 
 
-def allocators(box: Sandbox, scene: Path, script: Path) -> dict:
-    """The carry's µs a step on the allocator sim_server is linked with (tcmalloc) and on
-    glibc's (its malloc and libstdc++'s operator new put first with LD_PRELOAD), in
-    interleaved pairs: the median of each, and whether every run ended in the same state."""
+def variants(box: Sandbox, scene: Path, script: Path) -> dict:
+    """The carry's µs a step as sim_server runs it, on glibc's allocator (LD_PRELOAD) and on
+    Debian's build of DART (LD_LIBRARY_PATH), in interleaved rounds: the median of each,
+    the libraries each ran on, and whether every run ended in the same state."""
+    envs = {"linked": None, "glibc": {"LD_PRELOAD": GLIBC}, "debian_dart": {"LD_LIBRARY_PATH": DEBIAN_LIBS}}
     us: dict[str, list[float]] = {}
-    names, digests = {}, set()
-    for _ in range(ALLOCATOR_PAIRS):
-        for key, env in (("linked", None), ("glibc", {"LD_PRELOAD": GLIBC})):
+    ran_on, digests = {}, set()
+    for _ in range(ROUNDS):
+        for key, env in envs.items():
             r = alone(box, scene, script, DURATION, env)
             us.setdefault(key, []).append(r["physics_us_per_step"])
-            names[key] = r["allocator"]
+            ran_on[key] = {"allocator": r["allocator"], "dart": r["dart"]}
             digests.add(r["state_digest"])
-    return {"allocator": names["linked"], "glibc_allocator": names["glibc"],
-            "carry_us_per_step": statistics.median(us["linked"]),
-            "glibc_carry_us_per_step": statistics.median(us["glibc"]), "same_physics": len(digests) == 1}
+    return {"ran_on": ran_on, "us_per_step": {k: statistics.median(v) for k, v in us.items()},
+            "same_physics": len(digests) == 1}
 
 
 def main() -> int:
@@ -119,21 +123,25 @@ def main() -> int:
                   f"({r['rtf_one_participant'] / r['rtf_alone']:.2f}x); cube slip in the grasp {r['slip_mm']:.2f} mm, "
                   f"put down {r['put_down_error_mm']:.1f} mm from its start; alone == with participant: "
                   f"{r['same_physics']}; steps touching an obstacle: {r['obstacle_contact_steps']}", flush=True)
-        a = allocators(box, scene_with(2.0, "bullet", work), script_file)
+        a = variants(box, scene_with(2.0, "bullet", work), script_file)
     r2 = next(r for r in rows if r["step_ms"] == 2.0 and r["detector"] == "bullet")  # (the demo's setting)
-    print(f"step 2 ms bullet, carry: {a['carry_us_per_step']:.1f} µs/step on {a['allocator']}, "
-          f"{a['glibc_carry_us_per_step']:.1f} on glibc's ({a['glibc_allocator']}; {a['carry_us_per_step'] / a['glibc_carry_us_per_step']:.2f}x; "
-          f"medians of {ALLOCATOR_PAIRS} interleaved pairs); the same physics on both: {a['same_physics']}", flush=True)
-    carry = a["carry_us_per_step"]  # (the median; the row above keeps its one run)
+    us, on = a["us_per_step"], a["ran_on"]
+    print(f"step 2 ms bullet, carry (medians of {ROUNDS} interleaved rounds): {us['linked']:.1f} µs/step as "
+          f"sim_server runs it ({on['linked']['allocator']}, {on['linked']['dart']}); "
+          f"{us['glibc']:.1f} on glibc's allocator ({on['glibc']['allocator']}; "
+          f"{us['linked'] / us['glibc']:.2f}x); {us['debian_dart']:.1f} on Debian's DART "
+          f"({on['debian_dart']['dart']}; {us['linked'] / us['debian_dart']:.2f}x); the same physics on all: "
+          f"{a['same_physics']}", flush=True)
+    carry = us["linked"]  # (the median; the row above keeps its one run)
     fast = carry <= 100 and a["same_physics"]
     held = r2["slip_mm"] <= MAX_SLIP_MM and r2["put_down_error_mm"] <= MAX_PUT_DOWN_MM
     clear = r2["obstacle_contact_steps"] == 0
     print(f"target: at most 100 µs a step while grasping in the demo scene (2 ms, Bullet), the grasp kept (slip at "
           f"most {MAX_SLIP_MM} mm, put down within {MAX_PUT_DOWN_MM} mm) and the carry touching no obstacle: "
-          f"{'met' if fast and held and clear else 'NOT met'} ({carry:.0f} µs, the median of {ALLOCATOR_PAIRS}; slip "
+          f"{'met' if fast and held and clear else 'NOT met'} ({carry:.0f} µs, the median of {ROUNDS}; slip "
           f"{r2['slip_mm']:.2f} mm, put down {r2['put_down_error_mm']:.1f} mm, {r2['obstacle_contact_steps']} steps "
           f"touching an obstacle)")
-    print(json.dumps({"sim_physics": rows, "allocators": a}))
+    print(json.dumps({"sim_physics": rows, "variants": a}))
     return 0
 
 

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs everything skillbus needs on a fresh Debian 12 machine, idempotently:
 # apt packages (only those missing, so a second run is quick and needs no network),
-# then a Python virtual environment at .venv with the package installed editable
-# (pip runs only when pyproject.toml changed since the last install).
+# Debian's source of DART (deploy/dart-source.sh, once), then a Python virtual environment
+# at .venv with the package installed editable (pip runs only when pyproject.toml changed
+# since the last install).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -31,6 +32,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
+
+# Debian's source of its DART, built again without assertions by the CMake build
+# (cmake/DartWithoutAssertions.cmake); fetched once, and a warning only if it cannot be.
+deploy/dart-source.sh
 
 PY=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then

@@ -9,7 +9,7 @@
 #include "skillbus/apps/summary.hpp"
 #include "skillbus/auth.hpp"
 #include "skillbus/sim/server.hpp"
-#include "allocator.hpp"
+#include "libraries_in_use.hpp"
 
 using namespace skillbus;
 
@@ -103,6 +103,7 @@ int main(int argc, char** argv) {
   out["physics_us_per_step"] = apps::rounded(rep.steps ? rep.physics_seconds * 1e6 / rep.steps : 0.0, 1);
   out["collision_detector"] = server->physics().collision_detector();
   out["allocator"] = sim::allocator_in_use();
+  out["dart"] = sim::dart_in_use();
   out["participants"] = o.participants.size();
   out["state_digest"] = to_hex(rep.state_digest);
   out["session_digest"] = r.digest_hex();

@@ -7,11 +7,14 @@ import json
 import math
 import re
 import sys
+import sysconfig
 import time
+from pathlib import Path
 
 import pytest
 
 from conftest import last_json
+from support.skip_policy import cannot_run
 from skillbus.sim.scripts import CUBE, HOME, ARM, arm, gripper, grasp_and_carry, grasp_lift_release, sweep
 from skillbus import paths
 from skillbus.sim import scene as scene_file
@@ -320,6 +323,45 @@ def test_the_physics_runs_on_tcmalloc_and_glibcs_allocator_gives_the_same_physic
     assert runs["glibc"]["allocator"] == "libc.so.6 (operator new: libstdc++.so.6)", runs["glibc"]["allocator"]
     assert runs["linked"]["state_digest"] == runs["glibc"]["state_digest"]
     assert runs["linked"]["session_digest"] == runs["glibc"]["session_digest"]
+
+
+def dart_without_assertions() -> Path | None:
+    """The copy of libdart the build compiled without assertions and the physics loads
+    (cmake/DartWithoutAssertions.cmake), or None when the build was configured without it."""
+    cache = (paths.build_dir() / "CMakeCache.txt").read_text()
+    if "SKILLBUS_DART_WITHOUT_ASSERTIONS:BOOL=OFF" in cache:
+        return None
+    return paths.build_dir() / "dart-without-assertions" / "lib" / "libdart.so.6.12"
+
+
+def debians_library_dir() -> Path:
+    return Path("/usr/lib") / (sysconfig.get_config_var("MULTIARCH") or "x86_64-linux-gnu")
+
+
+def test_the_physics_runs_on_dart_without_assertions_and_debians_build_gives_the_same_physics(sandbox, tmp_path):
+    """Debian's libdart runs its assertions (NDEBUG undefined); sim_server loads a copy built
+    from Debian's source with -O3 -DNDEBUG, a third faster (docs/sim_server.md). Neither an
+    assertion nor -O3 may change a number: Debian's own build, put first with
+    LD_LIBRARY_PATH, grasps and carries to the same state bit for bit."""
+    lib = dart_without_assertions()
+    if lib is None:
+        cannot_run("the build was configured with -DSKILLBUS_DART_WITHOUT_ASSERTIONS=OFF: nothing to compare")
+    if not lib.exists():
+        cannot_run(f"no {lib}: Debian's source of DART was not fetched (deploy/dart-source.sh; the build "
+                   f"warned), and the physics runs on Debian's build with its assertions")
+    script = tmp_path / "carry.json"
+    script.write_text(json.dumps(grasp_and_carry()))
+    runs = {}
+    for name, env in (("rebuilt", None), ("debian", {"LD_LIBRARY_PATH": str(debians_library_dir())})):
+        p = sandbox.start(f"carry-{name}", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                            "--script", str(script), "--duration-s", "13"], env=env)
+        assert sandbox.wait(p, 120) == 0, p.stderr()[-2000:]
+        runs[name] = last_json(p.stdout())
+    assert Path(runs["rebuilt"]["dart"]).resolve() == lib.resolve(), runs["rebuilt"]["dart"]
+    assert Path(runs["debian"]["dart"]).resolve() == (debians_library_dir() / "libdart.so.6.12").resolve(), (
+        runs["debian"]["dart"])
+    assert runs["rebuilt"]["state_digest"] == runs["debian"]["state_digest"]
+    assert runs["rebuilt"]["session_digest"] == runs["debian"]["session_digest"]
 
 
 def test_an_ack_timeout_for_someone_who_is_no_participant_stops_the_start_naming_it(sandbox):

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Fetches Debian's source of the installed DART (the package libdart-dev was built from,
+# the same version and Debian's patches) into .deps/dart/<version>/, for the build to
+# compile it again without assertions (cmake/DartRelease.cmake).
+#
+# Why: Debian builds DART with CMAKE_BUILD_TYPE=None, which leaves NDEBUG undefined, so
+# every Eigen index check and DART assert runs inside the physics step. The same source
+# built as DART's Release type builds it (-O3 -DNDEBUG) gives the same numbers, bit for bit
+# (a test checks the state digest), about a third faster (docs/benchmarks.md, "Physics server").
+#
+# The download goes through apt (`apt-get source`), so the files are checked against
+# Debian's signed index, with a private list of deb-src entries made from this machine's
+# own apt sources: the machine's apt configuration is not changed. Idempotent: with the
+# source in place it does nothing and needs no network. Without network or without a
+# source for this version it says so and exits 0: the physics then runs on Debian's build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+ver=$(dpkg-query -W -f='${source:Version}' libdart-dev 2>/dev/null || true)
+if [ -z "$ver" ]; then
+  echo "dart-source: libdart-dev is not installed; nothing to fetch" >&2
+  exit 0
+fi
+dest=.deps/dart/$ver
+if [ -f "$dest/CMakeLists.txt" ]; then exit 0; fi
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$work/lists/partial" "$work/cache/archives/partial" "$work/parts" "$work/get"
+: > "$work/sources.list"
+# The machine's own apt sources as deb-src entries (one-line .list files and deb822
+# .sources files), in a list only this script reads.
+for f in /etc/apt/sources.list /etc/apt/sources.list.d/*.list; do
+  [ -f "$f" ] && sed -n 's/^[[:space:]]*deb[[:space:]]/deb-src /p' "$f" >> "$work/sources.list"
+done
+for f in /etc/apt/sources.list.d/*.sources; do
+  [ -f "$f" ] && sed 's/^Types:.*/Types: deb-src/' "$f" > "$work/parts/$(basename "$f")"
+done
+apt_opts=(-o "Dir::Etc::SourceList=$work/sources.list" -o "Dir::Etc::SourceParts=$work/parts"
+          -o "Dir::State::Lists=$work/lists" -o "Dir::Cache=$work/cache" -o "APT::Sandbox::User=$(id -un)"
+          -o "Debug::NoLocking=1")
+
+echo "dart-source: fetching Debian's source of DART $ver (for a build without assertions)"
+if ! apt-get "${apt_opts[@]}" -qq --error-on=any update > "$work/update.log" 2>&1; then
+  echo "dart-source: apt-get update of the deb-src lists failed (the physics runs on Debian's DART build):" >&2
+  tail -5 "$work/update.log" >&2
+  exit 0
+fi
+if ! (cd "$work/get" && apt-get "${apt_opts[@]}" -qq source --download-only "dart=$ver") > "$work/source.log" 2>&1; then
+  echo "dart-source: apt-get source dart=$ver failed (the physics runs on Debian's DART build):" >&2
+  tail -5 "$work/source.log" >&2
+  exit 0
+fi
+mkdir -p .deps/dart
+# dpkg-source checks the tarballs against the .dsc's checksums and applies Debian's patches.
+rm -rf "$dest.partial"
+dpkg-source -x "$work/get/dart_${ver#*:}.dsc" "$dest.partial" > "$work/extract.log" 2>&1 || {
+  echo "dart-source: unpacking the source failed:" >&2; tail -5 "$work/extract.log" >&2; exit 0; }
+mv "$dest.partial" "$dest"
+rm -f .deps/dart/*.tar.*  # (dpkg-source copies the tarballs beside what it unpacks)
+echo "dart-source: $dest"
