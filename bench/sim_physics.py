@@ -132,6 +132,9 @@ def main() -> int:
           f"{us['linked'] / us['glibc']:.2f}x); {us['debian_dart']:.1f} on Debian's DART "
           f"({on['debian_dart']['dart']}; {us['linked'] / us['debian_dart']:.2f}x); the same physics on all: "
           f"{a['same_physics']}", flush=True)
+    if on["linked"]["dart"] == on["debian_dart"]["dart"]:
+        print("    (both ran Debian's DART: this build has no DART without assertions; deploy/dart-source.sh "
+              "fetches its source, cmake/DartWithoutAssertions.cmake builds it)", flush=True)
     carry = us["linked"]  # (the median; the row above keeps its one run)
     fast = carry <= 100 and a["same_physics"]
     held = r2["slip_mm"] <= MAX_SLIP_MM and r2["put_down_error_mm"] <= MAX_PUT_DOWN_MM

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fetches Debian's source of the installed DART (the package libdart-dev was built from,
 # the same version and Debian's patches) into .deps/dart/<version>/, for the build to
-# compile it again without assertions (cmake/DartRelease.cmake).
+# compile it again without assertions (cmake/DartWithoutAssertions.cmake).
 #
 # Why: Debian builds DART with CMAKE_BUILD_TYPE=None, which leaves NDEBUG undefined, so
 # every Eigen index check and DART assert runs inside the physics step. The same source
@@ -13,6 +13,8 @@
 # own apt sources: the machine's apt configuration is not changed. Idempotent: with the
 # source in place it does nothing and needs no network. Without network or without a
 # source for this version it says so and exits 0: the physics then runs on Debian's build.
+# A failure is remembered (.deps/dart/<version>.unavailable) so that every `make` does not
+# try again; delete that file, or set SKILLBUS_DART_SOURCE_RETRY=1, to try again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -21,8 +23,22 @@ if [ -z "$ver" ]; then
   echo "dart-source: libdart-dev is not installed; nothing to fetch" >&2
   exit 0
 fi
-dest=.deps/dart/$ver
+dest=.deps/dart/${ver//:/_}  # (an epoch's colon would split the build's RUNPATH)
 if [ -f "$dest/CMakeLists.txt" ]; then exit 0; fi
+unavailable=$dest.unavailable
+if [ -f "$unavailable" ] && [ "${SKILLBUS_DART_SOURCE_RETRY:-0}" != 1 ]; then
+  echo "dart-source: no source of DART $ver ($(head -1 "$unavailable")); the physics runs on Debian's build." \
+       "Delete $unavailable to try again" >&2
+  exit 0
+fi
+mkdir -p .deps/dart
+# give_up WHAT LOG: says why, remembers it, and leaves the build to Debian's DART.
+give_up() {
+  echo "dart-source: $1 (the physics runs on Debian's DART build):" >&2
+  tail -5 "$2" >&2
+  echo "$1, $(date -u +%Y-%m-%dT%H:%MZ)" > "$unavailable"
+  exit 0
+}
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -41,21 +57,20 @@ apt_opts=(-o "Dir::Etc::SourceList=$work/sources.list" -o "Dir::Etc::SourceParts
           -o "Debug::NoLocking=1")
 
 echo "dart-source: fetching Debian's source of DART $ver (for a build without assertions)"
-if ! apt-get "${apt_opts[@]}" -qq --error-on=any update > "$work/update.log" 2>&1; then
-  echo "dart-source: apt-get update of the deb-src lists failed (the physics runs on Debian's DART build):" >&2
-  tail -5 "$work/update.log" >&2
-  exit 0
+# (A repository of the machine's without sources makes `update` complain; what matters is
+# whether Debian's index then has the source, which `apt-get source` says.)
+apt-get "${apt_opts[@]}" -qq update > "$work/update.log" 2>&1 || true
+if ! (cd "$work/get" && apt-get "${apt_opts[@]}" -qq --only-source source --download-only "dart=$ver") \
+     > "$work/source.log" 2>&1; then
+  cat "$work/update.log" >> "$work/source.log"
+  give_up "apt-get source dart=$ver failed" "$work/source.log"
 fi
-if ! (cd "$work/get" && apt-get "${apt_opts[@]}" -qq source --download-only "dart=$ver") > "$work/source.log" 2>&1; then
-  echo "dart-source: apt-get source dart=$ver failed (the physics runs on Debian's DART build):" >&2
-  tail -5 "$work/source.log" >&2
-  exit 0
-fi
-mkdir -p .deps/dart
 # dpkg-source checks the tarballs against the .dsc's checksums and applies Debian's patches.
 rm -rf "$dest.partial"
-dpkg-source -x "$work/get/dart_${ver#*:}.dsc" "$dest.partial" > "$work/extract.log" 2>&1 || {
-  echo "dart-source: unpacking the source failed:" >&2; tail -5 "$work/extract.log" >&2; exit 0; }
+if ! dpkg-source --no-copy -x "$work/get/dart_${ver#*:}.dsc" "$dest.partial" > "$work/extract.log" 2>&1; then
+  rm -rf "$dest.partial"
+  give_up "unpacking the source failed" "$work/extract.log"
+fi
 mv "$dest.partial" "$dest"
-rm -f .deps/dart/*.tar.*  # (dpkg-source copies the tarballs beside what it unpacks)
+rm -f "$unavailable"
 echo "dart-source: $dest"
