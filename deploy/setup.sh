@@ -12,6 +12,7 @@ APT_PACKAGES=(
   libgtest-dev libssl-dev libglib2.0-0 valgrind
   libserd-dev libraptor2-dev librasqal3-dev libeigen3-dev zlib1g-dev
   libdart-dev libdart-collision-bullet-dev libdart-utils-urdf-dev nlohmann-json3-dev libcli11-dev libceres-dev
+  libode-dev  # (for DART rebuilt with the features of Debian's build: cmake/DartSameFeatures.cmake)
   libgoogle-perftools-dev
   liboctomap-dev libompl-dev
   cyclonedds-dev cyclonedds-tools
