@@ -1,6 +1,7 @@
 """Lockstep between real processes: a C++ clock master, Python and C++ participants, over
 LCM (and, where marked, also over Cyclone DDS) in a private network namespace."""
 
+import json
 import os
 import re
 import subprocess
@@ -282,6 +283,38 @@ def test_a_participant_started_again_mid_session_is_named_at_once(sandbox, binar
     assert re.search(r"participant\(s\) py2 started again \(pid \d+, now \d+\) in frame \d+: ", s["error"]), s["error"]
     for n in ("py1", "cpp1"):  # told to stop, with the reason
         assert sandbox.wait(parts[n], 15) == 1
+
+
+def test_forged_joins_under_a_participants_name_end_only_a_session_without_a_key(sandbox, binary):
+    """A join from another pid says a participant was started again and ends the session
+    (the tests above). So a forged join is a way to stop a session: on a keyed bus (the
+    sandbox's, as every skillbus launch's) the bus refuses it unsigned or signed with a
+    wrong key, and the session runs to its end; without a key every process on the bus is
+    trusted, and the same forger ends it, saying so (docs/security.md)."""
+    names = ["py1", "cpp1"]
+    for key in ("bus key", "none"):
+        env = None if key == "bus key" else {"SKILLBUS_KEY_FILE": "none"}
+        modes = ("unsigned", "wrong-key") if env is None else ("unsigned",)
+        forgers = [sandbox.start(f"forger-{m}-{key}", python_tool("join_forger.py", m, ",".join(names), "4242", "8"),
+                                 env=env) for m in modes]
+        clock = sandbox.start(f"clock-{key}", [binary("sb_clock"), "--demo", "--frames", "20000", "--participants",
+                                               ",".join(names)], env=env)
+        parts = [sandbox.start(f"{n}-{key}", participant_argv(binary, n), env=env) for n in names]
+        code = sandbox.wait(clock, 60)
+        s = last_json(clock.stdout())
+        for f in forgers:
+            assert sandbox.wait(f, 30) == 0, f.stderr()[-2000:]
+            assert json.loads(f.stdout().strip().splitlines()[-1])["sent"] > 500
+        if env is None:
+            assert code == 0 and s["ok"] and s["frames"] == 20000, clock.stdout() + clock.stderr()[-2000:]
+            for p in parts:
+                assert sandbox.wait(p, 15) == 0, p.stderr()[-2000:]
+        else:
+            assert code == 1, clock.stdout() + clock.stderr()[-2000:]
+            assert re.search(r"participant\(s\) (py1|cpp1) started again \(pid \d+, now \d+\) .*or a second process "
+                             r"uses its name", s["error"]), s["error"]
+            for p in parts:
+                sandbox.wait(p, 15)
 
 
 # Runs a command and prints, on stderr once it has ended, how often it slept (voluntary
