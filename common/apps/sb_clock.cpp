@@ -17,6 +17,7 @@
 #include "skillbus/apps/cpu_latency.hpp"
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
+#include "skillbus/auth.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/faulty_bus.hpp"
 #include "skillbus/lockstep.hpp"
@@ -65,9 +66,12 @@ int main(int argc, char** argv) {
 
   const auto cpu_latency = apps::hold_cpu_latency_or_exit("sb_clock", cpu_latency_us);
   std::unique_ptr<Bus> bus;
+  const Bus* opened = nullptr;  // (the bus under the test's wrapper: its refusals for the summary)
   apps::start_or_exit("sb_clock", [&] {
     // --lose-clocks-every N: a test of the clock resend (every N-th clock is lost).
-    bus = std::make_unique<DropEveryNthBus>(open_bus(url), lose_clocks_every, clock_channel());
+    auto inner = open_bus(url);
+    opened = inner.get();
+    bus = std::make_unique<DropEveryNthBus>(std::move(inner), lose_clocks_every, clock_channel());
   });
   LockstepMaster master(*bus, cfg);
 
@@ -104,6 +108,7 @@ int main(int argc, char** argv) {
   out["digest"] = r.digest_hex();
   out["commands"] = commands;
   out["bad_input"] = master.bad_input().total();
+  if (const auto* a = auth::stats_of(*opened)) out["bus_rejected"] = a->rejected;  // (unsigned, bad_mac, ...)
   if (const auto in_force = cpu_latency ? cpu_latency->in_force_us() : std::nullopt)
     out["cpu_latency_us"] = *in_force;  // what the kernel applied at the end (docs/lockstep.md)
   // Per participant: the ms its acks kept the master waiting after the clock went out (an

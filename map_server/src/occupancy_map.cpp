@@ -51,8 +51,7 @@ std::pair<octomap::OcTreeKey, octomap::OcTreeKey> key_box(const octomap::OcTree&
 // How many voxels of each column (x, y) of the keys a..b, between a's and b's z, are
 // occupied and free, summed over rectangles of columns in O(1) (summed-area tables). The
 // tree is walked once over the whole box: each of its voxels is looked at once, however
-// many rectangles are asked for. 8 bytes a column (160 MB for the flattest box that
-// kMaxBoxVoxels lets through, one voxel high; 8 MB for 1 m2 at 1 cm, whatever the height).
+// many rectangles are asked for. 8 bytes a column.
 class ColumnSums {
  public:
   ColumnSums(const octomap::OcTree& t, const octomap::OcTreeKey& a, const octomap::OcTreeKey& b)
@@ -211,31 +210,40 @@ std::vector<Vec3> OccupancyMap::free_spots(const Vec3& lo, const Vec3& hi, doubl
   key_box(t, lo, hi);  // (the same checks as a box)
   const double r = resolution(), hx = footprint_x / 2 + clearance, hy = footprint_y / 2 + clearance;
   std::vector<Vec3> out;
-  // Centres whose footprint and clearance lie inside the box, a voxel apart.
-  const int nx = static_cast<int>(std::floor((hi[0] - lo[0] - 2 * hx) / r + 1e-9));
-  const int ny = static_cast<int>(std::floor((hi[1] - lo[1] - 2 * hy) / r + 1e-9));
-  if (nx < 0 || ny < 0 || limit == 0) return out;
+  // Centres whose footprint and clearance lie inside the box, a voxel apart. (Compared as
+  // doubles first: a huge footprint's negative count would not fit an int.)
+  const double fx = std::floor((hi[0] - lo[0] - 2 * hx) / r + 1e-9), fy = std::floor((hi[1] - lo[1] - 2 * hy) / r + 1e-9);
+  if (!(fx >= 0) || !(fy >= 0) || limit == 0) return out;
+  const int nx = static_cast<int>(fx), ny = static_cast<int>(fy);  // (at most the box's voxels a side)
   const auto centre = [&](int i, int j) { return std::array<double, 2>{lo[0] + hx + i * r, lo[1] + hy + j * r}; };
   const auto column_box = [&](const std::array<double, 2>& c) {
     return std::pair<Vec3, Vec3>{{c[0] - hx, c[1] - hy, lo[2]}, {c[0] + hx, c[1] + hy, hi[2]}};
   };
-  // Every centre's column box, counted as box() counts it (the same keys), from one walk
-  // over the boxes' union: the first and the last centre's corners (keys grow with the
-  // coordinates). One box() per centre was the centres times the footprint's voxels, which
-  // kMaxBoxVoxels did not bound: a 2 x 2 m box, 1 cm voxels, a 10 cm footprint, 36,000
-  // boxes of 3,000 voxels.
-  const auto first = column_box(centre(0, 0)), last = column_box(centre(nx, ny));
-  const auto [ua, ub] = keys_of(t, first.first, last.second);
-  const ColumnSums columns(t, ua, ub);
-  for (int j = 0; j <= ny && out.size() < limit; ++j)
-    for (int i = 0; i <= nx && out.size() < limit; ++i) {
-      const auto c = centre(i, j);
-      const auto [blo, bhi] = column_box(c);
-      const auto [ka, kb] = key_box(t, blo, bhi);
-      const BoxCounts n = columns.covers(ka, kb) ? columns.counts(ka, kb) : box(blo, bhi);
-      const int64_t all = n.occupied + n.free + n.unknown;
-      if (n.occupied == 0 && all > 0 && n.unknown <= max_unknown * all) out.push_back({c[0], c[1], lo[2]});
-    }
+  // Every centre's column box, counted as box() counts it (the same keys), from walks over
+  // the boxes' union: one box() per centre was the centres times the footprint's voxels,
+  // which kMaxBoxVoxels did not bound (a 2 x 2 m box, 1 cm voxels, a 10 cm footprint:
+  // 36,000 boxes of 1,000 voxels). In bands of rows of centres, each band's union from its
+  // first and last centre's corners (keys grow with the coordinates): tables of about
+  // kBandColumns columns (32 KB), a box walked about once (at most twice, with bands as deep
+  // as the footprint), and no band past the one that reaches `limit`.
+  constexpr int64_t kBandColumns = int64_t{1} << 12;
+  const auto [row_lo, row_hi] = keys_of(t, column_box(centre(0, 0)).first, column_box(centre(nx, 0)).second);
+  const int64_t columns_x = row_hi[0] - row_lo[0] + 1, footprint_rows = row_hi[1] - row_lo[1] + 1;
+  const int rows = static_cast<int>(std::min<int64_t>(ny + 1, std::max(footprint_rows, kBandColumns / columns_x)));
+  for (int j0 = 0; j0 <= ny && out.size() < limit; j0 += rows) {
+    const int j1 = std::min(ny, j0 + rows - 1);
+    const auto [ua, ub] = keys_of(t, column_box(centre(0, j0)).first, column_box(centre(nx, j1)).second);
+    const ColumnSums columns(t, ua, ub);
+    for (int j = j0; j <= j1 && out.size() < limit; ++j)
+      for (int i = 0; i <= nx && out.size() < limit; ++i) {
+        const auto c = centre(i, j);
+        const auto [blo, bhi] = column_box(c);
+        const auto [ka, kb] = key_box(t, blo, bhi);
+        const BoxCounts n = columns.covers(ka, kb) ? columns.counts(ka, kb) : box(blo, bhi);
+        const int64_t all = n.occupied + n.free + n.unknown;
+        if (n.occupied == 0 && all > 0 && n.unknown <= max_unknown * all) out.push_back({c[0], c[1], lo[2]});
+      }
+  }
   return out;
 }
 

@@ -1,4 +1,4 @@
-"""Forges lockstep joins inside a test's sandbox (test_security.py).
+"""Forges lockstep joins inside a test's sandbox (test_lockstep_processes.py).
 
     join_forger.py unsigned NAMES PID SECONDS    every 5 ms a join for each of NAMES from
                                                  process PID, without a trailer
@@ -12,6 +12,7 @@ prints one JSON line: {"sent": N}.
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import tempfile
 import time
@@ -34,7 +35,9 @@ def main() -> int:
     ch = channel("SB_LOCKSTEP_JOIN")
     sealer = None
     if mode == "wrong-key":
-        sealer = auth.Sealer(auth.load_keys(auth.create_key_file(Path(tempfile.mkdtemp()) / "other.key"))[0], names[0])
+        keys = Path(tempfile.mkdtemp())
+        sealer = auth.Sealer(auth.load_keys(auth.create_key_file(keys / "other.key"))[0], names[0])
+        shutil.rmtree(keys)
     sent = 0
     end = time.monotonic() + seconds
     while time.monotonic() < end:
