@@ -48,6 +48,10 @@ std::pair<octomap::OcTreeKey, octomap::OcTreeKey> key_box(const octomap::OcTree&
   return {a, b};
 }
 
+// Columns of the summed-area tables below that free_spots and free_area build at a time
+// (32 KB): a box is walked in bands of rows of about this many columns.
+constexpr int64_t kBandColumns = int64_t{1} << 12;
+
 // How many voxels of each column (x, y) of the keys a..b, between a's and b's z, are
 // occupied and free, summed over rectangles of columns in O(1) (summed-area tables). The
 // tree is walked once over the whole box: each of its voxels is looked at once, however
@@ -187,19 +191,29 @@ double OccupancyMap::free_area(const Vec3& lo, const Vec3& hi, double* area) con
   const auto& t = impl_->tree;
   const auto [a, b] = key_box(t, lo, hi);
   const double cell = t.getResolution() * t.getResolution();
-  int64_t free_columns = 0, columns = 0;
-  for (unsigned x = a[0]; x <= b[0]; ++x)
-    for (unsigned y = a[1]; y <= b[1]; ++y) {
-      ++columns;
-      bool all_free = true;
-      for (unsigned z = a[2]; z <= b[2] && all_free; ++z) {
-        const octomap::OcTreeNode* n = t.search(octomap::OcTreeKey(x, y, z));
-        all_free = n != nullptr && !t.isNodeOccupied(n);
+  const int64_t nx = static_cast<int64_t>(b[0]) - a[0] + 1, ny = static_cast<int64_t>(b[1]) - a[1] + 1;
+  const int64_t height = static_cast<int64_t>(b[2]) - a[2] + 1;
+  // A column is free when all its voxels in the box are known free: counted from one walk
+  // over the box in bands of rows (one search of the tree per voxel was up to
+  // kMaxBoxVoxels searches, seconds, in a lockstep frame).
+  const int64_t rows = std::max<int64_t>(1, kBandColumns / nx);
+  int64_t free_columns = 0;
+  for (int64_t y0 = 0; y0 < ny; y0 += rows) {
+    octomap::OcTreeKey ba = a, bb = b;
+    ba[1] = static_cast<octomap::key_type>(a[1] + y0);
+    bb[1] = static_cast<octomap::key_type>(a[1] + std::min(ny, y0 + rows) - 1);
+    const ColumnSums columns(t, ba, bb);
+    for (int64_t x = 0; x < nx; ++x)
+      for (int64_t y = ba[1]; y <= bb[1]; ++y) {
+        octomap::OcTreeKey k0 = ba, k1 = ba;
+        k0[0] = k1[0] = static_cast<octomap::key_type>(a[0] + x);
+        k0[1] = k1[1] = static_cast<octomap::key_type>(y);
+        k1[2] = b[2];
+        free_columns += columns.counts(k0, k1).free == height;
       }
-      free_columns += all_free;
-    }
-  if (area) *area = columns * cell;
-  return free_columns * cell;
+  }
+  if (area) *area = static_cast<double>(nx * ny) * cell;
+  return static_cast<double>(free_columns) * cell;
 }
 
 std::vector<Vec3> OccupancyMap::free_spots(const Vec3& lo, const Vec3& hi, double footprint_x, double footprint_y,
@@ -224,9 +238,8 @@ std::vector<Vec3> OccupancyMap::free_spots(const Vec3& lo, const Vec3& hi, doubl
   // which kMaxBoxVoxels did not bound (a 2 x 2 m box, 1 cm voxels, a 10 cm footprint:
   // 36,000 boxes of 1,000 voxels). In bands of rows of centres, each band's union from its
   // first and last centre's corners (keys grow with the coordinates): tables of about
-  // kBandColumns columns (32 KB), a box walked about once (at most twice, with bands as deep
+  // kBandColumns columns, a box walked about once (at most twice, with bands as deep
   // as the footprint), and no band past the one that reaches `limit`.
-  constexpr int64_t kBandColumns = int64_t{1} << 12;
   const auto [row_lo, row_hi] = keys_of(t, column_box(centre(0, 0)).first, column_box(centre(nx, 0)).second);
   const int64_t columns_x = row_hi[0] - row_lo[0] + 1, footprint_rows = row_hi[1] - row_lo[1] + 1;
   const int rows = static_cast<int>(std::min<int64_t>(ny + 1, std::max(footprint_rows, kBandColumns / columns_x)));

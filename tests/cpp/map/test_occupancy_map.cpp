@@ -147,6 +147,23 @@ std::vector<Vec3> free_spots_box_by_box(const OccupancyMap& m, const Vec3& lo, c
     }
   return out;
 }
+
+// The free area (and the whole area) of a box, asking box() for each column: a box one
+// voxel wide at the voxel's centre (voxels lie on multiples of the resolution).
+std::pair<double, double> free_area_column_by_column(const OccupancyMap& m, const Vec3& lo, const Vec3& hi) {
+  const double r = m.resolution();
+  const auto first = [&](double v) { return std::floor(v / r); };
+  const int64_t nx = static_cast<int64_t>(first(hi[0]) - first(lo[0])) + 1;
+  const int64_t ny = static_cast<int64_t>(first(hi[1]) - first(lo[1])) + 1;
+  int64_t free_columns = 0;
+  for (int64_t i = 0; i < nx; ++i)
+    for (int64_t j = 0; j < ny; ++j) {
+      const double x = (first(lo[0]) + i + 0.5) * r, y = (first(lo[1]) + j + 0.5) * r;
+      const BoxCounts c = m.box({x, y, lo[2]}, {x, y, hi[2]});
+      free_columns += c.occupied == 0 && c.unknown == 0;
+    }
+  return {free_columns * r * r, nx * ny * r * r};
+}
 }  // namespace
 
 TEST(OccupancyMap, FreeSpotsAreWhatCountingEachFootprintsColumnGives) {
@@ -187,6 +204,38 @@ TEST(OccupancyMap, FreeSpotsAreWhatCountingEachFootprintsColumnGives) {
   EXPECT_GT(spots, asked);  // (the queries found spots, not only none)
 }
 
+TEST(OccupancyMap, TheFreeAreaIsWhatCountingEachColumnGives) {
+  // free_area counts each column of the box from one walk; the reference asks box() for
+  // each column. Random clutter, pruned maps too, random boxes.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int partly_free = 0;
+  for (int map = 0; map < 4; ++map) {
+    const double r = map % 2 ? 0.01 : 0.02;
+    OccupancyMap m(r);
+    auto hits = floor_with_a_block();
+    for (int k = 0; k < 40; ++k) hits.push_back({-0.3 + 0.6 * u(rng), -0.3 + 0.6 * u(rng), 0.02 + 0.2 * u(rng)});
+    m.insert(hits, {}, {0.4 * u(rng) - 0.2, 0.4 * u(rng) - 0.2, 0.6 + 0.6 * u(rng)}, 3.0);
+    if (map >= 2) {
+      const auto file = std::filesystem::temp_directory_path() / ("free_area_" + std::to_string(::getpid()) + ".bt");
+      m.save(file.string());
+      m = OccupancyMap::load(file.string());
+      std::filesystem::remove(file);
+    }
+    for (int q = 0; q < 30; ++q) {
+      const Vec3 lo{-0.35 + 0.3 * u(rng), -0.35 + 0.3 * u(rng), -0.01 + 0.1 * u(rng)};
+      const Vec3 hi{lo[0] + 0.02 + 0.4 * u(rng), lo[1] + 0.02 + 0.4 * u(rng), lo[2] + 0.01 + 0.2 * u(rng)};
+      const auto [want, want_area] = free_area_column_by_column(m, lo, hi);
+      double area = 0;
+      const double got = m.free_area(lo, hi, &area);
+      EXPECT_NEAR(area, want_area, 1e-12) << "map " << map << " query " << q;
+      EXPECT_NEAR(got, want, 1e-12) << "map " << map << " query " << q;
+      partly_free += want > 0 && want < want_area;
+    }
+  }
+  EXPECT_GT(partly_free, 10);  // (boxes neither all free nor all not)
+}
+
 TEST(OccupancyMap, FreeSpotsInALargeMappedBoxLookAtEachVoxelOnce) {
   // A 1 x 1 m floor seen from above, everything over it free: a 1 x 1 m x 10 cm box at
   // 1 cm holds 100,000 voxels, and 8,281 centres with a 10 cm footprint. Box by box that
@@ -214,7 +263,13 @@ TEST(OccupancyMap, FreeSpotsInALargeMappedBoxLookAtEachVoxelOnce) {
   const double spotting = best_of_five([&] { spots = m.free_spots(lo, hi, 0.1, 0.1, 0.0, 0.2, 1'000'000); });
   EXPECT_GT(seen, 90'000);   // (the box is mapped: free, seen through)
   EXPECT_GT(spots.size(), 8'000u);  // (of 91 x 91 centres)
-  // (in bands of rows here: the same spots as box by box)
+  // (in bands of rows here: the same spots as box by box, and the same free area)
   EXPECT_EQ(spots, free_spots_box_by_box(m, lo, hi, 0.1, 0.1, 0.0, 0.2, 1'000'000));
+  double area = 0;
+  const double free = m.free_area(lo, hi, &area);
+  const auto [want, want_area] = free_area_column_by_column(m, lo, hi);
+  EXPECT_NEAR(area, want_area, 1e-12);
+  EXPECT_NEAR(free, want, 1e-12);
+  EXPECT_GT(free, 0.8 * area);  // (the floor seen through: most columns free)
   EXPECT_LT(spotting, 5 * whole) << "free_spots " << spotting << " s, one box() of the whole box " << whole << " s";
 }
