@@ -20,7 +20,7 @@ def run(args) -> int:
     from skillbus.bus import open_bus
     from skillbus.can.lockstep_link import LockstepCanLink, sdo_ids
     from skillbus.lockstep import LockstepParticipant
-    from skillbus.msgs import decode, sim_state_t
+    from skillbus.sim.state_decode import decode_sim_state
     from skillbus.sim.messages import gripper_channel, state_channel
 
     bus = open_bus(args.url)
@@ -43,7 +43,7 @@ def run(args) -> int:
         # the state can change what the device reports (it is the only one moving them).
         if raw[0] is None or at_rest():
             return
-        s = decode(sim_state_t, raw[0])
+        s = decode_sim_state(raw[0])
         raw[0] = None
         if s is None:
             bad[0] += 1

@@ -19,7 +19,7 @@ def run(args) -> int:
     in wall-clock mode): CAN through canopen's notifier, frames from a local timer."""
     from skillbus.bus import open_bus
     from skillbus.lockstep import LockstepParticipant
-    from skillbus.msgs import decode, sim_state_t
+    from skillbus.sim.state_decode import decode_sim_state
     from skillbus.sim.messages import gripper_channel, state_channel
 
     bus = open_bus(args.url)
@@ -32,7 +32,7 @@ def run(args) -> int:
     bad = [0]  # states that did not decode (values that are not sane: dev.rejects)
 
     def on_state(m) -> None:
-        s = decode(sim_state_t, m.data)
+        s = decode_sim_state(m.data)
         if s is None:
             bad[0] += 1
             return

@@ -14,36 +14,13 @@ from __future__ import annotations
 
 import struct
 
+from skillbus import lcm_read
 from skillbus.msgs import header_t, robot_arm_state_t
 
 _FINGERPRINT = robot_arm_state_t._get_packed_fingerprint()
-_TIMES = struct.Struct(">qq")
-_LENGTH = struct.Struct(">I")
-_INT = struct.Struct(">i")
-_POSE = struct.Struct(">7d")
+_TIMES, _POSE, _doubles, _DOUBLES = lcm_read.TIMES, lcm_read.POSE, lcm_read.doubles, lcm_read.DOUBLES
 _TAIL = struct.Struct(">bd")  # arm_moving, arm_tracking_error
-_DOUBLES: dict[int, struct.Struct] = {}
-
-
-def _doubles(n: int) -> struct.Struct:
-    s = _DOUBLES.get(n)
-    if s is None:
-        s = _DOUBLES[n] = struct.Struct(f">{n}d")
-    return s
-
-
-class _CutShort(Exception):
-    """A string's length runs past the message's end."""
-
-
-def _string(data: bytes, at: int, end: int) -> tuple[str, int]:
-    """The LCM string at `at` (its length counts the NUL, dropped as LCM's Python drops the
-    last byte whatever it is) and the position after it."""
-    (size,) = _LENGTH.unpack_from(data, at)
-    at += 4
-    if at + size > end:
-        raise _CutShort
-    return data[at:at + size][:-1].decode("utf-8", "replace"), at + size
+_CutShort, _string = lcm_read.CutShort, lcm_read.string
 
 
 def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
