@@ -28,5 +28,6 @@ bool add_quiet_frames(PyObject* module);
 bool add_auth(PyObject* module);
 bool add_channel_filter(PyObject* module);
 bool add_tick_wire(PyObject* module);
+bool add_lockstep_wire(PyObject* module);
 
 }  // namespace skillbus::native

@@ -8,6 +8,8 @@
 //                skillbus/channel_filter.hpp's, for skillbus.bus)
 //   element_wire  a skill parameter's element in wm_element_t's bytes (py_tick_wire.cpp,
 //                for skillbus.skill.tick_wire)
+//   decode_clock  the lockstep clock read into the generated classes (py_lockstep_wire.cpp,
+//                for skillbus.lockstep_wire)
 //
 // Python finds it through skillbus.native, which also honours SKILLBUS_NATIVE=0.
 #include "glue.hpp"
@@ -59,7 +61,8 @@ PyMODINIT_FUNC PyInit_skillbus_native() {
   PyObject* m = PyModule_Create(&module_def);
   if (!m) return nullptr;
   if (!skillbus::native::add_quiet_frames(m) || !skillbus::native::add_auth(m) ||
-      !skillbus::native::add_channel_filter(m) || !skillbus::native::add_tick_wire(m)) {
+      !skillbus::native::add_channel_filter(m) || !skillbus::native::add_tick_wire(m) ||
+      !skillbus::native::add_lockstep_wire(m)) {
     Py_DECREF(m);
     return nullptr;
   }
