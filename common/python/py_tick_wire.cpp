@@ -1,19 +1,23 @@
 // skillbus_native.element_wire(element) -> bytes or None: a skill parameter's element as
 // its wm_element_t encodes (skillbus.skill.tick_wire.element_bytes: id, type, label, then
-// each property's key and values), written from the Python objects in one pass.
+// each property's key and values), written from the Python objects in one pass; and
+// skillbus_native.params_wire(params) -> bytes: a tick reply's parameters, each as
+// tick_wire.param_bytes writes it from the skill's Param.
 //
 // Why: a skill process answers every tick with every parameter, and each element
-// parameter carries its properties; in Python that was a few microseconds an element,
-// most of the reply's encoding in the demo (docs/benchmarks.md). Only the regular case is
-// written here: an element whose properties are its own (not a reader copy's still
-// shared), values of exactly str, int (64-bit), float and bool, text that is UTF-8. For
-// anything else the answer is None and Python's encoder writes it (or raises as it does).
-// tests/py/test_tick_wire.py compares the two on random elements.
+// parameter carries its properties; in Python that was a few microseconds an element, then
+// 40-70 µs a reply of the demo's (docs/benchmarks.md). Only the regular case is written
+// here: an element whose properties are its own (params_wire: or a reader copy's, still
+// the replica's), values of exactly str, int (64-bit), float and bool, text that is UTF-8,
+// a parameter whose lists are lists. For anything else element_wire answers None and
+// params_wire calls Python's param_bytes for that parameter, which writes it or raises as
+// it does. tests/py/test_tick_wire.py compares the two on random elements and parameters.
 #include <cstdint>
 #include <cstring>
 #include <string>
 
 #include "glue.hpp"
+#include "skillbus_msgs/skill_value_t.hpp"
 #include "skillbus_msgs/wm_value_t.hpp"
 
 namespace skillbus::native {
@@ -102,55 +106,279 @@ PyObject* attribute(PyObject* o, PyObject* name) {
   return v;
 }
 
-PyObject* element_wire(PyObject*, PyObject* e) {
+// The properties in `all` (a list of Property objects) as wm_element_t writes them after
+// the names; false when Python must write them.
+bool put_properties(std::string& out, PyObject* all) {
   static PyObject* key_name = PyUnicode_InternFromString("_key");
   static PyObject* values_name = PyUnicode_InternFromString("_values");
+  const Py_ssize_t count = PyList_GET_SIZE(all);
+  put_u32(out, static_cast<uint32_t>(count));
+  bool ok = true;
+  for (Py_ssize_t j = 0; ok && j < count; ++j) {
+    PyObject* p = PyList_GET_ITEM(all, j);
+    PyObject* key = attribute(p, key_name);
+    PyObject* values = key ? attribute(p, values_name) : nullptr;
+    ok = key && values && PyUnicode_CheckExact(key) && PyList_CheckExact(values) && put_text(out, key);
+    if (ok) {
+      const Py_ssize_t n = PyList_GET_SIZE(values);
+      put_u32(out, static_cast<uint32_t>(n));
+      for (Py_ssize_t i = 0; ok && i < n; ++i) ok = put_value(out, PyList_GET_ITEM(values, i));
+    }
+    Py_XDECREF(key);
+    Py_XDECREF(values);
+  }
+  return ok;
+}
+
+// A reader copy's properties as Element._wire_properties lists them: each the one
+// getProperty handed out (when it is truthy, as Python's `or`), else the replica's. A new
+// list, or null with no error set.
+PyObject* reader_properties(PyObject* d) {
+  PyObject* shared = PyDict_GetItemString(d, "_shared");
+  if (!shared || !PyTuple_CheckExact(shared) || PyTuple_GET_SIZE(shared) < 1) return nullptr;
+  PyObject* props = PyTuple_GET_ITEM(shared, 0);
+  if (!PyDict_CheckExact(props)) return nullptr;
+  PyObject* handed = PyDict_GetItemString(d, "_handed");
+  if (handed && !PyDict_CheckExact(handed)) return nullptr;
+  PyObject* all = PyList_New(0);
+  PyObject *k = nullptr, *p = nullptr;
+  Py_ssize_t pos = 0;
+  while (all && PyDict_Next(props, &pos, &k, &p)) {
+    PyObject* mine = handed ? PyDict_GetItemWithError(handed, k) : nullptr;
+    int truthy = 0;
+    if (mine) truthy = PyObject_IsTrue(mine);
+    if (PyErr_Occurred() || truthy < 0 || PyList_Append(all, truthy ? mine : p) != 0) {
+      PyErr_Clear();
+      Py_CLEAR(all);
+    }
+  }
+  return all;
+}
+
+// An element as wm_element_t encodes (id, type, label, properties); with `reader_copies`
+// also a reader copy (its properties still the replica's). False when Python must write
+// it; `out` may then hold part of it.
+bool put_element(std::string& out, PyObject* e, bool reader_copies) {
   PyObject* d = PyObject_GenericGetDict(e, nullptr);
   if (!d) {
     PyErr_Clear();
-    Py_RETURN_NONE;
+    return false;
   }
-  std::string out;
   bool ok = PyDict_CheckExact(d);
   PyObject* props = ok ? PyDict_GetItemString(d, "_properties") : nullptr;  // (absent: a reader copy)
   PyObject *id = ok ? text_item(d, "_id") : nullptr, *type = ok ? text_item(d, "_type") : nullptr,
            *label = ok ? text_item(d, "_label") : nullptr;
-  ok = props && PyDict_CheckExact(props) && id && type && label;
-  if (ok) {
-    out.reserve(64 + 96 * static_cast<size_t>(PyDict_GET_SIZE(props)));
-    ok = put_text(out, id) && put_text(out, type) && put_text(out, label);
-  }
-  if (ok) {
-    // (a list of them first: reading an attribute may run Python code, which may change the dict)
-    PyObject* all = PyDict_Values(props);
+  // (a list of them first: reading an attribute may run Python code, which may change the dict)
+  PyObject* all = nullptr;
+  if (ok && props && PyDict_CheckExact(props)) {
+    all = PyDict_Values(props);
     if (!all) PyErr_Clear();
-    ok = all != nullptr;
-    const Py_ssize_t count = ok ? PyList_GET_SIZE(all) : 0;
-    put_u32(out, static_cast<uint32_t>(count));
-    for (Py_ssize_t j = 0; ok && j < count; ++j) {
-      PyObject* p = PyList_GET_ITEM(all, j);
-      PyObject* key = attribute(p, key_name);
-      PyObject* values = key ? attribute(p, values_name) : nullptr;
-      ok = key && values && PyUnicode_CheckExact(key) && PyList_CheckExact(values) && put_text(out, key);
-      if (ok) {
-        const Py_ssize_t n = PyList_GET_SIZE(values);
-        put_u32(out, static_cast<uint32_t>(n));
-        for (Py_ssize_t i = 0; ok && i < n; ++i) ok = put_value(out, PyList_GET_ITEM(values, i));
-      }
-      Py_XDECREF(key);
-      Py_XDECREF(values);
-    }
-    Py_XDECREF(all);
+  } else if (ok && !props && reader_copies) {
+    all = reader_properties(d);
   }
+  ok = all && id && type && label;
+  if (ok) {
+    out.reserve(out.size() + 64 + 96 * static_cast<size_t>(PyList_GET_SIZE(all)));
+    ok = put_text(out, id) && put_text(out, type) && put_text(out, label) && put_properties(out, all);
+  }
+  Py_XDECREF(all);
   Py_DECREF(d);
-  if (!ok) Py_RETURN_NONE;
+  return ok;
+}
+
+PyObject* element_wire(PyObject*, PyObject* e) {
+  std::string out;
+  if (!put_element(out, e, false)) Py_RETURN_NONE;  // (a reader copy too: Python keeps its bytes)
   return PyBytes_FromStringAndSize(out.data(), static_cast<Py_ssize_t>(out.size()));
+}
+
+// -- a tick reply's parameters -----------------------------------------------------------
+
+struct ParamWire {
+  PyObject* type_names = nullptr;   // TYPE_NAMES: a parameter's Python type -> its data_type name
+  PyObject* element_type = nullptr;  // skillbus.world.element.Element
+  PyObject* param_bytes = nullptr;   // Python's param_bytes(p), for what is not the regular case
+};
+ParamWire param_wire;
+
+// wm_element_t() as tick_wire._NO_ELEMENT: three empty strings and no properties.
+void put_no_element(std::string& out) {
+  for (int i = 0; i < 3; ++i) out.append(kEmptyText, 5);
+  put_u32(out, 0);
+}
+
+void put_i32(std::string& out, int32_t v) { put_u32(out, static_cast<uint32_t>(v)); }
+
+// One skill_value_t as tick_wire.value_bytes writes it; false when Python must write it.
+bool put_skill_value(std::string& out, PyObject* v) {
+  using skillbus_msgs::skill_value_t;
+  if (PyFloat_CheckExact(v)) {
+    out.push_back(static_cast<char>(skill_value_t::FLOAT));
+    out.append(kEmptyText, 5);
+    put_numbers(out, 0, PyFloat_AS_DOUBLE(v), false);
+  } else if (PyBool_Check(v)) {
+    out.push_back(static_cast<char>(skill_value_t::BOOL));
+    out.append(kEmptyText, 5);
+    put_numbers(out, 0, 0.0, v == Py_True);
+  } else if (PyLong_CheckExact(v)) {
+    int overflow = 0;
+    const long long i = PyLong_AsLongLongAndOverflow(v, &overflow);
+    if (overflow || (i == -1 && PyErr_Occurred())) {
+      PyErr_Clear();
+      return false;
+    }
+    out.push_back(static_cast<char>(skill_value_t::INT));
+    out.append(kEmptyText, 5);
+    put_numbers(out, i, 0.0, false);
+  } else if (PyUnicode_CheckExact(v)) {
+    out.push_back(static_cast<char>(skill_value_t::STRING));
+    if (!put_text(out, v)) return false;
+    put_numbers(out, 0, 0.0, false);
+  } else {
+    const int is_element = PyObject_IsInstance(v, param_wire.element_type);
+    if (is_element <= 0) {
+      PyErr_Clear();
+      return false;  // (a list or dict as JSON, or a value that cannot be sent: Python's)
+    }
+    out.push_back(static_cast<char>(skill_value_t::ELEMENT));
+    out.append(kEmptyText, 5);
+    put_numbers(out, 0, 0.0, false);
+    return put_element(out, v, true);
+  }
+  put_no_element(out);
+  return true;
+}
+
+// The parameter's attribute `name` as an exact str written as text; false otherwise.
+bool put_text_attribute(std::string& out, PyObject* p, PyObject* name) {
+  PyObject* s = attribute(p, name);
+  const bool ok = s && PyUnicode_CheckExact(s) && put_text(out, s);
+  Py_XDECREF(s);
+  return ok;
+}
+
+// `values` (an exact list) as a count and its skill_value_t's; false when Python must.
+bool put_skill_values(std::string& out, PyObject* values) {
+  if (!values || !PyList_CheckExact(values)) return false;
+  const Py_ssize_t n = PyList_GET_SIZE(values);
+  put_i32(out, static_cast<int32_t>(n));
+  for (Py_ssize_t i = 0; i < n; ++i)
+    if (!put_skill_value(out, PyList_GET_ITEM(values, i))) return false;
+  return true;
+}
+
+// One skill_param_t as tick_wire.param_bytes writes it from a Param; false when Python
+// must write it (anything but the regular case).
+bool put_param(std::string& out, PyObject* p) {
+  static PyObject* key = PyUnicode_InternFromString("_key");
+  static PyObject* description = PyUnicode_InternFromString("description");
+  static PyObject* param_type = PyUnicode_InternFromString("_param_type");
+  static PyObject* data_type = PyUnicode_InternFromString("_type");
+  static PyObject* values = PyUnicode_InternFromString("_values");
+  static PyObject* defaults = PyUnicode_InternFromString("_default");
+  static PyObject* options = PyUnicode_InternFromString("options");
+  static PyObject* type = PyUnicode_InternFromString("type");
+  if (!put_text_attribute(out, p, key) || !put_text_attribute(out, p, description)) return false;
+  PyObject* kind = attribute(p, param_type);
+  long k = kind && PyLong_Check(kind) ? PyLong_AsLong(kind) : 1000;
+  Py_XDECREF(kind);
+  if (k < -128 || k > 127) {
+    PyErr_Clear();
+    return false;
+  }
+  out.push_back(static_cast<char>(k));
+  PyObject* t = attribute(p, data_type);
+  PyObject* name = t ? PyDict_GetItemWithError(param_wire.type_names, t) : nullptr;  // (borrowed)
+  PyObject* vals = t ? attribute(p, values) : nullptr;
+  PyObject* defs = vals ? attribute(p, defaults) : nullptr;
+  PyObject* opts = defs ? attribute(p, options) : nullptr;
+  bool ok = name && PyUnicode_CheckExact(name) && put_text(out, name) && defs && PyList_CheckExact(defs);
+  if (ok) {  // the concept: an element parameter's first default's type
+    if (t == param_wire.element_type && PyList_GET_SIZE(defs) > 0) {
+      PyObject* concept = attribute(PyList_GET_ITEM(defs, 0), type);
+      ok = concept && PyUnicode_CheckExact(concept) && put_text(out, concept);
+      Py_XDECREF(concept);
+    } else {
+      out.append(kEmptyText, 5);
+    }
+  }
+  ok = ok && put_skill_values(out, vals) && put_skill_values(out, defs) && opts && PyList_CheckExact(opts);
+  if (ok) {
+    const Py_ssize_t n = PyList_GET_SIZE(opts);
+    put_i32(out, static_cast<int32_t>(n));
+    for (Py_ssize_t i = 0; ok && i < n; ++i) {
+      PyObject* o = PyList_GET_ITEM(opts, i);
+      ok = PyUnicode_CheckExact(o) && put_text(out, o);  // (str(o) of anything else: Python's)
+    }
+  }
+  if (PyErr_Occurred()) PyErr_Clear();
+  Py_XDECREF(t);
+  Py_XDECREF(vals);
+  Py_XDECREF(defs);
+  Py_XDECREF(opts);
+  return ok;
+}
+
+// params_wire(params) -> bytes: the skill_param_t's of a list of Params, as b"".join of
+// tick_wire.param_bytes: the regular case here, any other parameter by param_bytes
+// itself (which writes it, or raises what it raises).
+PyObject* params_wire(PyObject*, PyObject* params) {
+  if (!param_wire.param_bytes) {
+    PyErr_SetString(PyExc_RuntimeError, "params_wire: set_param_wire was not called");
+    return nullptr;
+  }
+  if (!PyList_CheckExact(params)) {
+    PyErr_SetString(PyExc_TypeError, "params_wire: a list of Params needed");
+    return nullptr;
+  }
+  std::string out;
+  // (a list of them first: a parameter's attributes may run Python code)
+  PyObject* all = PyList_GetSlice(params, 0, PyList_GET_SIZE(params));
+  if (!all) return nullptr;
+  for (Py_ssize_t i = 0; i < PyList_GET_SIZE(all); ++i) {
+    PyObject* p = PyList_GET_ITEM(all, i);
+    const size_t mark = out.size();
+    if (put_param(out, p)) continue;
+    out.resize(mark);
+    PyObject* b = PyObject_CallOneArg(param_wire.param_bytes, p);
+    if (!b || !PyBytes_Check(b)) {
+      if (b) PyErr_SetString(PyExc_TypeError, "params_wire: param_bytes did not return bytes");
+      Py_XDECREF(b);
+      Py_DECREF(all);
+      return nullptr;
+    }
+    out.append(PyBytes_AS_STRING(b), static_cast<size_t>(PyBytes_GET_SIZE(b)));
+    Py_DECREF(b);
+  }
+  Py_DECREF(all);
+  return PyBytes_FromStringAndSize(out.data(), static_cast<Py_ssize_t>(out.size()));
+}
+
+PyObject* set_param_wire(PyObject*, PyObject* args) {
+  PyObject *names = nullptr, *element = nullptr, *fallback = nullptr;
+  if (!PyArg_ParseTuple(args, "O!OO", &PyDict_Type, &names, &element, &fallback)) return nullptr;
+  if (!PyType_Check(element) || !PyCallable_Check(fallback)) {
+    PyErr_SetString(PyExc_TypeError, "set_param_wire(type_names, Element, param_bytes)");
+    return nullptr;
+  }
+  Py_INCREF(names);
+  Py_INCREF(element);
+  Py_INCREF(fallback);
+  Py_XSETREF(param_wire.type_names, names);
+  Py_XSETREF(param_wire.element_type, element);
+  Py_XSETREF(param_wire.param_bytes, fallback);
+  Py_RETURN_NONE;
 }
 
 PyMethodDef methods[] = {
     {"element_wire", element_wire, METH_O,
      "element_wire(element) -> bytes | None: the element as wm_element_t encodes, or None when Python must "
      "encode it (skillbus.skill.tick_wire)."},
+    {"params_wire", params_wire, METH_O,
+     "params_wire(params) -> bytes: the skill_param_t's of a list of Params, as tick_wire.param_bytes writes "
+     "them."},
+    {"set_param_wire", set_param_wire, METH_VARARGS,
+     "set_param_wire(type_names, Element, param_bytes): what params_wire reads types by and falls back to."},
     {nullptr, nullptr, 0, nullptr}};
 
 }  // namespace

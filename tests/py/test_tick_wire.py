@@ -275,3 +275,101 @@ def test_what_the_native_encoder_leaves_to_python_is_written_or_refused_as_pytho
     assert skillbus_native.element_wire(reader) is None  # (its properties are still the replica's)
     assert element_bytes(reader) == python_element_bytes(reader)
     assert skillbus_native.element_wire(object()) is None and skillbus_native.element_wire(3) is None
+
+
+# -- skillbus_native's parameter encoder (params_wire) ---------------------------------------
+
+import re  # noqa: E402
+
+from skillbus.skill import tick_wire  # noqa: E402
+from skillbus.skill.tick_wire import param_bytes  # noqa: E402
+
+
+@pytest.fixture
+def python_calls():
+    """params_wire's fallback counted: the parameters Python's param_bytes wrote."""
+    calls = []
+
+    def counted(p):
+        calls.append(p)
+        return param_bytes(p)
+
+    skillbus_native.set_param_wire(tick_wire.TYPE_NAMES, Element, counted)
+    yield calls
+    skillbus_native.set_param_wire(tick_wire.TYPE_NAMES, Element, param_bytes)
+
+
+def same_params_as_python(params) -> bytes | None:
+    """params_wire(params) is b"".join(param_bytes), or raises what Python raises."""
+    try:
+        want = b"".join([param_bytes(p) for p in params])
+    except Exception as py_error:
+        with pytest.raises(type(py_error), match=re.escape(str(py_error))):
+            skillbus_native.params_wire(params)
+        return None
+    assert skillbus_native.params_wire(params) == want
+    return want
+
+
+def test_replies_use_the_native_parameter_encoder():
+    assert tick_wire._params_wire is skillbus_native.params_wire
+
+
+def test_the_native_parameter_encoder_writes_pythons_bytes_for_random_parameters():
+    rng = random.Random(11)
+    for _ in range(400):
+        same_params_as_python([a_param(rng, i) for i in range(rng.randrange(6))])
+
+
+def reader_copy_param(rng, handed: bool) -> Param:
+    src = an_element(rng)
+    copy = Element._reader_copy(src, (("-1", "skiros:at", "skiros:Table-1"),))
+    if handed and src.properties:
+        copy.getProperty(src.properties[0].key).setValues([0.125])  # handed out (a copy of its own), changed
+    p = Param("Object", "the object", Element("skiros:Cube"), ParamTypes.Required)
+    p.setValues([copy])
+    return p
+
+
+def test_the_regular_case_is_written_natively(python_calls):
+    rng = random.Random(12)
+    regular = []
+    for i in range(200):
+        kind = rng.randrange(5)  # int, float, str, bool, element: none left to Python
+        values = values_of_one_type(rng, kind)
+        p = Param(f"P{i}", rng.choice(TEXT), values if len(values) > 1 else values[0], ParamTypes(rng.randrange(3)),
+                  options=[rng.choice(TEXT)][:rng.randrange(2)])
+        regular.append(p)
+    regular += [reader_copy_param(rng, handed) for handed in (False, True) for _ in range(20)]
+    got = skillbus_native.params_wire(regular)
+    assert python_calls == []  # (every one of them written in C++)
+    assert got == b"".join(param_bytes(p) for p in regular)
+    assert all("_properties" not in p.values[0].__dict__ for p in regular[-40:])  # (nothing copied to encode)
+
+
+def test_what_the_native_parameter_encoder_leaves_to_python_is_written_or_refused_as_python_does(python_calls):
+    rng = random.Random(13)
+    odd = []
+    json_param = Param("Poses", "a list", [[1, 2]], ParamTypes.Optional)  # lists go as JSON: Python's
+    odd.append(json_param)
+    odd.append(Param("Count", "", 3, ParamTypes.Required, options=[1, 2]))  # str(option): Python's
+    sub = Param("Name", "", "n", ParamTypes.Required)
+    sub._values = [Name("n")]  # a str subclass
+    odd.append(sub)
+    big = Param("Big", "", 1, ParamTypes.Required)
+    big._values = [2**63]  # over 64 bits: Python's struct.error
+    odd.append(big)
+    surrogate = Param("Text", "\udc80", "x", ParamTypes.Required)  # not UTF-8: Python's UnicodeEncodeError
+    odd.append(surrogate)
+    unsendable = Param("Thing", "", 1, ParamTypes.Required)
+    unsendable._values = [object()]  # a TypeError naming its type, from Python
+    odd.append(unsendable)
+    as_tuple = Param("Tuple", "", 1.0, ParamTypes.Required)
+    as_tuple._values = (1.0, 2.0)  # (a tuple: Python's loop takes it)
+    odd.append(as_tuple)
+    for p in odd:
+        before = len(python_calls)
+        same_params_as_python([a_param(rng, 0), p, a_param(rng, 1)])
+        assert any(c is p for c in python_calls[before:]), p.key
+    with pytest.raises(TypeError):
+        skillbus_native.params_wire((a_param(rng, 0),))  # (a list, as a reply holds them)

@@ -263,7 +263,23 @@ class TickReply(skill_tick_reply_t):
     def encode(self) -> bytes:
         if self.skill_params is None:
             return encode_tick_reply(self)
-        out = [_FINGERPRINT, _B(self.state), _encode_text(self.message),
-               _IDQI(self.code, self.progress, self.wm_version, len(self.skill_params))]
-        out += [param_bytes(p) for p in self.skill_params]
-        return b"".join(out)
+        head = (_FINGERPRINT + _B(self.state) + _encode_text(self.message) +
+                _IDQI(self.code, self.progress, self.wm_version, len(self.skill_params)))
+        if _params_wire is not None:
+            return head + _params_wire(self.skill_params)
+        return head + b"".join([param_bytes(p) for p in self.skill_params])
+
+
+def _native_params_wire():
+    """skillbus_native's params_wire, given what it reads types by and falls back to; None
+    without it."""
+    lib = native.module()
+    if lib is None or not hasattr(lib, "params_wire"):
+        return None
+    lib.set_param_wire(TYPE_NAMES, Element, param_bytes)
+    return lib.params_wire
+
+
+# The parameters of a reply written by skillbus_native (the regular case; param_bytes for
+# the rest), or by param_bytes alone.
+_params_wire = _native_params_wire()
