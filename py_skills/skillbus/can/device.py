@@ -231,11 +231,13 @@ class GripperDevice:
             now = (sw, int(round(self.model.width)), grip)
             if now != self._last_written:
                 # The dictionary's entries (what an SDO upload reads; read-only for others)
-                # only when they change: each write costs python-canopen several
-                # microseconds and its write callbacks, and at rest nothing changes for
-                # hundreds of frames.
-                for (index, var), value in zip(self._status_entries, now):
-                    self.node.set_data(index, 0, var.encode_raw(value))
+                # only those that changed: each write costs python-canopen several
+                # microseconds and its write callbacks; at rest nothing changes for
+                # hundreds of frames, and holding an object only the width does.
+                before = self._last_written or (None, None, None)
+                for (index, var), value, was in zip(self._status_entries, now, before):
+                    if value != was:
+                        self.node.set_data(index, 0, var.encode_raw(value))
                 self._last_written = now
             operational = self.node.nmt.state == "OPERATIONAL"
             self._since_sent += 1
