@@ -193,12 +193,14 @@ PyObject* decode_clock(PyObject*, PyObject* data) {
     PyErr_SetString(PyExc_RuntimeError, "decode_clock: set_clock_types was not called");
     return nullptr;
   }
-  // (bytes as the bus hands them; any other buffer, as Python's decoder reads one)
-  Py_buffer view;
-  if (PyObject_GetBuffer(data, &view, PyBUF_SIMPLE) != 0) return nullptr;
-  PyObject* clock = decode(static_cast<const uint8_t*>(view.buf), static_cast<size_t>(view.len));
-  PyBuffer_Release(&view);
-  return clock;
+  // (bytes as the bus hands them, or a bytearray; anything else is no clock, as in Python)
+  if (PyBytes_Check(data))
+    return decode(reinterpret_cast<const uint8_t*>(PyBytes_AS_STRING(data)), static_cast<size_t>(PyBytes_GET_SIZE(data)));
+  if (PyByteArray_Check(data))
+    return decode(reinterpret_cast<const uint8_t*>(PyByteArray_AS_STRING(data)),
+                  static_cast<size_t>(PyByteArray_GET_SIZE(data)));
+  PyErr_Format(PyExc_ValueError, "not a lockstep_clock_t (%.100s, not bytes)", Py_TYPE(data)->tp_name);
+  return nullptr;
 }
 
 PyObject* decode(const uint8_t* p, size_t n) {
@@ -239,7 +241,6 @@ PyObject* set_clock_types(PyObject*, PyObject* args) {
     PyErr_SetString(PyExc_ValueError, "set_clock_types: a fingerprint of 8 bytes needed");
     return nullptr;
   }
-  if (!names.header && !intern_names()) return nullptr;
   types.fingerprint.assign(PyBytes_AS_STRING(fingerprint), 8);
   // (kept for the module's life: the generated classes live as long)
   Py_INCREF(clock);
@@ -264,6 +265,6 @@ PyMethodDef methods[] = {
 
 }  // namespace
 
-bool add_lockstep_wire(PyObject* module) { return PyModule_AddFunctions(module, methods) == 0; }
+bool add_lockstep_wire(PyObject* module) { return intern_names() && PyModule_AddFunctions(module, methods) == 0; }
 
 }  // namespace skillbus::native

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <utility>
 
 #include "glue.hpp"
 #include "skillbus_msgs/skill_value_t.hpp"
@@ -63,6 +64,12 @@ void put_numbers(std::string& out, int64_t i, double f, bool b) {
 
 const char kEmptyText[5] = {0, 0, 0, 1, 0};
 
+// Attribute names, interned once (add_tick_wire: the module does not load without them).
+struct Names {
+  PyObject *key, *values, *defaults, *data_type, *type, *description, *param_type, *options;
+};
+Names names;
+
 // One property value as tick_wire._wm_value writes it; false when Python must write it.
 bool put_value(std::string& out, PyObject* v) {
   if (PyFloat_CheckExact(v)) {
@@ -109,15 +116,13 @@ PyObject* attribute(PyObject* o, PyObject* name) {
 // The properties in `all` (a list of Property objects) as wm_element_t writes them after
 // the names; false when Python must write them.
 bool put_properties(std::string& out, PyObject* all) {
-  static PyObject* key_name = PyUnicode_InternFromString("_key");
-  static PyObject* values_name = PyUnicode_InternFromString("_values");
   const Py_ssize_t count = PyList_GET_SIZE(all);
   put_u32(out, static_cast<uint32_t>(count));
   bool ok = true;
   for (Py_ssize_t j = 0; ok && j < count; ++j) {
     PyObject* p = PyList_GET_ITEM(all, j);
-    PyObject* key = attribute(p, key_name);
-    PyObject* values = key ? attribute(p, values_name) : nullptr;
+    PyObject* key = attribute(p, names.key);
+    PyObject* values = key ? attribute(p, names.values) : nullptr;
     ok = key && values && PyUnicode_CheckExact(key) && PyList_CheckExact(values) && put_text(out, key);
     if (ok) {
       const Py_ssize_t n = PyList_GET_SIZE(values);
@@ -132,7 +137,8 @@ bool put_properties(std::string& out, PyObject* all) {
 
 // A reader copy's properties as Element._wire_properties lists them: each the one
 // getProperty handed out (when it is truthy, as Python's `or`), else the replica's. A new
-// list, or null with no error set.
+// list, or null with no error set. (Deciding truthiness may run Python code, which may
+// change the element: everything used across it is held.)
 PyObject* reader_properties(PyObject* d) {
   PyObject* shared = PyDict_GetItemString(d, "_shared");
   if (!shared || !PyTuple_CheckExact(shared) || PyTuple_GET_SIZE(shared) < 1) return nullptr;
@@ -140,18 +146,24 @@ PyObject* reader_properties(PyObject* d) {
   if (!PyDict_CheckExact(props)) return nullptr;
   PyObject* handed = PyDict_GetItemString(d, "_handed");
   if (handed && !PyDict_CheckExact(handed)) return nullptr;
-  PyObject* all = PyList_New(0);
-  PyObject *k = nullptr, *p = nullptr;
-  Py_ssize_t pos = 0;
-  while (all && PyDict_Next(props, &pos, &k, &p)) {
-    PyObject* mine = handed ? PyDict_GetItemWithError(handed, k) : nullptr;
-    int truthy = 0;
-    if (mine) truthy = PyObject_IsTrue(mine);
-    if (PyErr_Occurred() || truthy < 0 || PyList_Append(all, truthy ? mine : p) != 0) {
+  // (the replica's properties as a list of pairs first: Python code may change the dicts)
+  PyObject* items = PyDict_Items(props);
+  Py_XINCREF(handed);
+  PyObject* all = items ? PyList_New(0) : nullptr;
+  for (Py_ssize_t i = 0; all && i < PyList_GET_SIZE(items); ++i) {
+    PyObject* pair = PyList_GET_ITEM(items, i);
+    PyObject* mine = handed ? PyDict_GetItemWithError(handed, PyTuple_GET_ITEM(pair, 0)) : nullptr;
+    Py_XINCREF(mine);
+    const int truthy = mine ? PyObject_IsTrue(mine) : 0;
+    if (PyErr_Occurred() || truthy < 0 || PyList_Append(all, truthy ? mine : PyTuple_GET_ITEM(pair, 1)) != 0) {
       PyErr_Clear();
       Py_CLEAR(all);
     }
+    Py_XDECREF(mine);
   }
+  if (!items) PyErr_Clear();
+  Py_XDECREF(items);
+  Py_XDECREF(handed);
   return all;
 }
 
@@ -166,8 +178,12 @@ bool put_element(std::string& out, PyObject* e, bool reader_copies) {
   }
   bool ok = PyDict_CheckExact(d);
   PyObject* props = ok ? PyDict_GetItemString(d, "_properties") : nullptr;  // (absent: a reader copy)
+  // (held: a reader copy's properties may run Python code, which may change the dict)
   PyObject *id = ok ? text_item(d, "_id") : nullptr, *type = ok ? text_item(d, "_type") : nullptr,
            *label = ok ? text_item(d, "_label") : nullptr;
+  Py_XINCREF(id);
+  Py_XINCREF(type);
+  Py_XINCREF(label);
   // (a list of them first: reading an attribute may run Python code, which may change the dict)
   PyObject* all = nullptr;
   if (ok && props && PyDict_CheckExact(props)) {
@@ -182,6 +198,9 @@ bool put_element(std::string& out, PyObject* e, bool reader_copies) {
     ok = put_text(out, id) && put_text(out, type) && put_text(out, label) && put_properties(out, all);
   }
   Py_XDECREF(all);
+  Py_XDECREF(id);
+  Py_XDECREF(type);
+  Py_XDECREF(label);
   Py_DECREF(d);
   return ok;
 }
@@ -249,73 +268,94 @@ bool put_skill_value(std::string& out, PyObject* v) {
   return true;
 }
 
-// The parameter's attribute `name` as an exact str written as text; false otherwise.
-bool put_text_attribute(std::string& out, PyObject* p, PyObject* name) {
-  PyObject* s = attribute(p, name);
-  const bool ok = s && PyUnicode_CheckExact(s) && put_text(out, s);
-  Py_XDECREF(s);
-  return ok;
-}
-
 // `values` (an exact list) as a count and its skill_value_t's; false when Python must.
+// (over a copy of the list: an element's truthiness or isinstance may run Python code)
 bool put_skill_values(std::string& out, PyObject* values) {
   if (!values || !PyList_CheckExact(values)) return false;
-  const Py_ssize_t n = PyList_GET_SIZE(values);
-  put_i32(out, static_cast<int32_t>(n));
-  for (Py_ssize_t i = 0; i < n; ++i)
-    if (!put_skill_value(out, PyList_GET_ITEM(values, i))) return false;
-  return true;
-}
-
-// One skill_param_t as tick_wire.param_bytes writes it from a Param; false when Python
-// must write it (anything but the regular case).
-bool put_param(std::string& out, PyObject* p) {
-  static PyObject* key = PyUnicode_InternFromString("_key");
-  static PyObject* description = PyUnicode_InternFromString("description");
-  static PyObject* param_type = PyUnicode_InternFromString("_param_type");
-  static PyObject* data_type = PyUnicode_InternFromString("_type");
-  static PyObject* values = PyUnicode_InternFromString("_values");
-  static PyObject* defaults = PyUnicode_InternFromString("_default");
-  static PyObject* options = PyUnicode_InternFromString("options");
-  static PyObject* type = PyUnicode_InternFromString("type");
-  if (!put_text_attribute(out, p, key) || !put_text_attribute(out, p, description)) return false;
-  PyObject* kind = attribute(p, param_type);
-  long k = kind && PyLong_Check(kind) ? PyLong_AsLong(kind) : 1000;
-  Py_XDECREF(kind);
-  if (k < -128 || k > 127) {
+  PyObject* held = PyList_GetSlice(values, 0, PyList_GET_SIZE(values));
+  if (!held) {
     PyErr_Clear();
     return false;
   }
-  out.push_back(static_cast<char>(k));
-  PyObject* t = attribute(p, data_type);
-  PyObject* name = t ? PyDict_GetItemWithError(param_wire.type_names, t) : nullptr;  // (borrowed)
-  PyObject* vals = t ? attribute(p, values) : nullptr;
-  PyObject* defs = vals ? attribute(p, defaults) : nullptr;
-  PyObject* opts = defs ? attribute(p, options) : nullptr;
-  bool ok = name && PyUnicode_CheckExact(name) && put_text(out, name) && defs && PyList_CheckExact(defs);
-  if (ok) {  // the concept: an element parameter's first default's type
-    if (t == param_wire.element_type && PyList_GET_SIZE(defs) > 0) {
-      PyObject* concept = attribute(PyList_GET_ITEM(defs, 0), type);
-      ok = concept && PyUnicode_CheckExact(concept) && put_text(out, concept);
-      Py_XDECREF(concept);
-    } else {
-      out.append(kEmptyText, 5);
-    }
+  const Py_ssize_t n = PyList_GET_SIZE(held);
+  put_i32(out, static_cast<int32_t>(n));
+  bool ok = true;
+  for (Py_ssize_t i = 0; ok && i < n; ++i) ok = put_skill_value(out, PyList_GET_ITEM(held, i));
+  Py_DECREF(held);
+  return ok;
+}
+
+// Attributes of a Param, in the order param_bytes reads them (a property's getter may run
+// Python code: read as Python reads them, each held until the parameter is written).
+struct ParamFields {
+  PyObject *defaults = nullptr, *data_type = nullptr, *concept = nullptr, *values = nullptr, *key = nullptr,
+           *description = nullptr, *kind = nullptr, *type_name = nullptr, *options = nullptr;
+  ~ParamFields() {
+    for (PyObject* o : {defaults, data_type, concept, values, key, description, kind, type_name, options}) Py_XDECREF(o);
   }
-  ok = ok && put_skill_values(out, vals) && put_skill_values(out, defs) && opts && PyList_CheckExact(opts);
+};
+
+// The fields of `p` (false, with no error set, at the first that is not the regular case).
+bool read_param(PyObject* p, ParamFields& f) {
+  f.defaults = attribute(p, names.defaults);
+  if (!f.defaults || !PyList_CheckExact(f.defaults)) return false;
+  f.data_type = attribute(p, names.data_type);
+  if (!f.data_type) return false;
+  if (f.data_type == param_wire.element_type && PyList_GET_SIZE(f.defaults) > 0) {
+    PyObject* first = PyList_GET_ITEM(f.defaults, 0);
+    Py_INCREF(first);
+    f.concept = attribute(first, names.type);
+    Py_DECREF(first);
+    if (!f.concept || !PyUnicode_CheckExact(f.concept)) return false;
+  }
+  f.values = attribute(p, names.values);
+  f.key = f.values ? attribute(p, names.key) : nullptr;
+  f.description = f.key ? attribute(p, names.description) : nullptr;
+  f.kind = f.description ? attribute(p, names.param_type) : nullptr;
+  if (!f.kind || !PyUnicode_CheckExact(f.key) || !PyUnicode_CheckExact(f.description) || !PyLong_Check(f.kind))
+    return false;
+  f.type_name = PyDict_GetItemWithError(param_wire.type_names, f.data_type);
+  if (!f.type_name) {
+    PyErr_Clear();  // (unhashable, or no such type: Python's KeyError or TypeError)
+    return false;
+  }
+  Py_INCREF(f.type_name);
+  return PyUnicode_CheckExact(f.type_name);
+}
+
+// One skill_param_t as tick_wire.param_bytes writes it from a Param; false, with no error
+// set, when Python must write it (anything but the regular case).
+bool put_param(std::string& out, PyObject* p) {
+  ParamFields f;
+  if (!read_param(p, f)) return false;
+  int overflow = 0;
+  const long kind = PyLong_AsLongAndOverflow(f.kind, &overflow);
+  if (overflow || (kind == -1 && PyErr_Occurred()) || kind < -128 || kind > 127) {
+    PyErr_Clear();  // (Python's struct.error)
+    return false;
+  }
+  bool ok = put_text(out, f.key) && put_text(out, f.description);
+  out.push_back(static_cast<char>(kind));
+  ok = ok && put_text(out, f.type_name);
+  if (ok && f.concept) {
+    ok = put_text(out, f.concept);
+  } else if (ok) {
+    out.append(kEmptyText, 5);
+  }
+  ok = ok && put_skill_values(out, f.values) && put_skill_values(out, f.defaults);
   if (ok) {
-    const Py_ssize_t n = PyList_GET_SIZE(opts);
+    f.options = attribute(p, names.options);
+    ok = f.options && PyList_CheckExact(f.options);
+  }
+  if (ok) {  // (nothing below runs Python code)
+    const Py_ssize_t n = PyList_GET_SIZE(f.options);
     put_i32(out, static_cast<int32_t>(n));
     for (Py_ssize_t i = 0; ok && i < n; ++i) {
-      PyObject* o = PyList_GET_ITEM(opts, i);
+      PyObject* o = PyList_GET_ITEM(f.options, i);
       ok = PyUnicode_CheckExact(o) && put_text(out, o);  // (str(o) of anything else: Python's)
     }
   }
   if (PyErr_Occurred()) PyErr_Clear();
-  Py_XDECREF(t);
-  Py_XDECREF(vals);
-  Py_XDECREF(defs);
-  Py_XDECREF(opts);
   return ok;
 }
 
@@ -383,6 +423,16 @@ PyMethodDef methods[] = {
 
 }  // namespace
 
-bool add_tick_wire(PyObject* module) { return PyModule_AddFunctions(module, methods) == 0; }
+bool add_tick_wire(PyObject* module) {
+  const std::pair<PyObject**, const char*> all[] = {
+      {&names.key, "_key"},         {&names.values, "_values"},           {&names.defaults, "_default"},
+      {&names.data_type, "_type"},  {&names.type, "type"},                {&names.description, "description"},
+      {&names.param_type, "_param_type"}, {&names.options, "options"}};
+  for (const auto& [slot, text] : all) {
+    *slot = PyUnicode_InternFromString(text);
+    if (!*slot) return false;
+  }
+  return PyModule_AddFunctions(module, methods) == 0;
+}
 
 }  // namespace skillbus::native

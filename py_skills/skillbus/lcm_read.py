@@ -15,15 +15,19 @@ LENGTH = struct.Struct(">I")
 INT = struct.Struct(">i")
 TIMES = struct.Struct(">qq")
 POSE = struct.Struct(">7d")
-# A struct per array length: bounded by what fits in a message (a decoder checks a count
-# against the bytes left before it asks; a forged count gets no struct).
+# A struct per array length, kept for the lengths that come (a decoder checks a count
+# against the bytes left before it asks); at most DOUBLES_KEPT of them, so that messages
+# with ever new counts that fit cannot grow it: past that a struct is made for the call.
 DOUBLES: dict[int, struct.Struct] = {}
+DOUBLES_KEPT = 64
 
 
 def doubles(n: int) -> struct.Struct:
     s = DOUBLES.get(n)
     if s is None:
-        s = DOUBLES[n] = struct.Struct(f">{n}d")
+        s = struct.Struct(f">{n}d")
+        if len(DOUBLES) < DOUBLES_KEPT:
+            DOUBLES[n] = s
     return s
 
 

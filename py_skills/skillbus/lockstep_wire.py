@@ -68,6 +68,8 @@ def python_decode_clock(data: bytes) -> lockstep_clock_t:
     """The clock in `data`; ValueError when it is no lockstep_clock_t (another type,
     cut short, a negative or impossible length, or bytes left over). decode_clock is
     skillbus_native's twin of it when built (the same fields and refusals)."""
+    if not isinstance(data, (bytes, bytearray)):
+        raise ValueError(f"not a lockstep_clock_t ({type(data).__name__}, not bytes)")
     if data[:8] != _CLOCK:
         raise ValueError("not a lockstep_clock_t (its fingerprint differs)")
     try:

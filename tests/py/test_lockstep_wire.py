@@ -122,3 +122,13 @@ def test_read_header_reads_a_stamp():
     m.header, m.digest = h, bytes(32)
     got, end = read_header(m.encode(), 8)
     assert (got.frame, got.sim_time_ns, got.sender, got.seq, end) == (7, 70, "me", 3, 8 + 8 + 8 + 4 + 3 + 4)
+
+
+@pytest.mark.parametrize("decoder", DECODERS)
+def test_what_is_not_bytes_is_no_clock(decoder):
+    decode_clock = decoder()
+    data = random_clock(random.Random(4)).encode()
+    assert decode_clock(bytearray(data)).encode() == data
+    for other in (data.decode("latin-1"), memoryview(data), None, 7, [data]):
+        with pytest.raises(ValueError, match="not a lockstep_clock_t"):
+            decode_clock(other)

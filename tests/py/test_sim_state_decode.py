@@ -140,3 +140,23 @@ def test_forged_joint_counts_do_not_grow_the_decoders_structs():
         assert decode_sim_state(forged) is None
         assert decode(sim_state_t, forged) is None
     assert len(lcm_read.DOUBLES) <= before + 1
+
+
+def test_states_whose_joint_names_change_are_read_anew():
+    # The names' bytes are kept from the last state: states alternating two sets of names
+    # of the same count and lengths must each give their own.
+    first, second = state(name="joint"), state(name="jiont")
+    assert len(first) == len(second)
+    for data in (first, second, second, first, first[:40] + b"X" + first[41:]):
+        same(data, valid=data in (first, second))
+    assert decode_sim_state(second).joint_names[0] == "jiont_0"
+    assert decode_sim_state(first).joint_names[0] == "joint_0"
+
+
+def test_what_is_not_bytes_is_read_as_the_generated_decoder_reads_it():
+    data = state()
+    for other in (bytearray(data), memoryview(data)):
+        got = decode_sim_state(other)
+        assert got is not None and got.encode() == data
+    for other in (data.decode("latin-1"), None, 7):
+        assert decode_sim_state(other) is None and decode(sim_state_t, other) is None

@@ -283,6 +283,7 @@ import re  # noqa: E402
 
 from skillbus.skill import tick_wire  # noqa: E402
 from skillbus.skill.tick_wire import param_bytes  # noqa: E402
+from skillbus.world.property import Property  # noqa: E402
 
 
 @pytest.fixture
@@ -373,3 +374,64 @@ def test_what_the_native_parameter_encoder_leaves_to_python_is_written_or_refuse
         assert any(c is p for c in python_calls[before:]), p.key
     with pytest.raises(TypeError):
         skillbus_native.params_wire((a_param(rng, 0),))  # (a list, as a reply holds them)
+
+
+def test_a_kind_out_of_a_byte_or_of_64_bits_is_refused_as_python_refuses_it(python_calls):
+    for kind in (128, -129, 2**63, 2**64, -2**63 - 1):
+        p = Param("K", "d", 1.0, ParamTypes.Required)
+        p._param_type = kind
+        assert same_params_as_python([p]) is None, kind  # (struct.error, from Python)
+
+
+class ChangesItsElement(Property):
+    """A handed-out property whose truthiness drops it from the element that holds it: the
+    encoder must hold what it reads across Python code that runs while it reads."""
+
+    holder: dict = {}
+
+    def __bool__(self):
+        self.holder["e"].__dict__.get("_handed", {}).clear()
+        return True
+
+
+def test_python_code_run_while_a_parameter_is_read_changes_nothing_it_holds():
+    src = Element("skiros:Cube", "red", "skiros:Cube-2")
+    for i in range(4):
+        src.setProperty(f"skiros:K{i}", float(i))
+    copy = Element._reader_copy(src, ())
+    ChangesItsElement.holder["e"] = copy
+    copy.__dict__["_handed"] = {"skiros:K0": ChangesItsElement("skiros:K0", 9.0)}
+    p = Param("Object", "o", Element("skiros:Cube"), ParamTypes.Required)
+    p.setValues([copy])
+    got = skillbus_native.params_wire([p])
+    _ = [Property(f"skiros:Junk{i}", 1.0) for i in range(1000)]  # (what a freed property's memory would hold)
+    assert got.count(b"skiros:K0") == 1 and b"skiros:Junk" not in got
+    copy.__dict__["_handed"] = {"skiros:K0": ChangesItsElement("skiros:K0", 9.0)}
+    assert got == param_bytes(p)  # (the handed-out property, as Python's `or` takes it)
+
+
+class RenamesTypes(Param):
+    """A parameter whose options getter changes the encoder's table of type names."""
+
+    @property
+    def options(self):
+        tick_wire.TYPE_NAMES[float] = "changed-" + "x" * 40
+        return []
+
+    @options.setter
+    def options(self, value):
+        pass
+
+
+def test_a_getter_that_changes_the_type_names_gives_pythons_bytes():
+    before = dict(tick_wire.TYPE_NAMES)
+    try:
+        # (a name of its own, held by the table alone: replacing it frees it)
+        tick_wire.TYPE_NAMES[float] = "".join(["fl", "oat"])
+        native = skillbus_native.params_wire([RenamesTypes("Speed", "s", 0.5, ParamTypes.Optional)])
+        tick_wire.TYPE_NAMES[float] = "".join(["fl", "oat"])
+        python = param_bytes(RenamesTypes("Speed", "s", 0.5, ParamTypes.Optional))
+    finally:
+        tick_wire.TYPE_NAMES.clear()
+        tick_wire.TYPE_NAMES.update(before)
+    assert native == python and b"changed-" not in native  # (the name read before the options, as Python)

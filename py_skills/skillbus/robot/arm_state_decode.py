@@ -26,6 +26,10 @@ _CutShort, _string = lcm_read.CutShort, lcm_read.string
 def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
     """The robot_arm_state_t `data` encodes, or None when skillbus.msgs.decode would
     refuse it."""
+    if type(data) is not bytes:  # (as skillbus.msgs.decode: a bytearray or memoryview is read, else None)
+        if not isinstance(data, (bytearray, memoryview)):
+            return None
+        data = bytes(data)
     end = len(data)
     if data[:8] != _FINGERPRINT:
         return None

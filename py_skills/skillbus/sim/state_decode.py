@@ -62,6 +62,10 @@ def _joint_names(data: bytes, at: int, end: int, n: int) -> tuple[list[str], int
 
 def decode_sim_state(data: bytes) -> sim_state_t | None:
     """The sim_state_t `data` encodes, or None when skillbus.msgs.decode would refuse it."""
+    if type(data) is not bytes:  # (as skillbus.msgs.decode: a bytearray or memoryview is read, else None)
+        if not isinstance(data, (bytearray, memoryview)):
+            return None
+        data = bytes(data)
     end = len(data)
     if data[:8] != _FINGERPRINT:
         return None
