@@ -84,6 +84,7 @@ bench: build
 	$(PY) bench/wm_scale.py
 	$(PY) bench/sparql.py
 	$(PY) bench/skill_ticks.py
+	$(PY) bench/frame_codecs.py
 	$(PY) bench/sim_physics.py
 	$(PY) bench/can_latency.py
 	$(PY) bench/pick_and_place.py

@@ -7,11 +7,13 @@
 // Why: a skill process answers every tick with every parameter, and each element
 // parameter carries its properties; in Python that was a few microseconds an element, then
 // 40-70 µs a reply of the demo's (docs/benchmarks.md). Only the regular case is written
-// here: an element whose properties are its own (params_wire: or a reader copy's, still
-// the replica's), values of exactly str, int (64-bit), float and bool, text that is UTF-8,
-// a parameter whose lists are lists. For anything else element_wire answers None and
-// params_wire calls Python's param_bytes for that parameter, which writes it or raises as
-// it does. tests/py/test_tick_wire.py compares the two on random elements and parameters.
+// here: an element whose properties are its own, values of exactly str, int (64-bit),
+// float and bool, text that is UTF-8, a parameter whose lists are lists. For anything else
+// element_wire answers None; params_wire hands an element it leaves (a tick's reader
+// copies: Python keeps their bytes per source, tick after tick) to Python's
+// python_element_bytes, and any other parameter to Python's param_bytes, which writes it
+// or raises as it does. tests/py/test_tick_wire.py compares the two on random elements and
+// parameters.
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -135,42 +137,10 @@ bool put_properties(std::string& out, PyObject* all) {
   return ok;
 }
 
-// A reader copy's properties as Element._wire_properties lists them: each the one
-// getProperty handed out (when it is truthy, as Python's `or`), else the replica's. A new
-// list, or null with no error set. (Deciding truthiness may run Python code, which may
-// change the element: everything used across it is held.)
-PyObject* reader_properties(PyObject* d) {
-  PyObject* shared = PyDict_GetItemString(d, "_shared");
-  if (!shared || !PyTuple_CheckExact(shared) || PyTuple_GET_SIZE(shared) < 1) return nullptr;
-  PyObject* props = PyTuple_GET_ITEM(shared, 0);
-  if (!PyDict_CheckExact(props)) return nullptr;
-  PyObject* handed = PyDict_GetItemString(d, "_handed");
-  if (handed && !PyDict_CheckExact(handed)) return nullptr;
-  // (the replica's properties as a list of pairs first: Python code may change the dicts)
-  PyObject* items = PyDict_Items(props);
-  Py_XINCREF(handed);
-  PyObject* all = items ? PyList_New(0) : nullptr;
-  for (Py_ssize_t i = 0; all && i < PyList_GET_SIZE(items); ++i) {
-    PyObject* pair = PyList_GET_ITEM(items, i);
-    PyObject* mine = handed ? PyDict_GetItemWithError(handed, PyTuple_GET_ITEM(pair, 0)) : nullptr;
-    Py_XINCREF(mine);
-    const int truthy = mine ? PyObject_IsTrue(mine) : 0;
-    if (PyErr_Occurred() || truthy < 0 || PyList_Append(all, truthy ? mine : PyTuple_GET_ITEM(pair, 1)) != 0) {
-      PyErr_Clear();
-      Py_CLEAR(all);
-    }
-    Py_XDECREF(mine);
-  }
-  if (!items) PyErr_Clear();
-  Py_XDECREF(items);
-  Py_XDECREF(handed);
-  return all;
-}
-
-// An element as wm_element_t encodes (id, type, label, properties); with `reader_copies`
-// also a reader copy (its properties still the replica's). False when Python must write
-// it; `out` may then hold part of it.
-bool put_element(std::string& out, PyObject* e, bool reader_copies) {
+// An element whose properties are its own as wm_element_t encodes (id, type, label,
+// properties). False when Python must write it (a reader copy among them); `out` may then
+// hold part of it.
+bool put_element(std::string& out, PyObject* e) {
   PyObject* d = PyObject_GenericGetDict(e, nullptr);
   if (!d) {
     PyErr_Clear();
@@ -178,7 +148,7 @@ bool put_element(std::string& out, PyObject* e, bool reader_copies) {
   }
   bool ok = PyDict_CheckExact(d);
   PyObject* props = ok ? PyDict_GetItemString(d, "_properties") : nullptr;  // (absent: a reader copy)
-  // (held: a reader copy's properties may run Python code, which may change the dict)
+  // (held: reading the properties' attributes may run Python code, which may change the dict)
   PyObject *id = ok ? text_item(d, "_id") : nullptr, *type = ok ? text_item(d, "_type") : nullptr,
            *label = ok ? text_item(d, "_label") : nullptr;
   Py_XINCREF(id);
@@ -189,8 +159,6 @@ bool put_element(std::string& out, PyObject* e, bool reader_copies) {
   if (ok && props && PyDict_CheckExact(props)) {
     all = PyDict_Values(props);
     if (!all) PyErr_Clear();
-  } else if (ok && !props && reader_copies) {
-    all = reader_properties(d);
   }
   ok = all && id && type && label;
   if (ok) {
@@ -207,7 +175,7 @@ bool put_element(std::string& out, PyObject* e, bool reader_copies) {
 
 PyObject* element_wire(PyObject*, PyObject* e) {
   std::string out;
-  if (!put_element(out, e, false)) Py_RETURN_NONE;  // (a reader copy too: Python keeps its bytes)
+  if (!put_element(out, e)) Py_RETURN_NONE;
   return PyBytes_FromStringAndSize(out.data(), static_cast<Py_ssize_t>(out.size()));
 }
 
@@ -217,6 +185,9 @@ struct ParamWire {
   PyObject* type_names = nullptr;   // TYPE_NAMES: a parameter's Python type -> its data_type name
   PyObject* element_type = nullptr;  // skillbus.world.element.Element
   PyObject* param_bytes = nullptr;   // Python's param_bytes(p), for what is not the regular case
+  // Python's python_element_bytes(e), for an element put_element leaves: a reader copy
+  // (its bytes kept per source there, tick after tick), a value of another type.
+  PyObject* element_bytes = nullptr;
 };
 ParamWire param_wire;
 
@@ -262,7 +233,15 @@ bool put_skill_value(std::string& out, PyObject* v) {
     out.push_back(static_cast<char>(skill_value_t::ELEMENT));
     out.append(kEmptyText, 5);
     put_numbers(out, 0, 0.0, false);
-    return put_element(out, v, true);
+    const size_t mark = out.size();
+    if (put_element(out, v)) return true;
+    out.resize(mark);
+    PyObject* b = PyObject_CallOneArg(param_wire.element_bytes, v);
+    const bool ok = b && PyBytes_Check(b);
+    if (ok) out.append(PyBytes_AS_STRING(b), static_cast<size_t>(PyBytes_GET_SIZE(b)));
+    Py_XDECREF(b);
+    if (!ok) PyErr_Clear();  // (what it raised, param_bytes raises again for the parameter)
+    return ok;
   }
   put_no_element(out);
   return true;
@@ -395,18 +374,20 @@ PyObject* params_wire(PyObject*, PyObject* params) {
 }
 
 PyObject* set_param_wire(PyObject*, PyObject* args) {
-  PyObject *names = nullptr, *element = nullptr, *fallback = nullptr;
-  if (!PyArg_ParseTuple(args, "O!OO", &PyDict_Type, &names, &element, &fallback)) return nullptr;
-  if (!PyType_Check(element) || !PyCallable_Check(fallback)) {
-    PyErr_SetString(PyExc_TypeError, "set_param_wire(type_names, Element, param_bytes)");
+  PyObject *names = nullptr, *element = nullptr, *fallback = nullptr, *element_fallback = nullptr;
+  if (!PyArg_ParseTuple(args, "O!OOO", &PyDict_Type, &names, &element, &fallback, &element_fallback)) return nullptr;
+  if (!PyType_Check(element) || !PyCallable_Check(fallback) || !PyCallable_Check(element_fallback)) {
+    PyErr_SetString(PyExc_TypeError, "set_param_wire(type_names, Element, param_bytes, python_element_bytes)");
     return nullptr;
   }
   Py_INCREF(names);
   Py_INCREF(element);
   Py_INCREF(fallback);
+  Py_INCREF(element_fallback);
   Py_XSETREF(param_wire.type_names, names);
   Py_XSETREF(param_wire.element_type, element);
   Py_XSETREF(param_wire.param_bytes, fallback);
+  Py_XSETREF(param_wire.element_bytes, element_fallback);
   Py_RETURN_NONE;
 }
 
@@ -418,7 +399,8 @@ PyMethodDef methods[] = {
      "params_wire(params) -> bytes: the skill_param_t's of a list of Params, as tick_wire.param_bytes writes "
      "them."},
     {"set_param_wire", set_param_wire, METH_VARARGS,
-     "set_param_wire(type_names, Element, param_bytes): what params_wire reads types by and falls back to."},
+     "set_param_wire(type_names, Element, param_bytes, python_element_bytes): what params_wire reads types by "
+     "and falls back to."},
     {nullptr, nullptr, 0, nullptr}};
 
 }  // namespace

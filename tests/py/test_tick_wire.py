@@ -295,9 +295,9 @@ def python_calls():
         calls.append(p)
         return param_bytes(p)
 
-    skillbus_native.set_param_wire(tick_wire.TYPE_NAMES, Element, counted)
+    skillbus_native.set_param_wire(tick_wire.TYPE_NAMES, Element, counted, python_element_bytes)
     yield calls
-    skillbus_native.set_param_wire(tick_wire.TYPE_NAMES, Element, param_bytes)
+    skillbus_native.set_param_wire(tick_wire.TYPE_NAMES, Element, param_bytes, python_element_bytes)
 
 
 def same_params_as_python(params) -> bytes | None:

@@ -276,7 +276,7 @@ def _native_params_wire():
     lib = native.module()
     if lib is None or not hasattr(lib, "params_wire"):
         return None
-    lib.set_param_wire(TYPE_NAMES, Element, param_bytes)
+    lib.set_param_wire(TYPE_NAMES, Element, param_bytes, python_element_bytes)
     return lib.params_wire
 
 
