@@ -19,7 +19,6 @@ import os
 import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from pick_and_place import alone, demo
@@ -35,6 +34,7 @@ from skillbus.sim.messages import state_channel
 bus = open_bus()
 for ch in (state_channel(), arm_state_channel()):
     bus.subscribe(ch, lambda c, d: None)
+print("listening", flush=True)
 while True:
     bus.handle(1.0)
 '''
@@ -58,7 +58,8 @@ def main() -> int:
                     if kind != "nobody listening":
                         listeners = [box.start(f"listener-{rep}-{i}", ["taskset", "--cpu-list", others, sys.executable,
                                                                       "-c", LISTENER]) for i in range(SUBSCRIBERS)]
-                        time.sleep(1.5)  # (subscribed before the run)
+                        for p in listeners:  # (subscribed before the run)
+                            p.wait_for("listening", 30, stream="stdout")
                     a = alone(box, d["script"], d["frames"], 20.0, d["physics_prefix"], d["physics_options"])
                     for p in listeners:
                         box.kill(p)

@@ -76,3 +76,24 @@ def last_json(text: str) -> dict:
     if summary is None:
         raise AssertionError(f"no JSON summary in output:\n{text[-2000:]}")
     return summary
+
+
+@pytest.fixture
+def device_and_driver():
+    """A booted simulated gripper device (node 5, fingers that go nowhere) and a driver's
+    remote node on the same in-process CAN network (tests/py: the device's heartbeat and
+    status)."""
+    import canopen
+
+    from skillbus.can.device import EDS, GripperDevice
+    from skillbus.can.fingers import SimFingers
+    from test_untrusted_can import networks
+
+    dev_net, peer = networks(2)
+    dev = GripperDevice(dev_net, 5, EDS, fingers=SimFingers(lambda m: None))
+    node = canopen.RemoteNode(5, str(EDS))
+    peer.add_node(node)
+    dev.boot()
+    yield dev, node
+    dev_net.disconnect()
+    peer.disconnect()

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <initializer_list>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "glue.hpp"
@@ -56,41 +57,21 @@ class Reader {
   size_t size() const { return n_; }
   size_t left() const { return n_ - at_; }
 
-  bool u64(uint64_t& v) {
-    if (left() < 8) return cut();
-    v = 0;
-    for (int i = 0; i < 8; ++i) v = (v << 8) | p_[at_ + i];
-    at_ += 8;
-    return true;
-  }
-  bool i64(int64_t& v) {
-    uint64_t u = 0;
-    if (!u64(u)) return false;
-    v = static_cast<int64_t>(u);
-    return true;
-  }
-  bool u32(uint32_t& v) {
-    if (left() < 4) return cut();
-    v = (uint32_t(p_[at_]) << 24) | (uint32_t(p_[at_ + 1]) << 16) | (uint32_t(p_[at_ + 2]) << 8) | p_[at_ + 3];
-    at_ += 4;
-    return true;
-  }
-  bool i32(int32_t& v) {
-    uint32_t u = 0;
-    if (!u32(u)) return false;
-    v = static_cast<int32_t>(u);
-    return true;
-  }
-  bool byte(uint8_t& v) {
-    if (left() < 1) return cut();
-    v = p_[at_++];
+  // A number as LCM writes it: big-endian, two's complement.
+  template <class T>
+  bool number(T& v) {
+    if (left() < sizeof(T)) return cut();
+    std::make_unsigned_t<T> u = 0;
+    for (size_t i = 0; i < sizeof(T); ++i) u = static_cast<std::make_unsigned_t<T>>((uint64_t(u) << 8) | p_[at_ + i]);
+    at_ += sizeof(T);
+    v = static_cast<T>(u);
     return true;
   }
   // LCM's string: a length counting its NUL (at least 1), the bytes, the NUL; the last
   // byte is dropped whatever it is, and bytes that are not UTF-8 are replaced.
   PyObject* text(const char* what) {
     uint32_t n = 0;
-    if (!u32(n)) return nullptr;
+    if (!number(n)) return nullptr;
     if (n < 1 || n > left()) {
       PyErr_Format(PyExc_ValueError, "%s cut short", what);
       return nullptr;
@@ -137,9 +118,9 @@ PyObject* make(PyTypeObject* t, std::initializer_list<std::pair<PyObject*, PyObj
 PyObject* read_header(Reader& r) {
   int64_t frame = 0, sim_time = 0;
   int32_t seq = 0;
-  if (!r.i64(frame) || !r.i64(sim_time)) return nullptr;
+  if (!r.number(frame) || !r.number(sim_time)) return nullptr;
   PyObject* sender = r.text("a header");
-  if (!sender || !r.i32(seq)) {
+  if (!sender || !r.number(seq)) {
     Py_XDECREF(sender);
     return nullptr;
   }
@@ -168,7 +149,7 @@ PyObject* read_count(Reader& r) {
   PyObject* channel = sender ? r.text("a string") : nullptr;
   int64_t frame = 0;
   int32_t count = 0;
-  if (!channel || !r.i64(frame) || !r.i32(count)) {
+  if (!channel || !r.number(frame) || !r.number(count)) {
     Py_XDECREF(sender);
     Py_XDECREF(channel);
     return nullptr;
@@ -214,12 +195,12 @@ PyObject* decode(const uint8_t* p, size_t n) {
   int64_t period = 0;
   int32_t count = 0;
   uint8_t stop = 0;
-  bool ok = put(clock, names.header, read_header(r)) && r.i64(period) && r.i32(count) &&
+  bool ok = put(clock, names.header, read_header(r)) && r.number(period) && r.number(count) &&
             plausible(count, r, "participants") && put(clock, names.frame_period_ns, PyLong_FromLongLong(period)) &&
             put(clock, names.num_participants, PyLong_FromLong(count)) &&
-            put(clock, names.participants, read_list(count, [&] { return r.text("a string"); })) && r.i32(count) &&
+            put(clock, names.participants, read_list(count, [&] { return r.text("a string"); })) && r.number(count) &&
             plausible(count, r, "counts") && put(clock, names.counts, read_list(count, [&] { return read_count(r); })) &&
-            put(clock, names.num_counts, PyLong_FromLong(count)) && r.byte(stop) &&
+            put(clock, names.num_counts, PyLong_FromLong(count)) && r.number(stop) &&
             put(clock, names.stop, PyBool_FromLong(stop != 0)) && put(clock, names.stop_reason, r.text("a string"));
   if (ok && r.left() != 0) {
     PyErr_Format(PyExc_ValueError, "a lockstep_clock_t with %zu bytes after its end", r.left());

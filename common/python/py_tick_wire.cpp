@@ -72,14 +72,21 @@ struct Names {
 };
 Names names;
 
-// One property value as tick_wire._wm_value writes it; false when Python must write it.
-bool put_value(std::string& out, PyObject* v) {
+// What put_scalar did with a value.
+enum class Scalar { kWritten, kNotOne, kRefused };
+
+// A value of exactly float, bool, int (64-bit) or str as a `Value` (wm_value_t or
+// skill_value_t) writes it up to its numbers: the type, the string, i, f, b. kNotOne for
+// any other type (a subclass too); kRefused for an int beyond 64 bits or a str that is not
+// UTF-8 (Python raises for those).
+template <class Value>
+Scalar put_scalar(std::string& out, PyObject* v) {
   if (PyFloat_CheckExact(v)) {
-    out.push_back(static_cast<char>(wm_value_t::FLOAT));
+    out.push_back(static_cast<char>(Value::FLOAT));
     out.append(kEmptyText, 5);
     put_numbers(out, 0, PyFloat_AS_DOUBLE(v), false);
   } else if (PyBool_Check(v)) {  // (before int: a bool is an int; bool has no subclasses)
-    out.push_back(static_cast<char>(wm_value_t::BOOL));
+    out.push_back(static_cast<char>(Value::BOOL));
     out.append(kEmptyText, 5);
     put_numbers(out, 0, 0.0, v == Py_True);
   } else if (PyLong_CheckExact(v)) {
@@ -87,20 +94,24 @@ bool put_value(std::string& out, PyObject* v) {
     const long long i = PyLong_AsLongLongAndOverflow(v, &overflow);
     if (overflow || (i == -1 && PyErr_Occurred())) {  // (Python's struct.error, from Python)
       PyErr_Clear();
-      return false;
+      return Scalar::kRefused;
     }
-    out.push_back(static_cast<char>(wm_value_t::INT));
+    out.push_back(static_cast<char>(Value::INT));
     out.append(kEmptyText, 5);
     put_numbers(out, i, 0.0, false);
   } else if (PyUnicode_CheckExact(v)) {
-    out.push_back(static_cast<char>(wm_value_t::STRING));
-    if (!put_text(out, v)) return false;
+    out.push_back(static_cast<char>(Value::STRING));
+    if (!put_text(out, v)) return Scalar::kRefused;
     put_numbers(out, 0, 0.0, false);
   } else {
-    return false;  // (a subclass, or a type that cannot be stored: Python's answer)
+    return Scalar::kNotOne;
   }
-  return true;
+  return Scalar::kWritten;
 }
+
+// One property value as tick_wire._wm_value writes it; false when Python must write it (a
+// subclass, or a type that cannot be stored: Python's answer).
+bool put_value(std::string& out, PyObject* v) { return put_scalar<wm_value_t>(out, v) == Scalar::kWritten; }
 
 // A borrowed exact str from `d`, or null.
 PyObject* text_item(PyObject* d, const char* key) {
@@ -202,29 +213,9 @@ void put_i32(std::string& out, int32_t v) { put_u32(out, static_cast<uint32_t>(v
 // One skill_value_t as tick_wire.value_bytes writes it; false when Python must write it.
 bool put_skill_value(std::string& out, PyObject* v) {
   using skillbus_msgs::skill_value_t;
-  if (PyFloat_CheckExact(v)) {
-    out.push_back(static_cast<char>(skill_value_t::FLOAT));
-    out.append(kEmptyText, 5);
-    put_numbers(out, 0, PyFloat_AS_DOUBLE(v), false);
-  } else if (PyBool_Check(v)) {
-    out.push_back(static_cast<char>(skill_value_t::BOOL));
-    out.append(kEmptyText, 5);
-    put_numbers(out, 0, 0.0, v == Py_True);
-  } else if (PyLong_CheckExact(v)) {
-    int overflow = 0;
-    const long long i = PyLong_AsLongLongAndOverflow(v, &overflow);
-    if (overflow || (i == -1 && PyErr_Occurred())) {
-      PyErr_Clear();
-      return false;
-    }
-    out.push_back(static_cast<char>(skill_value_t::INT));
-    out.append(kEmptyText, 5);
-    put_numbers(out, i, 0.0, false);
-  } else if (PyUnicode_CheckExact(v)) {
-    out.push_back(static_cast<char>(skill_value_t::STRING));
-    if (!put_text(out, v)) return false;
-    put_numbers(out, 0, 0.0, false);
-  } else {
+  const Scalar scalar = put_scalar<skill_value_t>(out, v);
+  if (scalar == Scalar::kRefused) return false;
+  if (scalar == Scalar::kNotOne) {
     const int is_element = PyObject_IsInstance(v, param_wire.element_type);
     if (is_element <= 0) {
       PyErr_Clear();

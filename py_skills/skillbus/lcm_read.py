@@ -44,3 +44,53 @@ def string(data: bytes, at: int, end: int) -> tuple[str, int]:
     if at + size > end:
         raise CutShort
     return data[at:at + size][:-1].decode("utf-8", "replace"), at + size
+
+
+def message_bytes(data: object) -> bytes | None:
+    """`data` as bytes where skillbus.msgs.decode reads it (bytes, a bytearray, a
+    memoryview); None for anything else, which it refuses."""
+    if type(data) is bytes:
+        return data
+    return bytes(data) if isinstance(data, (bytearray, memoryview)) else None
+
+
+_STAMP_COUNT = struct.Struct(">ii")
+
+
+def stamp_and_count(data: bytes, end: int) -> tuple[int, int, str, int, int, int]:
+    """The header_t after a message's fingerprint and the int32 count after it: (frame,
+    sim_time_ns, sender, seq, count, the position after the count). struct.error or
+    CutShort when the message ends first."""
+    frame, sim_time_ns = TIMES.unpack_from(data, 8)
+    sender, at = string(data, 24, end)
+    seq, count = _STAMP_COUNT.unpack_from(data, at)
+    return frame, sim_time_ns, sender, seq, count, at + 8
+
+
+class RepeatedStrings:
+    """A run of LCM strings that comes the same message after message (a robot's joint
+    names): the bytes and strings of the last run read, compared (a bytes comparison)
+    before they are decoded again. One per decoder; a hit gives a new list, as the
+    generated decoder does."""
+
+    def __init__(self) -> None:
+        self._last: list = [b"", []]  # (swapped whole: a read of it is one step under the GIL)
+
+    def read(self, data: bytes, at: int, end: int, n: int) -> tuple[list[str], int]:
+        """The `n` strings at `at` and the position after them (CutShort, struct.error
+        when the message ends first)."""
+        raw, strings = self._last
+        size = len(raw)
+        if size and len(strings) == n and data[at:at + size] == raw:
+            return list(strings), at + size
+        start, strings = at, []
+        unpack = LENGTH.unpack_from
+        for _ in range(n):
+            (length,) = unpack(data, at)
+            at += 4
+            if at + length > end:
+                raise CutShort
+            strings.append(data[at:at + length][:-1].decode("utf-8", "replace"))
+            at += length
+        self._last = [data[start:at], strings]
+        return list(strings), at

@@ -2,10 +2,11 @@
 skillbus.msgs.decode) for every byte string: valid states, states cut short or grown,
 and states with bytes flipped (seeded)."""
 
-import random
 import struct
 
 import pytest
+
+from damaged import cut_and_grown, flipped
 
 from skillbus.msgs import decode, robot_arm_state_t
 from skillbus.robot.arm_state_decode import decode_arm_state
@@ -53,21 +54,13 @@ def test_valid_states_decode_alike(data):
 
 
 def test_every_cut_and_growth_is_refused_alike():
-    data = state(6)
-    for cut in range(len(data)):
-        same(data[:cut])
-    for extra in (b"\x00", b"\x00" * 8, b"junk"):
-        same(data + extra)
+    for data in cut_and_grown(state(6)):
+        same(data)
 
 
 def test_flipped_bytes_and_odd_counts_decode_alike():
-    rng = random.Random(20261204)
-    data = state(6)
-    for _ in range(3000):
-        b = bytearray(data)
-        for _ in range(rng.randint(1, 3)):
-            b[rng.randrange(len(b))] = rng.randrange(256)
-        same(bytes(b))
+    for data in flipped(state(6), 20261204, 3000):
+        same(data)
     # A negative joint count, a string longer than the message, invalid UTF-8 in a name.
     at = 8 + 16 + 4 + 4 + 4  # fingerprint, frame and time, "sim\0", seq
     for count in (-1, -(2 ** 31), 2 ** 31 - 1):

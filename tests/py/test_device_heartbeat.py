@@ -18,18 +18,6 @@ from test_untrusted_can import networks
 MS = 1_000_000
 
 
-@pytest.fixture
-def device_and_driver():
-    dev_net, peer = networks(2)
-    dev = GripperDevice(dev_net, 5, EDS, fingers=SimFingers(lambda m: None))
-    node = canopen.RemoteNode(5, str(EDS))
-    peer.add_node(node)
-    dev.boot()
-    yield dev, node
-    dev_net.disconnect()
-    peer.disconnect()
-
-
 def heartbeats(dev: GripperDevice, monkeypatch, times_ms: list[int]) -> list[int]:
     """The sim times (ms) among `times_ms` at which the device sent its heartbeat."""
     sent: list[int] = []

@@ -6,14 +6,12 @@ from __future__ import annotations
 
 from skillbus.can import cia402 as c
 
-from test_device_heartbeat import device_and_driver  # noqa: F401  (the fixture)
-
 
 def uploaded(node) -> tuple[int, int, int]:
     return node.sdo[0x6041].raw, node.sdo[0x6064].raw, node.sdo[0x2000].raw
 
 
-def test_an_upload_reads_the_status_after_each_kind_of_change(device_and_driver):  # noqa: F811
+def test_an_upload_reads_the_status_after_each_kind_of_change(device_and_driver):
     dev, node = device_and_driver
     dev._publish_status(event=False)
     assert uploaded(node) == dev._last_written

@@ -18,7 +18,8 @@ from skillbus import lcm_read
 from skillbus.msgs import header_t, robot_arm_state_t
 
 _FINGERPRINT = robot_arm_state_t._get_packed_fingerprint()
-_TIMES, _POSE, _doubles, _DOUBLES = lcm_read.TIMES, lcm_read.POSE, lcm_read.doubles, lcm_read.DOUBLES
+_POSE, _doubles, _DOUBLES = lcm_read.POSE, lcm_read.doubles, lcm_read.DOUBLES
+_JOINT_NAMES = lcm_read.RepeatedStrings()
 _TAIL = struct.Struct(">bd")  # arm_moving, arm_tracking_error
 _CutShort, _string = lcm_read.CutShort, lcm_read.string
 
@@ -26,24 +27,15 @@ _CutShort, _string = lcm_read.CutShort, lcm_read.string
 def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
     """The robot_arm_state_t `data` encodes, or None when skillbus.msgs.decode would
     refuse it."""
-    if type(data) is not bytes:  # (as skillbus.msgs.decode: a bytearray or memoryview is read, else None)
-        if not isinstance(data, (bytearray, memoryview)):
-            return None
-        data = bytes(data)
-    end = len(data)
-    if data[:8] != _FINGERPRINT:
+    data = lcm_read.message_bytes(data)
+    if data is None or data[:8] != _FINGERPRINT:
         return None
+    end = len(data)
     try:
-        frame, sim_time_ns = _TIMES.unpack_from(data, 8)
-        sender, at = _string(data, 24, end)
-        seq, n = struct.unpack_from(">ii", data, at)
-        at += 8
+        frame, sim_time_ns, sender, seq, n, at = lcm_read.stamp_and_count(data, end)
         if n < 0 or 24 * n > end - at:  # (its three arrays could not fit: cut short, whatever follows)
             return None
-        names = []
-        for _ in range(n):
-            name, at = _string(data, at, end)
-            names.append(name)
+        names, at = _JOINT_NAMES.read(data, at, end, n)
         doubles = _doubles(n)
         position = doubles.unpack_from(data, at)
         at += doubles.size

@@ -19,7 +19,6 @@ from skillbus import lcm_read
 from skillbus.msgs import header_t, sim_contact_t, sim_object_t, sim_state_t
 
 _FINGERPRINT = sim_state_t._get_packed_fingerprint()
-_SEQ_COUNT = struct.Struct(">ii")
 _FINGERS = struct.Struct(">7dddd")  # tool_pose, finger_width, finger_force, finger_width_target
 _ARM_TAIL = struct.Struct(">bdi")  # arm_moving, arm_tracking_error, num_objects
 _OBJECT = struct.Struct(">7d6d")  # pose, twist
@@ -31,52 +30,23 @@ _CONTACT_MIN = 8 + _CONTACT.size
 
 _new_state, _new_header = sim_state_t.__new__, header_t.__new__
 _new_object, _new_contact = sim_object_t.__new__, sim_contact_t.__new__
-_string, _doubles, _INT, _TIMES, _LENGTH = (lcm_read.string, lcm_read.doubles, lcm_read.INT, lcm_read.TIMES,
-                                            lcm_read.LENGTH)
+_string, _doubles, _INT = lcm_read.string, lcm_read.doubles, lcm_read.INT
 
 
-# The joint names come the same in every state: their bytes and names of the last state
-# read, compared (a bytes comparison) before they are decoded again.
-_last_names: list = [b"", []]
-
-
-def _joint_names(data: bytes, at: int, end: int, n: int) -> tuple[list[str], int]:
-    """The `n` joint names at `at` (a new list each time, as the generated decoder's) and
-    the position after them."""
-    raw, names = _last_names
-    size = len(raw)
-    if size and len(names) == n and data[at:at + size] == raw:
-        return list(names), at + size
-    start, names = at, []
-    unpack = _LENGTH.unpack_from
-    for _ in range(n):
-        (length,) = unpack(data, at)
-        at += 4
-        if at + length > end:
-            raise lcm_read.CutShort
-        names.append(data[at:at + length][:-1].decode("utf-8", "replace"))
-        at += length
-    _last_names[:] = [data[start:at], names]
-    return list(names), at
+_JOINT_NAMES = lcm_read.RepeatedStrings()
 
 
 def decode_sim_state(data: bytes) -> sim_state_t | None:
     """The sim_state_t `data` encodes, or None when skillbus.msgs.decode would refuse it."""
-    if type(data) is not bytes:  # (as skillbus.msgs.decode: a bytearray or memoryview is read, else None)
-        if not isinstance(data, (bytearray, memoryview)):
-            return None
-        data = bytes(data)
-    end = len(data)
-    if data[:8] != _FINGERPRINT:
+    data = lcm_read.message_bytes(data)
+    if data is None or data[:8] != _FINGERPRINT:
         return None
+    end = len(data)
     try:
-        frame, sim_time_ns = _TIMES.unpack_from(data, 8)
-        sender, at = _string(data, 24, end)
-        seq, n = _SEQ_COUNT.unpack_from(data, at)
-        at += 8
+        frame, sim_time_ns, sender, seq, n, at = lcm_read.stamp_and_count(data, end)
         if n < 0 or 28 * n > end - at:  # (a name and three numbers each could not fit)
             return None
-        names, at = _joint_names(data, at, end, n)
+        names, at = _JOINT_NAMES.read(data, at, end, n)
         joints = _doubles(n)
         position = joints.unpack_from(data, at)
         velocity = joints.unpack_from(data, at + joints.size)
