@@ -91,6 +91,7 @@ class GripperDevice:
         # written (a read through the dictionary costs python-canopen several microseconds).
         # Registered last, so no later callback refuses a write this has already taken.
         self._heartbeat_ms = self.node.sdo[0x1017].raw
+        self._position_delta = self.node.sdo[0x2001].raw  # (0x2001, kept as written, likewise)
         self.node.add_write_callback(self._note_heartbeat_period)
 
     # -- CAN side --------------------------------------------------------------------
@@ -113,7 +114,8 @@ class GripperDevice:
     # range) and counted. Their types bound the rest (U16, U32).
     SDO_RANGES = {0x6060: ("modes of operation", (1,)),                 # profile position only
                   0x6073: ("force limit", range(1, 0xFFFF + 1)),       # 0 would grip with no force
-                  0x6081: ("profile velocity", range(1, MAX_VELOCITY_UM_S + 1))}
+                  0x6081: ("profile velocity", range(1, MAX_VELOCITY_UM_S + 1)),
+                  0x2001: ("TPDO1 position delta", range(0, MAX_WIDTH_UM + 1))}
 
     def _check_sdo_write(self, index: int, subindex: int, od, data: bytes) -> None:
         rule = self.SDO_RANGES.get(index)
@@ -133,6 +135,8 @@ class GripperDevice:
     def _note_heartbeat_period(self, index: int, subindex: int, od, data: bytes) -> None:
         if index == 0x1017 and subindex == 0:
             self._heartbeat_ms = od.decode_raw(data)
+        elif index == 0x2001 and subindex == 0:
+            self._position_delta = od.decode_raw(data)
 
     def _on_rpdo(self, pdo) -> None:
         if len(pdo.data) != 6:
@@ -211,7 +215,8 @@ class GripperDevice:
         self._publish_status(event=False)
 
     # Event timer of TPDO1 in steps: standalone every step (10 ms, the EDS's 0x1800sub5);
-    # under lockstep the TPDO goes out on every change and otherwise every 10th frame.
+    # under lockstep the TPDO goes out on every change of state (statusword, grip state)
+    # or of the position by at least 0x2001, and otherwise every 10th frame.
     event_every = 1
     _since_sent = 0
     _last_sent: tuple | None = None
@@ -241,7 +246,7 @@ class GripperDevice:
                 self._last_written = now
             operational = self.node.nmt.state == "OPERATIONAL"
             self._since_sent += 1
-            due = now != self._last_sent or self._since_sent >= self.event_every or event
+            due = event or self._since_sent >= self.event_every or self._changed_enough(now)
             if operational and due:
                 self._last_sent, self._since_sent = now, 0
                 # TPDO1's contents before every send, changed or not: python-canopen takes a
@@ -256,6 +261,18 @@ class GripperDevice:
         if operational and due:
             tpdo.transmit()
 
+
+    def _changed_enough(self, now: tuple[int, int, int]) -> bool:
+        """Whether the status `now` (statusword, position, grip state) is news since the last
+        TPDO1: a new statusword or grip state, or a position at least 0x2001 (µm) from the
+        one sent. Holding an object the fingers move by a few to tens of micrometres from
+        frame to frame as the arm carries it; each of those TPDOs woke three processes
+        (this one, the CAN hub, the driver's) for a width nobody reads that finely: the
+        grip itself is in the grip state, which always goes out at once."""
+        last = self._last_sent
+        if last is None or now[0] != last[0] or now[2] != last[2]:
+            return True
+        return abs(now[1] - last[1]) >= max(1, self._position_delta)
 
     def quiet_horizon(self, frame: int) -> tuple[int, int] | None:
         """Lockstep, after `frame`'s step with the fingers at rest: how far the next frames
