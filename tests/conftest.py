@@ -17,6 +17,9 @@ from skillbus.netns import Sandbox, SandboxError
 # The skip policy: a test that cannot run fails unless SKILLBUS_ALLOW_SKIP=1 (its hooks
 # are registered by being here).
 from support.skip_policy import cannot_run, pytest_configure, pytest_make_collect_report, pytest_runtest_makereport  # noqa: F401
+from support.interrupts import restore_ctrl_c
+
+restore_ctrl_c()  # (a run started with SIGINT ignored would pass that on to every process it starts)
 
 TESTS = Path(__file__).resolve().parent
 

@@ -99,3 +99,48 @@ def test_on_the_wall_clock_every_step_sends(sending):
     step(41_001)
     step(41_001)
     assert received() == [41_000, 41_001, 41_001]
+
+
+def test_a_grip_state_change_alone_goes_out_at_once(sending):
+    dev, _, step, received = sending
+    dev.model.moving = True  # closing on nothing: the grip state says "moving"
+    step(41_001)
+    assert received() == [41_000, 41_001]
+
+
+def test_an_event_send_ignores_the_delta(sending):
+    dev, _, _, received = sending
+    dev.model.width = 41_001
+    dev._publish_status(event=True)  # (a controlword handled: answered at once)
+    assert received() == [41_000, 41_001]
+
+
+def test_an_eds_without_the_delta_object_sends_every_change(tmp_path):
+    """A device description written before 0x2001 existed still makes a working device,
+    which sends every change as the device did then."""
+    import re
+
+    from skillbus.can.device import EDS, GripperDevice
+    from skillbus.can.fingers import SimFingers
+    from test_untrusted_can import networks
+
+    text = EDS.read_text()
+    text = re.sub(r"\n\[2001\]\n(?:[^\[\n][^\n]*\n)*", "\n", text)
+    text = text.replace("SupportedObjects=2\n1=0x2000\n2=0x2001\n", "SupportedObjects=1\n1=0x2000\n")
+    assert "[2001]" not in text and "0x2001" not in text
+    old = tmp_path / "old.eds"
+    old.write_text(text)
+    net, = networks(1)
+    try:
+        dev = GripperDevice(net, 5, old, fingers=SimFingers(lambda m: None))
+        assert dev._position_delta == 0
+        sent = []
+        dev.node.tpdo[1].transmit = lambda: sent.append(dev._last_sent[1])
+        dev.event_every = 10
+        dev.node.nmt.state = "OPERATIONAL"
+        for width in (41_000, 41_001, 41_002):
+            dev.model.width = width
+            dev._publish_status(event=False)
+        assert sent == [41_000, 41_001, 41_002]
+    finally:
+        net.disconnect()

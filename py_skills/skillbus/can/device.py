@@ -91,7 +91,9 @@ class GripperDevice:
         # written (a read through the dictionary costs python-canopen several microseconds).
         # Registered last, so no later callback refuses a write this has already taken.
         self._heartbeat_ms = self.node.sdo[0x1017].raw
-        self._position_delta = self.node.sdo[0x2001].raw  # (0x2001, kept as written, likewise)
+        # 0x2001 likewise; an EDS without it (one written before it was added) keeps sending
+        # every change, as the device did then.
+        self._position_delta = self.node.sdo[0x2001].raw if 0x2001 in self.node.object_dictionary else 0
         self.node.add_write_callback(self._note_heartbeat_period)
 
     # -- CAN side --------------------------------------------------------------------
