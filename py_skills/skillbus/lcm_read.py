@@ -67,6 +67,25 @@ def stamp_and_count(data: bytes, end: int) -> tuple[int, int, str, int, int, int
     return frame, sim_time_ns, sender, seq, count, at + 8
 
 
+def joints_head(data: object, fingerprint: bytes, names: "RepeatedStrings",
+                min_per_joint: int) -> tuple[bytes, int, tuple[int, int, str, int], int, list[str], int] | None:
+    """What a robot's state messages begin with (robot_arm_state_t, sim_state_t): the
+    fingerprint, the header_t, the joint count and the joint names. (data as bytes, its
+    end, (frame, sim_time_ns, sender, seq), the count, the names, the position after
+    them), or None for what skillbus.msgs.decode refuses there: not bytes, another type,
+    a negative count, or one whose joints could not fit (`min_per_joint` bytes each).
+    struct.error or CutShort when the message ends first."""
+    data = message_bytes(data)
+    if data is None or data[:8] != fingerprint:
+        return None
+    end = len(data)
+    frame, sim_time_ns, sender, seq, n, at = stamp_and_count(data, end)
+    if n < 0 or min_per_joint * n > end - at:
+        return None
+    joint_names, at = names.read(data, at, end, n)
+    return data, end, (frame, sim_time_ns, sender, seq), n, joint_names, at
+
+
 class RepeatedStrings:
     """A run of LCM strings that comes the same message after message (a robot's joint
     names): the bytes and strings of the last run read, compared (a bytes comparison)

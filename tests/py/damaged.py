@@ -23,3 +23,18 @@ def flipped(data: bytes, seed: int, count: int) -> Iterator[bytes]:
         for _ in range(rng.randint(1, 3)):
             b[rng.randrange(len(b))] = rng.randrange(256)
         yield bytes(b)
+
+
+HEADER = ("frame", "sim_time_ns", "sender", "seq")
+
+
+def fields(m, names) -> list:
+    """(name, repr, type) of each field: how a decoded copy is compared with LCM's (repr: a
+    flipped byte may make a NaN, which equals nothing)."""
+    return [(f, repr(getattr(m, f)), type(getattr(m, f))) for f in names]
+
+
+def same_stamp_and_fields(got, want, names) -> None:
+    """`got` reads as `want`: its header and the fields `names`, value and type alike."""
+    assert fields(got.header, HEADER) == fields(want.header, HEADER)
+    assert fields(got, names) == fields(want, names)

@@ -6,7 +6,7 @@ import struct
 
 import pytest
 
-from damaged import cut_and_grown, flipped
+from damaged import cut_and_grown, flipped, same_stamp_and_fields
 
 from skillbus.msgs import decode, robot_arm_state_t
 from skillbus.robot.arm_state_decode import decode_arm_state
@@ -37,12 +37,7 @@ def same(data: bytes, valid: bool = False) -> None:
         assert got is None, data
         return
     assert got is not None, data
-    for f in ("frame", "sim_time_ns", "sender", "seq"):
-        a, b = getattr(want.header, f), getattr(got.header, f)
-        assert (repr(a), type(a)) == (repr(b), type(b)), f
-    for f in FIELDS:
-        a, b = getattr(want, f), getattr(got, f)
-        assert (repr(a), type(a)) == (repr(b), type(b)), f  # (repr: a flipped byte may make a NaN)
+    same_stamp_and_fields(got, want, FIELDS)
     if valid:
         assert got.encode() == data
 

@@ -103,9 +103,12 @@ def test_on_the_wall_clock_every_step_sends(sending):
 
 def test_a_grip_state_change_alone_goes_out_at_once(sending):
     dev, _, step, received = sending
-    dev.model.moving = True  # closing on nothing: the grip state says "moving"
+    sw_before = dev._last_sent[0]
+    f = dev.model  # closing on a cube and stalled on it: gripped, its statusword as it was
+    f.moving, f.target, f.force, f.touching, f.acknowledged = True, 0.0, f.force_limit_n, {"cube"}, True
     step(41_001)
     assert received() == [41_000, 41_001]
+    assert dev._last_sent[0] == sw_before and dev._last_sent[2] & c.GRIP_GRIPPED
 
 
 def test_an_event_send_ignores_the_delta(sending):

@@ -7,7 +7,7 @@ import struct
 
 import pytest
 
-from damaged import cut_and_grown, flipped
+from damaged import cut_and_grown, fields, flipped, same_stamp_and_fields
 
 from skillbus.msgs import decode, sim_contact_t, sim_object_t, sim_state_t
 from skillbus.sim.state_decode import decode_sim_state
@@ -41,10 +41,6 @@ def state(joints: int = 8, objects: int = 3, contacts: int = 2, name: str = "joi
     return s.encode()
 
 
-def fields(m, names) -> list:
-    return [(f, repr(getattr(m, f)), type(getattr(m, f))) for f in names]  # (repr: a flipped byte may make a NaN)
-
-
 def same(data: bytes, valid: bool = False) -> None:
     want = decode(sim_state_t, data)
     got = decode_sim_state(data)
@@ -52,9 +48,7 @@ def same(data: bytes, valid: bool = False) -> None:
         assert got is None, data
         return
     assert got is not None, data
-    assert fields(got.header, ("frame", "sim_time_ns", "sender", "seq")) == \
-        fields(want.header, ("frame", "sim_time_ns", "sender", "seq"))
-    assert fields(got, FIELDS) == fields(want, FIELDS)
+    same_stamp_and_fields(got, want, FIELDS)
     assert [fields(o, sim_object_t.__slots__) for o in got.objects] == \
         [fields(o, sim_object_t.__slots__) for o in want.objects]
     assert [fields(c, sim_contact_t.__slots__) for c in got.contacts] == \

@@ -94,7 +94,7 @@ class GripperDevice:
         # 0x2001 likewise; an EDS without it (one written before it was added) keeps sending
         # every change, as the device did then.
         self._position_delta = self.node.sdo[0x2001].raw if 0x2001 in self.node.object_dictionary else 0
-        self.node.add_write_callback(self._note_heartbeat_period)
+        self.node.add_write_callback(self._note_written)
 
     # -- CAN side --------------------------------------------------------------------
     def boot(self) -> None:
@@ -134,7 +134,8 @@ class GripperDevice:
             self.rejects.record(f"SDO 0x{index:04X}", e)
             raise canopen.SdoAbortedError(SDO_VALUE_RANGE) from None
 
-    def _note_heartbeat_period(self, index: int, subindex: int, od, data: bytes) -> None:
+    def _note_written(self, index: int, subindex: int, od, data: bytes) -> None:
+        """Keeps the objects read every lockstep frame (0x1017, 0x2001) as they are written."""
         if index == 0x1017 and subindex == 0:
             self._heartbeat_ms = od.decode_raw(data)
         elif index == 0x2001 and subindex == 0:

@@ -27,15 +27,11 @@ _CutShort, _string = lcm_read.CutShort, lcm_read.string
 def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
     """The robot_arm_state_t `data` encodes, or None when skillbus.msgs.decode would
     refuse it."""
-    data = lcm_read.message_bytes(data)
-    if data is None or data[:8] != _FINGERPRINT:
-        return None
-    end = len(data)
     try:
-        frame, sim_time_ns, sender, seq, n, at = lcm_read.stamp_and_count(data, end)
-        if n < 0 or 24 * n > end - at:  # (its three arrays could not fit: cut short, whatever follows)
+        head = lcm_read.joints_head(data, _FINGERPRINT, _JOINT_NAMES, 24)  # (three numbers a joint at least)
+        if head is None:
             return None
-        names, at = _JOINT_NAMES.read(data, at, end, n)
+        data, end, stamp, n, names, at = head
         doubles = _doubles(n)
         position = doubles.unpack_from(data, at)
         at += doubles.size
@@ -52,7 +48,7 @@ def decode_arm_state(data: bytes) -> robot_arm_state_t | None:
     if at != end:
         return None
     h = header_t()
-    h.frame, h.sim_time_ns, h.sender, h.seq = frame, sim_time_ns, sender, seq
+    h.frame, h.sim_time_ns, h.sender, h.seq = stamp
     s = robot_arm_state_t()
     s.header, s.num_joints, s.joint_names = h, n, names
     s.position, s.velocity, s.effort, s.tool_pose = position, velocity, effort, tool_pose

@@ -38,15 +38,11 @@ _JOINT_NAMES = lcm_read.RepeatedStrings()
 
 def decode_sim_state(data: bytes) -> sim_state_t | None:
     """The sim_state_t `data` encodes, or None when skillbus.msgs.decode would refuse it."""
-    data = lcm_read.message_bytes(data)
-    if data is None or data[:8] != _FINGERPRINT:
-        return None
-    end = len(data)
     try:
-        frame, sim_time_ns, sender, seq, n, at = lcm_read.stamp_and_count(data, end)
-        if n < 0 or 28 * n > end - at:  # (a name and three numbers each could not fit)
+        head = lcm_read.joints_head(data, _FINGERPRINT, _JOINT_NAMES, 28)  # (a name and three numbers a joint)
+        if head is None:
             return None
-        names, at = _JOINT_NAMES.read(data, at, end, n)
+        data, end, stamp, n, names, at = head
         joints = _doubles(n)
         position = joints.unpack_from(data, at)
         velocity = joints.unpack_from(data, at + joints.size)
@@ -82,7 +78,7 @@ def decode_sim_state(data: bytes) -> sim_state_t | None:
     if at != end:
         return None
     h = _new_header(header_t)
-    h.frame, h.sim_time_ns, h.sender, h.seq = frame, sim_time_ns, sender, seq
+    h.frame, h.sim_time_ns, h.sender, h.seq = stamp
     s = _new_state(sim_state_t)
     s.header, s.num_joints, s.joint_names = h, n, names
     s.position, s.velocity, s.effort = position, velocity, effort
