@@ -277,6 +277,27 @@ class DdsBus(Bus):
         if ret < 0:
             raise self._error(f"DDS write on {channel} failed ({ret})")
 
+    def wait_matched(self, channel: str, timeout: float) -> bool:
+        """Waits up to `timeout` s until this process's writer of `channel` (made by its
+        first publish) has found a reader of it; False if it has not. DDS finds readers some
+        time after a writer appears (milliseconds, more on a loaded machine): what must
+        reach a reader that discovers the topic (a recorder) is sent after this."""
+        w = self._writers.get(channel)
+        deadline = time.monotonic() + timeout
+        while w is None or not w.get_matched_subscriptions():
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.005)
+        return True
+
+    def wait_acknowledged(self, timeout: float) -> bool:
+        """Waits up to `timeout` s until every reader found has acknowledged all this
+        process wrote (it is in their queues, and no longer lost if this process ends)."""
+        from cyclonedds.util import duration
+        deadline = time.monotonic() + timeout
+        return all(w.wait_for_acks(duration(seconds=max(0.0, deadline - time.monotonic())))
+                   for w in list(self._writers.values()))
+
     def subscribe(self, channel: str, handler: Handler, queue_capacity: int = 0) -> int:
         if channel not in self._readers:
             from cyclonedds.sub import DataReader

@@ -48,8 +48,11 @@ class LogWriter:
 
     def flush_if_due(self) -> None:
         if time.monotonic() - self._last_flush >= FLUSH_S:
-            self._f.flush()
-            self._last_flush = time.monotonic()
+            self.flush()
+
+    def flush(self) -> None:
+        self._f.flush()
+        self._last_flush = time.monotonic()
 
     def close(self) -> None:
         self._f.close()
@@ -88,6 +91,13 @@ class DdsRecorder:
                         log.warning("not recording DDS topic %s: %s", ascii(name), e)
             if len(found) < 64:
                 return
+
+    def drain(self) -> None:
+        """Writes everything that has reached the recorder, without waiting for more."""
+        self.discover()
+        while self.bus.handle(0.0):
+            pass
+        self.log.flush()
 
     def spin(self, timeout: float = DISCOVER_S) -> None:
         now = time.monotonic()

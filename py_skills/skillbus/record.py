@@ -9,6 +9,7 @@ from __future__ import annotations
 import signal
 import sys
 import time
+from typing import Callable
 
 from skillbus.bus import BusError, resolve_url
 
@@ -40,11 +41,21 @@ def main(args) -> int:
         return 2
     print("recording", file=sys.stderr, flush=True)
     deadline = time.monotonic() + args.seconds if args.seconds is not None else None
+    events = record_until(rec, lambda: bool(stop) or (deadline is not None and time.monotonic() >= deadline))
+    print(f'{{"events": {events}, "channels": {len(rec.channels)}}}', flush=True)
+    return 0
+
+
+def record_until(rec, stopped: Callable[[], bool]) -> int:
+    """Runs the recorder `rec` until `stopped()`, then writes what had reached it by then
+    and closes it; returns the events written. A stop (SIGTERM) can come while messages
+    wait in the recorder's queues: on DDS their writers already have the recorder's
+    acknowledgement and will not send them again, so leaving them unread would lose them."""
     try:
-        while not stop and (deadline is None or time.monotonic() < deadline):
+        while not stopped():
             rec.spin()
+        rec.drain()
     finally:
         events = rec.log.events
         rec.close()
-    print(f'{{"events": {events}, "channels": {len(rec.channels)}}}', flush=True)
-    return 0
+    return events

@@ -46,18 +46,27 @@ class UdpmRecorder:
             self.close()
             raise
 
-    def spin(self, timeout: float = 0.05) -> None:
-        """Writes what arrived, waiting at most `timeout` for it."""
+    def spin(self, timeout: float = 0.05) -> int:
+        """Writes what arrived, waiting at most `timeout` for it; returns the datagrams read."""
         ready, _, _ = select.select(self.receivers, [], [], timeout)
+        read = 0
         for r in ready:
             while True:
                 got = r.read()
                 if got is False:  # (nothing more now; None: a fragment, or a datagram that does not parse)
                     break
+                read += 1
                 if got is not None:
                     self.log.write(got[0], got[1])
                     self.channels.add(got[0])
         self.log.flush_if_due()
+        return read
+
+    def drain(self) -> None:
+        """Writes everything in the sockets' buffers, without waiting for more."""
+        while self.spin(0.0):
+            pass
+        self.log.flush()
 
     def close(self) -> None:
         if self.log is not None:

@@ -14,8 +14,10 @@ READER = textwrap.dedent('''
     import sys
     from skillbus.bus import open_raw_bus
     bus = open_raw_bus()
-    got = []
-    bus.subscribe("SB_TEST_SLOW", lambda ch, d: got.append(d))
+    def got(ch, d):
+        if d == b"hello":
+            print("got hello", flush=True)  # (so the writer has matched this reader)
+    bus.subscribe("SB_TEST_SLOW", got)
     print("subscribed", flush=True)
     while True:
         bus.handle(1.0)
@@ -44,8 +46,7 @@ def test_a_write_to_a_reader_that_takes_nothing_is_a_counted_loss(tmp_path):
         go = tmp_path / "stopped"
         writer = box.start("writer", [sys.executable, "-c", WRITER, str(go)], env={"SKILLBUS_KEY_FILE": "none"})
         writer.wait_for("writing", 30, stream="stdout")
-        import time
-        time.sleep(1.0)  # (discovery: the writer matches the reader)
+        reader.wait_for("got hello", 30, stream="stdout")  # (discovery: the writer has matched the reader)
         box.kill(reader, signal.SIGSTOP)  # (alive and matched, taking nothing)
         go.touch()
         wait_until(lambda: writer.popen.poll() is not None, 60, "the writer to finish")

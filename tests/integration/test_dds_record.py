@@ -16,15 +16,24 @@ WRITER = textwrap.dedent('''
     import sys, time
     from skillbus.bus import open_bus
     bus = open_bus()
-    time.sleep(float(sys.argv[1]))  # (the recorder finds the topic meanwhile, or not: it must not matter)
+
+    def matched():
+        for channel in ("SB_TEST_A", "SB_TEST_B"):
+            assert bus.wait_matched(channel, 30), "the recorder never read " + channel
+
+    time.sleep(float(sys.argv[1]))  # (the recorder finds this participant meanwhile, or not: it must not matter)
     for i in range(50):
         bus.publish("SB_TEST_A", b"a%d" % i)
         if i % 5 == 0:
             bus.publish("SB_TEST_B", bytes(3000 + i))
-        # A topic exists from its first message on: the recorder has its writer's last 16
-        # (skillbus.dds) while it finds and matches it; here it has the time.
-        time.sleep(0.3 if i == 0 and sys.argv[1] != "0" else 0.002)
-    time.sleep(1.0)  # (stays matched until the recorder has it all)
+        if i == 0 and sys.argv[1] != "0":
+            # A topic exists from its first message on; the recorder finds it by discovery
+            # and gets what its writer keeps for late readers (skillbus.dds): the last 16.
+            # This writer waits for it before going on (the burst writer does not).
+            matched()
+        time.sleep(0.002)
+    matched()
+    assert bus.wait_acknowledged(30), "the recorder did not acknowledge everything"  # (it cannot be lost now)
 ''')
 
 
@@ -65,3 +74,23 @@ def test_it_refuses_a_bus_that_is_not_dds(tmp_path):
     r = subprocess.run([sys.executable, "-m", "skillbus.cli", "dds-record", str(tmp_path / "x.lcmlog"),
                         "--url", "udpm://239.255.76.67:7667?ttl=0"], capture_output=True, text=True, timeout=30)
     assert r.returncode == 2 and "records a DDS domain" in r.stderr and "skillbus record" in r.stderr
+
+
+def test_waiting_for_a_reader_that_is_not_there_ends_at_its_timeout(tmp_path):
+    from skillbus.netns import Sandbox
+    code = textwrap.dedent('''
+        import time
+        from skillbus.bus import open_raw_bus
+        bus = open_raw_bus()
+        bus.publish("SB_TEST_NOBODY", b"x")
+        t0 = time.monotonic()
+        assert not bus.wait_matched("SB_TEST_NOBODY", 0.3)  # (no reader of it in the domain)
+        assert not bus.wait_matched("SB_TEST_NEVER_SENT", 0.1)  # (no writer of it in this process)
+        assert 0.4 <= time.monotonic() - t0 < 5
+        assert bus.wait_acknowledged(1)  # (nobody to wait for)
+        print("ok", flush=True)
+    ''')
+    with Sandbox(log_dir=tmp_path / "logs", transport="dds") as box:
+        p = box.start("w", [sys.executable, "-c", code], env={"SKILLBUS_KEY_FILE": "none"})
+        assert box.wait(p, 60) == 0, p.stderr()
+        assert "ok" in p.stdout()
