@@ -1,5 +1,6 @@
 """The CANopen gripper driver against the simulated device, over the virtual SocketCAN bus."""
 
+import signal
 import sys
 import time
 
@@ -172,7 +173,8 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
     finally:
         driver.close()
         net.disconnect()
-    time.sleep(0.3)
+    # (the recorder flushes every 0.1 s: the last frame sent is in the file, so all are)
+    wait_until(lambda: "123#0102" in log_file.read_text(), 30, "frame 0x123 in the candump log")
     sandbox.kill(recorder, 2)  # SIGINT: the recorder closes its file
     assert sandbox.wait(recorder, 10) == 0
     raw = log_file.read_text().splitlines()
@@ -187,6 +189,31 @@ def test_the_bus_is_recorded_in_candump_format_and_decoded(sandbox, tmp_path):
                      "SDO answer abort 0x5555sub0 (not in the EDS): code 0x06020000",
                      "unknown COB-ID 0x123 (2 bytes)"):
         assert expected in text, f"{expected!r} not in:\n{text[:3000]}"
+
+
+def test_frames_that_reached_the_recorder_before_its_stop_are_recorded(sandbox, tmp_path):
+    path = start_hub(sandbox, tmp_path / "grip.sock")
+    log_file = tmp_path / "stop.log"
+    recorder = sandbox.start("recorder", [sys.executable, "-m", "skillbus.cli", "can-record", str(log_file),
+                                          "--channel", str(path)])
+    recorder.wait_for("recording", 30)
+    listener = can.Bus(interface="skillbus_vcan", channel=str(path))
+    sender = can.Bus(interface="skillbus_vcan", channel=str(path))
+    try:
+        sandbox.kill(recorder, signal.SIGSTOP)  # (frames wait in its socket while it has no CPU)
+        for i in range(20):
+            sender.send(can.Message(arbitration_id=0x200 + i, data=bytes([i]), is_extended_id=False))
+        got = []  # (the hub forwards in order: once the listener has the last, the recorder's socket has all)
+        wait_until(lambda: (m := listener.recv(0.05)) is not None and got.append(m.arbitration_id) is None
+                   and got[-1] == 0x213, 30, "the frames through the hub")
+        sandbox.kill(recorder, signal.SIGTERM)  # (the stop comes first when it runs again)
+        sandbox.kill(recorder, signal.SIGCONT)
+        assert sandbox.wait(recorder, 10) == 0, recorder.stderr()
+    finally:
+        listener.shutdown()
+        sender.shutdown()
+    ids = [int(line.split()[2].split("#")[0], 16) for line in log_file.read_text().splitlines()]
+    assert ids == [0x200 + i for i in range(20)]
 
 
 def test_can_log_names_a_file_it_cannot_read(sandbox, tmp_path):

@@ -65,6 +65,11 @@ def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: f
             if time.monotonic() - flushed >= FLUSH_S and getattr(log, "file", None) is not None:
                 log.file.flush()
                 flushed = time.monotonic()
+        # Stopped: the frames that reached the recorder before the stop are kept too (a
+        # stop is asked for after something was sent; it must be in the log).
+        while (msg := bus.recv(0.0)) is not None:
+            log.on_message_received(msg)
+            n += 1
     finally:  # nothing is lost on a stop: the file is flushed and closed
         log.stop()
         bus.shutdown()
