@@ -1,5 +1,6 @@
 """The CANopen gripper driver against the simulated device, over the virtual SocketCAN bus."""
 
+import re
 import signal
 import sys
 import time
@@ -109,15 +110,18 @@ def test_close_on_an_object_grips_it(rig):
     assert driver.status().state == cia402.OPERATION_ENABLED and not driver.status().faults
 
 
-def test_heartbeat_loss_is_a_fault_within_three_periods(rig, sandbox):
+def test_heartbeat_loss_is_a_fault_after_three_periods(rig, sandbox):
     driver, device, _ = rig()
     sandbox.kill(device)
 
-    def lost() -> bool:  # the driver's own supervision names it: nobody calls poll()
-        return any(f.startswith("gripper node 5: heartbeat lost at ") for f in driver.status().faults)
+    def lost() -> str | None:  # the driver's own supervision names it: nobody calls poll()
+        return next((f for f in driver.status().faults if f.startswith("gripper node 5: heartbeat lost at ")), None)
 
-    wait_until(lost, 3 * 0.1 + 0.25, "the fault 'heartbeat lost' within 3 heartbeat periods (+ the one in flight)",
-               interval=0.01, diagnostic=lambda: f"its status: {driver.status()}")
+    # (the three periods exactly, on a clock of the test's: tests/py/test_device_heartbeat.py;
+    # here, processes on a loaded machine: named, by the driver's thread, not early)
+    fault = wait_until(lost, 10, "the fault 'heartbeat lost'", interval=0.01,
+                       diagnostic=lambda: f"its status: {driver.status()}")
+    assert int(re.search(r"\(none for (\d+) ms\)", fault).group(1)) >= 3 * 100, fault
 
 
 def test_emcy_on_a_blocked_move_then_fault_reset(rig):

@@ -16,16 +16,18 @@ from conftest import lcm_only
 COUNT, SIZE = 40, 50_000  # 2 MB: ten times the kernel's default buffer
 
 RECEIVER = textwrap.dedent("""
-    import sys, time
+    import os, sys, time
     from skillbus.bus import open_bus, DEFAULT_URL
+    from skillbus.waiting import wait_until
     url = sys.argv[1] or DEFAULT_URL
     bus = open_bus(url)
     got = []
     bus.subscribe("SB_BURST", lambda ch, data: got.append(len(data)))
     print("ready", flush=True)
-    end = time.monotonic() + 2.0
-    while time.monotonic() < end:
-        bus.handle(0.05)
+    # (stopped here until the burst has been sent; then the test says go)
+    wait_until(lambda: os.path.exists(sys.argv[2]), 60, "the go file")
+    while bus.handle(2.0):  # (the burst is in the socket's buffer, what of it was kept: read it all)
+        pass
     print("got", len(got), flush=True)
 """)
 
@@ -39,11 +41,13 @@ SENDER = textwrap.dedent(f"""
 
 
 def burst_into(sandbox, url: str) -> int:
-    rx = sandbox.start(f"rx-{len(sandbox.procs)}", [sys.executable, "-c", RECEIVER, url])
+    go = sandbox.log_dir / f"go-{len(sandbox.procs)}"
+    rx = sandbox.start(f"rx-{len(sandbox.procs)}", [sys.executable, "-c", RECEIVER, url, str(go)])
     rx.wait_for("ready", 30, stream="stdout")
     sandbox.kill(rx, signal.SIGSTOP)  # (LCM reads its sockets in a thread: stop all of it)
     tx = sandbox.start(f"tx-{len(sandbox.procs)}", [sys.executable, "-c", SENDER])
     assert sandbox.wait(tx, 30) == 0, tx.stderr()
+    go.touch()
     sandbox.kill(rx, signal.SIGCONT)
     assert sandbox.wait(rx, 30) == 0, rx.stderr()
     return int(rx.stdout().split("got")[-1].split()[0])

@@ -4,7 +4,6 @@ must agree with the manager."""
 
 import json
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -76,9 +75,8 @@ def test_grounding_that_finds_nothing_names_the_parameter(system):
 
 def test_a_broken_hold_condition_stops_a_running_primitive(system):
     run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "-p", "Object=skiros:Cube-3",
-                               "--timeout", "30"], env={"PYTHONPATH": str(LIBS)})
-    run.wait_for("started", 20, stream="stdout")
-    time.sleep(0.5)
+                               "--timeout", "30", "--watch"], env={"PYTHONPATH": str(LIBS)})
+    run.wait_for("holding", 20, stream="stdout")  # (the primitive runs: its hold-condition is checked each tick)
     code = ("from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface as W; "
             "W(open_bus(), 't').set_relation('skiros:Table-1','skiros:contain','skiros:Cube-3', False)")
     edit = system.start("edit", [sys.executable, "-c", code])

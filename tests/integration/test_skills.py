@@ -99,17 +99,24 @@ def test_pause_step_resume_and_stop(sandbox):
     wait_until(lambda: last_tick() >= 3, 20, "tick 3 of Wait", interval=0.02,
                diagnostic=lambda: run.stdout() + run.stderr())
     assert cli(sandbox, "pause", "1")[0] == 0
-    time.sleep(0.3)
+    # (the manager sent the last tick's progress before it answered; the run prints it
+    # when it gets a core: the tick shown is the paused one once it holds for a while)
+    def settled() -> bool:
+        before = last_tick()
+        time.sleep(0.5)
+        return last_tick() == before
+
+    wait_until(settled, 20, "the shown tick to settle after the pause")
     paused_at = last_tick()
     time.sleep(0.5)
     assert last_tick() == paused_at  # not ticked while paused
     rc, out, _ = cli(sandbox, "step", "1")
     assert rc == 0 and "stepping once" in out
-    time.sleep(0.3)
-    assert last_tick() == paused_at + 1
+    wait_until(lambda: last_tick() > paused_at, 20, "the step's tick", diagnostic=lambda: run.stdout())
+    time.sleep(0.5)
+    assert last_tick() == paused_at + 1  # one tick, and then paused again
     assert cli(sandbox, "resume", "1")[0] == 0
-    time.sleep(0.3)
-    assert last_tick() > paused_at + 2
+    wait_until(lambda: last_tick() > paused_at + 2, 20, "ticks after the resume", diagnostic=lambda: run.stdout())
     rc, out, _ = cli(sandbox, "stop", "1")
     assert rc == 0 and "stopping" in out
     assert sandbox.wait(run, 20) == 1

@@ -52,7 +52,7 @@ def test_killing_a_skill_process_fails_the_task_by_name_and_a_restart_succeeds(t
                                 r"within 1\.0 s|no ack for frame \d+ from participant\(s\) proc_b within 1\.5 s)"),
                      10, interval=0.01)
         failed_at = time.monotonic()
-        assert failed_at - killed < 2.0
+        assert failed_at - killed < 5.0  # (the 1.0 s or 1.5 s timeout, and a loaded machine's delays)
         # the dead participant also stops the lockstep session, named
         assert box.wait(clock, 30) == 1
         assert "proc_b" in last_json(clock.stdout())["error"]

@@ -95,7 +95,8 @@ groundme = _prim(GroundMe)
 
 
 class hold(PrimitiveBase):
-    """Runs for 100 ticks (4 s) unless its hold-condition breaks first."""
+    """Runs for 10,000 ticks (400 s: longer than any test waits) unless its hold-condition
+    breaks first."""
 
     def createDescription(self):
         self.setDescription(Hold(), "hold")
@@ -106,7 +107,7 @@ class hold(PrimitiveBase):
 
     def execute(self):
         self.n += 1
-        return self.step(f"holding {self.n}") if self.n < 100 else self.success("held")
+        return self.step(f"holding {self.n}") if self.n < 10_000 else self.success("held")
 
 
 # ---- alternatives and InferInvalid -------------------------------------------------
