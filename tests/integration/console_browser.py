@@ -102,7 +102,13 @@ def control_cli_task(page: Page, shots: Path, args) -> dict:
     wait_until("ticks after resuming the held task", lambda: shown_tick(page) > out["held"] + 3, 20)
     out["after_first_resume"] = shown_tick(page)
     page.click("[data-testid=task-pause]")
-    time.sleep(1.5)  # a tick already under way when the pause came may still be shown
+
+    def settled() -> bool:  # (a tick under way when the pause came is still shown, when it arrives)
+        before = shown_tick(page)
+        time.sleep(1.0)
+        return shown_tick(page) == before
+
+    wait_until("the shown tick to settle after the pause", settled, 30)
     out["paused_at"] = shown_tick(page)
     time.sleep(1.5)
     out["after_pause"] = shown_tick(page)

@@ -112,7 +112,12 @@ def from_another_host(url: str) -> dict:
     import struct
     child = subprocess.Popen(["unshare", "-n", "--", "sleep", "600"])
     try:
-        time.sleep(0.3)
+        # (until the child is in its own network namespace: a veth end moved into it earlier
+        # would land in ours, and the "other host" would be this one)
+        end = time.monotonic() + 10
+        while os.readlink(f"/proc/{child.pid}/ns/net") == os.readlink("/proc/self/ns/net"):
+            assert time.monotonic() < end, "the second host's network namespace was never made"
+            time.sleep(0.01)
         sh("ip", "link", "add", "vrobot", "type", "veth", "peer", "name", "vother", "netns", str(child.pid))
         sh("ip", "addr", "add", "10.77.0.1/24", "dev", "vrobot")
         sh("ip", "link", "set", "vrobot", "up", "multicast", "on")

@@ -114,7 +114,7 @@ def test_a_manager_killed_under_a_run_is_named_at_once(sandbox):
     rc = sandbox.wait(run, 20)
     out, err = run.stdout(), run.stderr()
     assert rc == 1, f"exit {rc}\n{out}\n{err}"
-    assert time.monotonic() - killed < 6.0
+    assert time.monotonic() - killed < 15.0  # (3.5 s of silence, a loaded machine's delays; not the 120 s)
     assert "task 2: Failure: the skill manager went silent: no announcement on SB_SKILL_MANAGER" in out, out + err
     assert "Traceback" not in err, err
 

@@ -84,7 +84,7 @@ def test_killing_a_participant_stops_the_master_with_an_error_naming_it(transpor
     s = last_json(clock.stdout())
     assert not s["ok"] and s["frames"] > 0
     assert re.search(r"no ack for frame \d+ from participant\(s\) py2 within 1.5 s", s["error"]), s["error"]
-    assert took < 1.5 + 2.0
+    assert took < 1.5 + 8.0  # (its 1.5 s, and a loaded machine's delays)
     # the survivors are told to stop and end with the master's reason
     for n in ("py1", "cpp1"):
         assert sandbox.wait(parts[n], 15) == 1
@@ -533,6 +533,6 @@ def test_a_participant_without_the_longer_allowance_is_still_declared_dead_in_it
     killed_at = time.monotonic()
     sandbox.kill(parts["py2"])
     assert sandbox.wait(clock, 30) == 1
-    assert time.monotonic() - killed_at < 1.5 + 2.0
+    assert time.monotonic() - killed_at < 1.5 + 8.0  # (its 1.5 s, not py1's 60 s; a loaded machine's delays)
     error = last_json(clock.stdout())["error"]
     assert re.search(r"no ack for frame \d+ from participant\(s\) py2 within 1.5 s", error), error

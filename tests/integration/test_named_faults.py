@@ -29,4 +29,4 @@ def test_a_killed_arm_driver_is_named_by_the_moving_skill(sandbox, tmp_path):
     assert sandbox.wait(move, 30) == 1, move.stdout() + move.stderr()
     out = move.stdout()
     assert "the robot arm's driver went silent: no state on SB_ROBOT_ARM_STATE for" in out, out
-    assert time.monotonic() - killed < 3.0
+    assert time.monotonic() - killed < 10.0  # (named from the silence, long before the run's 60 s; load's delays in it)

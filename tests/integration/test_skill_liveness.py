@@ -15,20 +15,26 @@ def skills_listed(sandbox) -> str:
     return out if rc == 0 else ""
 
 
-def test_a_restarted_manager_lists_every_skill_again_within_5_s(sandbox):
+def test_a_restarted_manager_lists_every_skill_again_within_seconds(sandbox):
     mgr, proc = start_system(sandbox, "flow_skills")
     before = skills_listed(sandbox)
     assert "Chain (chain, compound, process proc1)" in before, before
     sandbox.kill(mgr, signal.SIGKILL)
     sandbox.wait(mgr, 10)
+    restarted = time.monotonic()
     sandbox.start("skill_mgr-again", [mgr_binary(), "--wall-clock"])
+    # The process registers again when the new manager's first announcement does not list
+    # it (docs/skills.md: about a second); measured on its log, not through a CLI process
+    # per look (one takes seconds to start on a loaded machine).
+    wait_until(lambda: "registered again" in proc.stderr(), 30, "proc1 registering again", interval=0.01)
+    assert time.monotonic() - restarted < 5.0  # (the manager's start on a loaded machine is in it)
     listed = [""]
 
     def lists_every_skill() -> bool:
         rc, listed[0], _ = cli(sandbox, "skills", timeout=20)
         return rc == 0 and listed[0] == before
 
-    wait_until(lists_every_skill, 5.0, "the restarted manager listing every skill", interval=0.1,
+    wait_until(lists_every_skill, 30, "the restarted manager listing every skill", interval=0.1,
                diagnostic=lambda: f"it lists:\n{listed[0]}")
     rc, out, _ = cli(sandbox, "run", "Chain", "--timeout", "30")
     assert rc == 0, out
@@ -62,7 +68,7 @@ def test_a_process_that_stops_is_dropped_and_a_task_that_needs_it_names_it(sandb
     assert rc == 0, out
     sandbox.kill(echo, signal.SIGKILL)
     sandbox.wait(echo, 10)
-    wait_until(lambda: "Echo (echo" not in skills_listed(sandbox), 3.0 + 3.0,
+    wait_until(lambda: "Echo (echo" not in skills_listed(sandbox), 30,
                "the dead process's skills dropped from the list", interval=0.2)
     gone = "skill process echoes stopped answering (no heartbeat for 3000 ms)"
     rc, out, _ = cli(sandbox, "run", "UsesEcho", "--timeout", "20")
@@ -96,7 +102,7 @@ req = skill_start_t(); req.type = "Wait"
 task = c.call("start", req, skill_task_t, timeout=5.0).task
 stop = skill_start_t(); stop.task = task
 c.call("stop", stop, skill_task_t, timeout=5.0)
-poll_until(lambda: any(p.task == task and p.state == skill_state_t.FAILURE for p in ends), 3.0, step=bus.handle)
+poll_until(lambda: any(p.task == task and p.state == skill_state_t.FAILURE for p in ends), 20, step=bus.handle)
 final = [p for p in ends if p.task == task and p.state == skill_state_t.FAILURE]
 print(final[0].nodes[0].message if final else "no end seen")
 """

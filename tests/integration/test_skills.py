@@ -133,7 +133,7 @@ def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):
     rc, out, _ = cli(sandbox, "run", "Consume", "-p", "Item=x", "--timeout", "20")
     assert rc == 1
     assert "skill process proc1 did not answer the tick of consume within 1.0 s" in out, out
-    assert time.monotonic() - t0 < 2 + 3  # within 2 s of the first tick, plus CLI start-up
+    assert time.monotonic() - t0 < 10  # (the tick's 1.0 s, the CLI's start-up on a loaded machine; not the 20 s)
     # the supervisor restarts it; it registers again and the skill runs
     restarted = sandbox.start("proc1-again", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
                                               "--library", "flow_skills"], env={"PYTHONPATH": str(LIBS)})

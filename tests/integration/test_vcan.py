@@ -34,16 +34,27 @@ def test_two_clients_exchange_10000_frames_in_order_none_lost(sandbox, hub):
         assert r == {"received": 10000, "in_order": True, "own": 0}, r
 
 
+def received(bus, count: int, timeout: float = 10.0) -> list[int]:
+    """The ids of the next `count` frames (the hub is a process: on a loaded machine it
+    forwards late), then of any more that come within 0.3 s (there should be none)."""
+    ids: list[int] = []
+    end = time.monotonic() + timeout
+    while len(ids) < count and time.monotonic() < end:
+        if (m := bus.recv(timeout=0.1)) is not None:
+            ids.append(m.arbitration_id)
+    while (m := bus.recv(timeout=0.3)) is not None:
+        ids.append(m.arbitration_id)
+    return ids
+
+
 def test_own_frames_only_when_asked(hub):
     channel, _ = hub
     quiet, loud, other = open_bus(channel), open_bus(channel, receive_own_messages=True), open_bus(channel)
     try:
         quiet.send(can.Message(arbitration_id=0x10, data=b"q", is_extended_id=False))
         loud.send(can.Message(arbitration_id=0x20, data=b"l", is_extended_id=False))
-        seen_by = {name: [] for name in ("quiet", "loud", "other")}
-        for name, bus in (("quiet", quiet), ("loud", loud), ("other", other)):
-            while (m := bus.recv(timeout=0.5)) is not None:
-                seen_by[name].append(m.arbitration_id)
+        seen_by = {name: received(bus, n) for name, bus, n in (("quiet", quiet, 1), ("loud", loud, 2),
+                                                                ("other", other, 2))}
         assert seen_by == {"quiet": [0x20], "loud": [0x10, 0x20], "other": [0x10, 0x20]}
     finally:
         for b in (quiet, loud, other):
@@ -58,15 +69,15 @@ def test_filters_extended_ids_remote_and_fd_frames(hub):
     try:
         for cid in (0x181, 0x201, 0x18F, 0x700):
             tx.send(can.Message(arbitration_id=cid, data=b"\x01", is_extended_id=False))
-        assert [m.arbitration_id for m in iter(lambda: rx.recv(0.3), None)] == [0x181, 0x18F]
-        list(iter(lambda: fd_rx.recv(0.2), None))  # drain
+        assert received(rx, 2) == [0x181, 0x18F]
+        assert received(fd_rx, 4) == [0x181, 0x201, 0x18F, 0x700]  # (unfiltered)
         tx.send(can.Message(arbitration_id=0x1ABCDEF0, data=bytes(range(64)), is_extended_id=True, is_fd=True,
                             bitrate_switch=True))
         tx.send(can.Message(arbitration_id=0x42, is_remote_frame=True, dlc=4, is_extended_id=False))
-        fd = fd_rx.recv(1.0)
+        fd = fd_rx.recv(10.0)
         assert fd.is_fd and fd.bitrate_switch and fd.is_extended_id and fd.arbitration_id == 0x1ABCDEF0
         assert bytes(fd.data) == bytes(range(64))
-        rtr = fd_rx.recv(1.0)
+        rtr = fd_rx.recv(10.0)
         assert rtr.is_remote_frame and rtr.dlc == 4 and rtr.arbitration_id == 0x42
     finally:
         for b in (tx, rx, fd_rx):
@@ -101,7 +112,7 @@ def test_no_hub_is_a_clear_error(tmp_path):
 def test_a_client_that_stops_reading_is_disconnected_not_the_bus_stopped(sandbox, tmp_path):
     path = tmp_path / "small.sock"
     hub_proc = sandbox.start("can-hub", [sys.executable, "-m", "skillbus.cli", "can-hub", "--channel", path,
-                                         "--queue-limit", "500", "--stall-timeout", "1.0"])
+                                         "--queue-limit", "500", "--stall-timeout", "5.0"])
     wait_until(path.exists, 10, f"the CAN hub's socket {path}", interval=0.02,
                diagnostic=lambda: hub_proc.stderr()[-2000:])
     sleeper = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)  # connects, never reads

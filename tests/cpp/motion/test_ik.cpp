@@ -118,7 +118,7 @@ TEST(Planner, ALineOfTooManyWaypointsIsRefusedAtOnce) {
   req.step_m = 1.5e-7;
   const auto t0 = std::chrono::steady_clock::now();
   const Plan p = plan_motion(kin(), req);
-  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(100));
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(1000));  // (millions of solves: minutes)
   EXPECT_FALSE(p.ok);
   EXPECT_NE(p.error.find("waypoints; give a larger step_m"), std::string::npos) << p.error;
   req.step_m = 1e-300;  // (the count would overflow an int)
