@@ -29,7 +29,7 @@ from skillbus.msgs import (header_t, joint_traj_point_t, robot_arm_cmd_t, sim_co
                            wm_commit_t, wm_op_t, wm_scene_t, wm_txn_t)
 from skillbus.rpc import RpcClient, RpcError
 from skillbus.system import TASK, programs
-from skillbus.waiting import poll_until
+from skillbus.waiting import poll_until, wait_until
 from skillbus.world import Element
 from skillbus.world.convert import op
 
@@ -114,10 +114,8 @@ def from_another_host(url: str) -> dict:
     try:
         # (until the child is in its own network namespace: a veth end moved into it earlier
         # would land in ours, and the "other host" would be this one)
-        end = time.monotonic() + 10
-        while os.readlink(f"/proc/{child.pid}/ns/net") == os.readlink("/proc/self/ns/net"):
-            assert time.monotonic() < end, "the second host's network namespace was never made"
-            time.sleep(0.01)
+        wait_until(lambda: os.readlink(f"/proc/{child.pid}/ns/net") != os.readlink("/proc/self/ns/net"), 10,
+                   "the second host's network namespace", interval=0.01)
         sh("ip", "link", "add", "vrobot", "type", "veth", "peer", "name", "vother", "netns", str(child.pid))
         sh("ip", "addr", "add", "10.77.0.1/24", "dev", "vrobot")
         sh("ip", "link", "set", "vrobot", "up", "multicast", "on")

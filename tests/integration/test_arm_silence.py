@@ -23,6 +23,7 @@ CHECKER = textwrap.dedent("""
     import json, time
     from skillbus.bus import open_bus
     from skillbus.robot.arm import Arm
+    from skillbus.waiting import poll_until
     bus = open_bus()
     arm = Arm(bus)
     def pump(seconds):
@@ -38,9 +39,7 @@ CHECKER = textwrap.dedent("""
     time.sleep(1.5)                 # this process starved: nothing read, the driver goes on
     out["after_starving"] = arm.silence()
     print("starved", flush=True)    # (the test kills the driver now)
-    end = time.monotonic() + 30
-    while not arm.silence() and time.monotonic() < end:
-        bus.handle(0.01)
+    poll_until(lambda: arm.silence() != "", 30, interval=0.01, step=bus.handle)
     out["driver_gone"] = arm.silence()
     print(json.dumps(out))
 """)

@@ -9,17 +9,15 @@ import textwrap
 from conftest import last_json
 
 RECORD_THEN_STOP = textwrap.dedent('''
-    import json, sys, time
+    import json, sys
     from skillbus.bus import open_raw_bus, resolve_url
     from skillbus.record import open_recorder, record_until
+    from skillbus.waiting import wait_until
 
     rec = open_recorder(resolve_url(None), sys.argv[1])
     bus = open_raw_bus()
-    deadline = time.monotonic() + 30
     bus.publish("SB_TEST_Q", b"q0")  # (on DDS the topic exists from here on: the recorder finds it)
-    while rec.log.events < 1:
-        assert time.monotonic() < deadline, "the recorder never got q0"
-        rec.spin(0.01)
+    wait_until(lambda: rec.log.events >= 1, 30, "the recorder's q0", interval=0.01, step=rec.spin)
     for i in range(1, 20):
         bus.publish("SB_TEST_Q", b"q%d" % i)
     if hasattr(bus, "wait_acknowledged"):  # (DDS: until the recorder has them all)

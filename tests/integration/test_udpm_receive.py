@@ -78,8 +78,9 @@ GARBAGE = textwrap.dedent("""
 """)
 
 RECEIVER = textwrap.dedent("""
-    import json, time
+    import json
     from skillbus.bus import LcmBus, resolve_url
+    from skillbus.waiting import poll_until
     bus = LcmBus(resolve_url())
     got = []
     bus.subscribe("SB_ECHO_IN", lambda ch, d: got.append(d))
@@ -87,9 +88,7 @@ RECEIVER = textwrap.dedent("""
     print("ready", flush=True)
     # Until the good message and its echo are here (the bad datagrams came before them, on
     # the same socket), then a while more: anything else that came would be counted too.
-    end = time.monotonic() + 30
-    while len(got) < 2 and time.monotonic() < end:
-        bus.handle(0.05)
+    poll_until(lambda: len(got) >= 2, 30, step=bus.handle)
     while bus.handle(0.5):
         pass
     print(json.dumps({"got": [g.decode() for g in got], "undecodable": bus.undecodable}))

@@ -8,7 +8,7 @@ import can
 import pytest
 
 from conftest import last_json, python_tool
-from skillbus.waiting import wait_until
+from skillbus.waiting import poll_until, wait_until
 
 
 @pytest.fixture
@@ -38,10 +38,12 @@ def received(bus, count: int, timeout: float = 10.0) -> list[int]:
     """The ids of the next `count` frames (the hub is a process: on a loaded machine it
     forwards late), then of any more that come within 0.3 s (there should be none)."""
     ids: list[int] = []
-    end = time.monotonic() + timeout
-    while len(ids) < count and time.monotonic() < end:
-        if (m := bus.recv(timeout=0.1)) is not None:
+
+    def receive(seconds: float) -> None:
+        if (m := bus.recv(timeout=seconds)) is not None:
             ids.append(m.arbitration_id)
+
+    poll_until(lambda: len(ids) >= count, timeout, step=receive)
     while (m := bus.recv(timeout=0.3)) is not None:
         ids.append(m.arbitration_id)
     return ids
