@@ -12,6 +12,7 @@ import lcm
 from skillbus import auth
 from skillbus.msgs import decode, skill_progress_t
 from skillbus.skill import State
+from support.held_task import hold_task
 from test_launch_run_dir import box, netns_procs  # noqa: F401 (box: a fixture)
 
 LIVE = re.compile(r"^  t=\s*(\d+\.\d+) s  (.*)$", re.M)
@@ -84,30 +85,13 @@ def test_the_live_view_follows_the_task_to_its_end(box, tmp_path):  # noqa: F811
     assert replay.tasks_at(replay.frames[-1])[0]["state"] == state
 
 
-# Pauses the demo's task (task 1 of its manager) as soon as it exists: under lockstep the
-# whole ClearTable takes a few seconds, and a test that saw it running could signal the demo
-# only after it had ended (seen on a loaded machine: exit 0 instead of 130).
-HOLD_TASK_1 = """
-from skillbus.bus import open_bus
-from skillbus.msgs import skill_start_t, skill_task_t
-from skillbus.rpc import RpcClient, RpcError
-from skillbus.waiting import wait_until
-client, req = RpcClient(open_bus(), "SKILL", "hold"), skill_start_t()
-req.task = 1
-# (RpcError, retried: no manager yet, or no task 1 yet)
-wait_until(lambda: client.call("pause", req, skill_task_t, timeout=0.5), 120, "task 1 paused", interval=0.01,
-           retry_on=(RpcError,))
-print("held", flush=True)
-"""
-
-
 def test_an_interrupted_demo_shuts_its_system_down(box, tmp_path):  # noqa: F811
     run_dir = tmp_path / "demo"
     for sig, code in ((signal.SIGTERM, 143), (signal.SIGINT, 130)):
         demo = box.start(f"demo-{sig.name}", [sys.executable, "-m", "skillbus.cli", "demo", "--run-dir", str(run_dir)],
                          env={"SKILLBUS_NETNS": "1"})
-        hold = box.start(f"hold-{sig.name}", [sys.executable, "-c", HOLD_TASK_1])
-        hold.wait_for("held", 150, stream="stdout", what="the demo's task held (paused) while it runs")
+        # (held first: the whole ClearTable can end between a live line and the signal)
+        hold_task(box, 1).wait_for("held", 150, stream="stdout", what="the demo's task held (paused) while it runs")
         box.kill(demo, sig)
         rc = box.wait(demo, 60)
         err = demo.stderr()

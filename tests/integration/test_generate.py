@@ -18,6 +18,7 @@ import pytest
 
 from conftest import last_json
 from skillbus import paths
+from skillbus.waiting import wait_until
 
 CONFIG = paths.REPO_ROOT / "deploy" / "generate" / "drawer.yaml"        # open, pick, place in the drawer, close
 SHORT = paths.REPO_ROOT / "deploy" / "generate" / "pick_place.yaml"    # pick and place on the table
@@ -122,14 +123,13 @@ def test_a_worker_killed_mid_episode_is_retried_and_leaves_nothing(tmp_path):
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         attempt0 = out / "work" / "episode-000000" / "attempt-0"
-        end = time.monotonic() + 120
-        # mid-episode: the session is running (the skill process has registered its skills)
-        while time.monotonic() < end and "registered" not in _read(attempt0 / "logs" / "skills.err"):
-            time.sleep(0.2)
-        assert "registered" in _read(attempt0 / "logs" / "skills.err"), "episode 0 never got going"
-        time.sleep(3.0)
-        pids = [pid for pid in worker_pids(out, 0) if _is_python(pid)]
-        assert pids, "no worker process of episode 0"
+        # Mid-episode: the session is running (the skill process has registered its skills),
+        # and killed at once (the episode's task takes a few seconds: a wait here could let
+        # it end first on a loaded machine).
+        wait_until(lambda: "registered" in _read(attempt0 / "logs" / "skills.err"), 120, "episode 0 getting going",
+                   interval=0.05)
+        pids = wait_until(lambda: [pid for pid in worker_pids(out, 0) if _is_python(pid)], 30,
+                          "a worker process of episode 0")
         for pid in pids:
             os.kill(pid, signal.SIGKILL)
         stdout, err = p.communicate(timeout=900)

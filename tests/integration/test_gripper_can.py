@@ -93,8 +93,10 @@ def test_boot_heartbeat_enable_open_close_move_stop(rig):
     assert not s.gripped
     driver.command(60000)  # move to a width
     s = wait_status(driver, lambda s: s.target_reached and s.position_um == 60000)
+    # A slow close (5 mm/s: 12 s in all), so that the stop lands mid-move on a loaded machine too.
+    driver.node.sdo[0x6081].raw = 5_000  # profile velocity
     driver.command(0)
-    wait_status(driver, lambda s: s.moving and s.position_um < 50000)
+    wait_status(driver, lambda s: s.moving and s.position_um < 58000)
     driver.stop()  # halt mid-move
     s = wait_status(driver, lambda s: not s.moving)
     time.sleep(0.2)

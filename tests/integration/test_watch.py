@@ -11,13 +11,39 @@ from conftest import last_json
 from test_skills import LIBS, cli, start_system
 
 
+# Starts Wait (40 ticks: 1.6 s) and pauses it at once, in one process: a watcher started
+# after a `run --detach` could come after the whole task on a loaded machine, and see no tick.
+START_HELD = """
+from skillbus.bus import open_bus
+from skillbus.msgs import skill_list_t, skill_start_t, skill_task_t
+from skillbus.rpc import RpcClient, RpcRemoteError
+from skillbus.skill.cli import parse_param
+from skillbus.waiting import wait_until
+client = RpcClient(open_bus(), "SKILL", "t")
+listed = client.call("list", skill_start_t(), skill_list_t, timeout=5.0)
+req = skill_start_t()
+req.type, req.params = "Wait", [parse_param("Ticks=40", listed, "Wait")]
+req.num_params = 1
+held = skill_start_t()
+held.task = client.call("start", req, skill_task_t, timeout=5.0).task
+# (retried while it is queued: "no running task"; it runs from the manager's next tick)
+wait_until(lambda: client.call("pause", held, skill_task_t, timeout=5.0), 10, "the task paused", interval=0.002,
+           retry_on=(RpcRemoteError,))
+print(held.task, flush=True)
+"""
+
+
 def test_watch_attaches_to_a_task_started_elsewhere_and_prints_only_changes(sandbox):
     start_system(sandbox, "flow_skills")
-    rc, out, err = cli(sandbox, "run", "Wait", "-p", "Ticks=40", "--detach")
-    assert rc == 0, err
-    task = int(out.strip())
-    rc, out, err = cli(sandbox, "watch", str(task), "--timeout", "30")
-    assert rc == 0, out + err
+    starter = sandbox.start("start-held", [sys.executable, "-c", START_HELD], env={"PYTHONPATH": str(LIBS)})
+    assert sandbox.wait(starter, 60) == 0, starter.stderr()
+    task = int(starter.stdout().strip())
+    watch = sandbox.start("watch", [sys.executable, "-m", "skillbus.cli", "watch", str(task), "--timeout", "30"],
+                          env={"PYTHONPATH": str(LIBS)})
+    watch.wait_for("watching from tick", 30, stream="stdout")
+    assert cli(sandbox, "resume", task)[0] == 0
+    assert sandbox.wait(watch, 60) == 0, watch.stdout() + watch.stderr()
+    out = watch.stdout()
     assert re.search(rf"task {task}: Wait, watching from tick \d+", out), out
     ticks = re.findall(r"Wait Running: tick (\d+)", out)
     # one line per change (each tick changes the message), never a whole tree again
