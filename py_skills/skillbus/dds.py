@@ -282,13 +282,13 @@ class DdsBus(Bus):
         first publish) has found a reader of it; False if it has not. DDS finds readers some
         time after a writer appears (milliseconds, more on a loaded machine): what must
         reach a reader that discovers the topic (a recorder) is sent after this."""
-        w = self._writers.get(channel)
-        deadline = time.monotonic() + timeout
-        while w is None or not w.get_matched_subscriptions():
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(0.005)
-        return True
+        from skillbus.waiting import poll_until
+
+        def matched() -> bool:
+            w = self._writers.get(channel)
+            return w is not None and bool(w.get_matched_subscriptions())
+
+        return bool(poll_until(matched, timeout, interval=0.005))
 
     def wait_acknowledged(self, timeout: float) -> bool:
         """Waits up to `timeout` s until every reader found has acknowledged all this

@@ -8,36 +8,21 @@ import re
 import sys
 
 from conftest import last_json
+from support.held_task import hold_task
 from test_skills import LIBS, cli, start_system
-
-
-# Starts Wait (40 ticks: 1.6 s) and pauses it at once, in one process: a watcher started
-# after a `run --detach` could come after the whole task on a loaded machine, and see no tick.
-START_HELD = """
-from skillbus.bus import open_bus
-from skillbus.msgs import skill_list_t, skill_start_t, skill_task_t
-from skillbus.rpc import RpcClient, RpcRemoteError
-from skillbus.skill.cli import parse_param
-from skillbus.waiting import wait_until
-client = RpcClient(open_bus(), "SKILL", "t")
-listed = client.call("list", skill_start_t(), skill_list_t, timeout=5.0)
-req = skill_start_t()
-req.type, req.params = "Wait", [parse_param("Ticks=40", listed, "Wait")]
-req.num_params = 1
-held = skill_start_t()
-held.task = client.call("start", req, skill_task_t, timeout=5.0).task
-# (retried while it is queued: "no running task"; it runs from the manager's next tick)
-wait_until(lambda: client.call("pause", held, skill_task_t, timeout=5.0), 10, "the task paused", interval=0.002,
-           retry_on=(RpcRemoteError,))
-print(held.task, flush=True)
-"""
 
 
 def test_watch_attaches_to_a_task_started_elsewhere_and_prints_only_changes(sandbox):
     start_system(sandbox, "flow_skills")
-    starter = sandbox.start("start-held", [sys.executable, "-c", START_HELD], env={"PYTHONPATH": str(LIBS)})
-    assert sandbox.wait(starter, 60) == 0, starter.stderr()
-    task = int(starter.stdout().strip())
+    # Held as soon as it runs (40 ticks: 1.6 s), then resumed once the watcher is attached:
+    # a watcher started after a `run --detach` could come after the whole task on a loaded
+    # machine, and see no tick.
+    holder = hold_task(sandbox, 1)
+    rc, out, err = cli(sandbox, "run", "Wait", "-p", "Ticks=40", "--detach")
+    assert rc == 0, err
+    task = int(out.strip())
+    assert task == 1, out  # (the system's first task: the one held)
+    holder.wait_for("held", 60, stream="stdout")
     watch = sandbox.start("watch", [sys.executable, "-m", "skillbus.cli", "watch", str(task), "--timeout", "30"],
                           env={"PYTHONPATH": str(LIBS)})
     watch.wait_for("watching from tick", 30, stream="stdout")

@@ -21,7 +21,7 @@ print("held", flush=True)
 """
 
 
-def hold_task(sandbox, task: int = 1, timeout: float = 150):
+def hold_task(sandbox, task: int = 1):
     """Starts the holder of `task` in `sandbox`; returns its process (wait for "held")."""
     import sys
     return sandbox.start(f"hold-{task}-{len(sandbox.procs)}", [sys.executable, "-c", HOLD_TASK, str(task)])
