@@ -193,6 +193,41 @@ def test_copies_are_real_copies():
     assert ph.getParamValues("a") == [1, 2] and ph["e"].value.label == ""
 
 
+def test_a_copy_is_what_a_generic_deep_copy_is_and_shares_nothing_that_changes():
+    # Param.copy (every start of a primitive copies its description's parameters) against
+    # copy.deepcopy's own walk of the object (Param.__deepcopy__ bypassed).
+    cube = Element("skiros:Cube", "cube", "skiros:Cube-3")
+    cube.setProperty("skiros:Size", [0.05, 0.05, 0.05])
+    cube.addRelation("-1", "skiros:contain", "skiros:Bin-1")
+    made = [Param("n", "count", 1, ParamTypes.Required),
+            Param("via", "", [[0.1, 0.2], [0.3]], ParamTypes.Optional),
+            Param("cfg", "", {"a": [1, 2]}, ParamTypes.Optional),
+            Param("obj", "", cube, ParamTypes.Inferred, options=[[1, 2]]),
+            Param("none", "", float, ParamTypes.Optional)]
+    made[0].setValue(4)  # values apart from the default
+    for p in made:
+        generic = copy.copy(p)
+        generic.__dict__ = copy.deepcopy(p.__dict__)
+        c = p.copy()
+        assert type(c) is Param and c.__dict__.keys() == generic.__dict__.keys()
+        assert (c.key, c.description, c.paramType, c.dataType(), c.last_update) == \
+            (generic.key, generic.description, generic.paramType, generic.dataType(), generic.last_update)
+        assert c.values == generic.values and c.defaults == generic.defaults and c.options == generic.options
+        assert copy.deepcopy(p).values == c.values
+    obj = made[3].copy()
+    obj.value.setProperty("skiros:Size", [1.0])
+    obj.value.addRelation("-1", "skiros:at", "skiros:Table-1")
+    obj.defaults[0].label = "other"
+    obj.options[0].append(3)
+    assert cube.getProperty("skiros:Size").values == [0.05, 0.05, 0.05] and len(cube.getRelations()) == 1
+    assert made[3].default.label == "cube" and made[3].options == [[1, 2]]
+    via = made[1].copy()
+    via.values[0].append(9.9)
+    cfg = made[2].copy()
+    cfg.value["a"].append(3)
+    assert made[1].values == [[0.1, 0.2], [0.3]] and made[2].value == {"a": [1, 2]}
+
+
 def test_specifyParams_keep_default():
     target = ParamHandler()
     target.addParam("n", 1, ParamTypes.Required)                                   # a default: kept

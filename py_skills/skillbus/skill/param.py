@@ -44,6 +44,26 @@ TYPES = (int, float, str, bool, list, dict, Element)
 # wants more than its 1 µs tolerance) sees two changes in a row, however fast they come.
 _MIN_STEP = timedelta(microseconds=2)
 
+_new_param = object.__new__
+_IMMUTABLE = frozenset((str, int, float, bool, type(None)))
+
+
+def copy_values(values: list) -> list:
+    """A list of parameter values copied as copy.deepcopy would: immutable values shared,
+    elements cloned (Element.clone), lists copied through, anything else deep-copied."""
+    out = []
+    for v in values:
+        t = type(v)
+        if t in _IMMUTABLE:
+            out.append(v)
+        elif t is Element:
+            out.append(v.clone())
+        elif t is list:
+            out.append(copy_values(v))
+        else:
+            out.append(copy.deepcopy(v))
+    return out
+
 
 class Param(Property):
     """A parameter: ``Param(key, description, value, param_type)``. `value` is a type
@@ -57,8 +77,21 @@ class Param(Property):
         self._param_type = param_type if isinstance(param_type, ParamTypes) else ParamTypes(param_type)
         self.options = list(options or [])
         self._type, self._values = _type_and_values(key, value)
-        self._default = copy.deepcopy(self._values)
+        self._default = copy_values(self._values)
         self._last_update = datetime.now()
+
+    def copy(self) -> "Param":
+        """A copy that shares nothing that can change, as copy.deepcopy but several times
+        cheaper (copy_values): every start of a primitive copies its description's
+        parameters, inside the frame of its tick."""
+        p = _new_param(type(self))
+        p.__dict__.update(self.__dict__)
+        p._values, p._default = copy_values(self._values), copy_values(self._default)
+        p.options = copy_values(self.options)
+        return p
+
+    def __deepcopy__(self, memo: dict) -> "Param":
+        return self.copy()
 
     # -- kind, description, time -------------------------------------------------------
     @property
@@ -128,12 +161,12 @@ class Param(Property):
 
     def setDefault(self) -> None:
         """Back to (a copy of) the defaults."""
-        self._values = copy.deepcopy(self._default)
+        self._values = copy_values(self._default)
 
     def makeDefault(self, values: Any) -> None:
         """Sets the values (as setValues) and makes them the defaults."""
         self.setValues(values)
-        self._default = copy.deepcopy(self._values)
+        self._default = copy_values(self._values)
 
     # -- as a world-model element -------------------------------------------------------------
     def toElement(self) -> Element:

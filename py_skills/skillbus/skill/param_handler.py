@@ -70,7 +70,7 @@ class ParamHandler:
     def getCopy(self) -> dict[str, Param]:
         """A copy of the map, Params and values included: changing it leaves this handler
         alone (SkiROS2's copies share the value lists with the original)."""
-        return copy.deepcopy(self._params)
+        return {k: p.copy() for k, p in self._params.items()}
 
     def _get(self, key: str, caller: str) -> Param | None:
         p = self._params.get(key)
