@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
   out["frames"] = r.frames;
   out["digest"] = r.digest_hex();
   out["tasks"] = tasks;
+  out["idle_ticks"] = mgr->idle_ticks();  // execute ticks a primitive's idle_until spared
   // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
   if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);

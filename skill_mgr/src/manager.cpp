@@ -241,6 +241,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
                                                         opt_.tick_timeout, (id << 32) + 1, &world_, opt_.robot,
                                                         opt_.robot_label});
   t->ctx->expand_timeout = opt_.expand_timeout;
+  t->ctx->idle_ticks = &idle_ticks_;
   // (instance ids name running primitives in skill processes: unique across tasks)
   if (impls.empty() || !bad.empty()) {
     const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;

@@ -64,6 +64,8 @@ class Manager {
   const Registry& registry() const { return registry_; }
   // How each finished task ended: id -> "Success: message" / "Failure: message".
   const std::map<int64_t, std::string>& results() const { return results_; }
+  // Execute ticks not sent: the primitive was idle (skill_tick_reply_t.idle_until_ns).
+  int64_t idle_ticks() const { return idle_ticks_; }
 
  private:
   void on_frame(int64_t frame, int64_t sim_time_ns);
@@ -97,6 +99,7 @@ class Manager {
   std::deque<std::pair<int64_t, std::string>> stopped_queued_;  // stopped before they began: (task, type)
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;
+  int64_t idle_ticks_ = 0;
   static constexpr size_t kFinishedKept = 20;
   std::map<int64_t, skillbus_msgs::skill_progress_t> latest_;  // running and recently finished tasks
   std::string progress_channel_ = channel("SB_SKILL_PROGRESS");  // (named once: published every tick)

@@ -31,6 +31,14 @@ std::string seconds(std::chrono::milliseconds d) {
   return buf;
 }
 
+// The same parameters, values and all, in the same order.
+bool same_params(const std::vector<Param>& a, const std::vector<Param>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (a[i].key != b[i].key || !same_values(a[i], b[i])) return false;
+  return true;
+}
+
 }  // namespace
 
 RemotePrimitive::RemotePrimitive(TaskContext& ctx, Implementation impl, std::shared_ptr<Scope> scope)
@@ -102,6 +110,7 @@ State RemotePrimitive::call(int8_t action) {
     params_text_stale_ = true;  // (whatever read the text while they were lent read none)
     set_result(reply.message, reply.code, reply.progress);
     wm_version_ = reply.wm_version;
+    idle_until_ns_ = reply.state == skill_state_t::RUNNING ? reply.idle_until_ns : 0;
     // What the skill changed goes to the blackboard, an emptied value included; what it
     // sent back unchanged is not written (a parallel sibling may have written that key).
     for (const auto& p : reply.params) {
@@ -127,7 +136,11 @@ State RemotePrimitive::call(int8_t action) {
 }
 
 State RemotePrimitive::step() {
-  set_params(gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_)));
+  std::vector<Param> now = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
+  // A skill idle until later (idle_until_ns) is not ticked while what it would be given is
+  // what it answered with; a changed parameter reaches it at once.
+  const bool idle = !first_ && ctx_.sim_time_ns < idle_until_ns_ && same_params(now, params_);
+  if (!idle) set_params(std::move(now));
   if (!first_) {  // hold-conditions, checked on every later tick (the first was checked at start)
     const std::string broken = check_hold(ctx_, impl_, params_);
     if (!broken.empty()) {
@@ -135,6 +148,10 @@ State RemotePrimitive::step() {
       set_result(broken, kFailed);
       return State::Failure;
     }
+  }
+  if (idle) {
+    if (ctx_.idle_ticks) ++*ctx_.idle_ticks;
+    return State::Running;  // (its message, code and progress stay those of its last tick)
   }
   const int8_t action = first_ ? skill_tick_t::START : skill_tick_t::EXECUTE;
   first_ = false;

@@ -42,6 +42,9 @@ class RemotePrimitive : public Node {
   bool first_ = true;
   bool unresponsive_ = false;  // its process did not answer: do not wait for it again
   int64_t wm_version_ = -1;    // the world version the skill has seen (from its last reply)
+  // Until this sim time the skill's execute() would change nothing (its last reply's
+  // idle_until_ns): execute ticks are skipped while its parameters stay the same.
+  int64_t idle_until_ns_ = 0;
 };
 
 }  // namespace skillbus::skills

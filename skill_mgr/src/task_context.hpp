@@ -27,6 +27,7 @@ struct TaskContext {
   int64_t frame = -1;             // the frame being ticked, passed to skill processes
   int64_t sim_time_ns = 0;
   std::chrono::milliseconds expand_timeout{30000};  // a compound's expansion (ManagerOptions)
+  int64_t* idle_ticks = nullptr;  // the manager's count of execute ticks skipped (idle_until_ns)
 };
 
 // The replica when it is loaded, else null (reads that may go without a world).

@@ -46,6 +46,7 @@ class Arm:
         self._state: robot_arm_state_t | None = None
         self._raw: bytes | None = None  # decoded only when a skill asks (ticks are rarer than frames)
         self.replies: dict[str, robot_cmd_reply_t] = {}
+        self._ends: dict[str, float] = {}  # a trajectory's end at the earliest, by command id (execute)
         self.bad = 0  # messages not used: not decodable, or values not sane (by kind: rejects)
         self.rejects = Rejects("arm")
         if participant is not None:
@@ -141,6 +142,24 @@ class Arm:
 
     def execute(self, plan: motion_plan_t, cmd_id: str) -> None:
         self._send(cmd_id, list(plan.joint_names), list(plan.points))
+        if plan.points:  # (the robot starts it at the earliest now: it cannot end sooner)
+            self._ends[cmd_id] = tick_context.now_s() + plan.points[-1].time_from_start_ns * 1e-9
+            while len(self._ends) > 1000:
+                self._ends.pop(next(iter(self._ends)))
+
+    def not_done_before(self, cmd_id: str) -> float | None:
+        """The time (s, tick_context.now_s()'s clock) before which `cmd_id`, a trajectory
+        sent by execute(), cannot be finished: its last point's time from when it was sent.
+        None until the robot has accepted it (a refusal comes at once and must be heard),
+        and for a command of another kind. On the wall clock at most STALE_S / 2 from now,
+        so that a driver that goes silent on the way is still named (silence())."""
+        r = self.replies.get(cmd_id)
+        end = self._ends.get(cmd_id)
+        if r is None or not r.accepted or end is None:
+            return None
+        if self.participant is None:
+            end = min(end, tick_context.now_s() + self.STALE_S / 2)
+        return end
 
     def hold(self, cmd_id: str) -> list[float]:
         """Stops the arm where it is: a position target (one point at time 0) at the

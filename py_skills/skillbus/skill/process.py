@@ -237,6 +237,8 @@ class SkillProcess:
         r.wm_version = self.wmi.version if self.wmi is not None else -1
         if skill is not None:
             r.progress = float(getattr(skill, "progress", 0.0))
+            if state == State.Running:
+                r.idle_until_ns = getattr(skill, "_idle_until_ns", 0)
         return r
 
     def _frame_gate(self, method):
@@ -329,6 +331,7 @@ class SkillProcess:
         """One execute(), timed for the progress period; then, as SkiROS2's tick, the
         element parameters it set go to the world model (_updateRoutine)."""
         stamps = skill._element_stamps()
+        skill._idle_until_ns = 0  # (said anew by each execute() that idles)
         t0 = time.monotonic()
         state = skill.execute()
         skill._count_tick(time.monotonic() - t0)

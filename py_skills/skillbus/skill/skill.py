@@ -310,6 +310,22 @@ class PrimitiveBase(SkillCore):
     def __init__(self) -> None:
         super().__init__()
         self.progress = 0.0  # skillbus: a fraction done, 0..1, for the progress display
+        self._idle_until_ns = 0
+
+    def idle_until(self, sim_time_s: float) -> None:
+        """skillbus (SkiROS2 has no such call): called in execute() before it returns
+        Running, the skill's word that until `sim_time_s` (seconds, the clock of its
+        ticks: ``skillbus.tick_context.now_s()``) its execute() would return Running with
+        the same message and change nothing, as long as its parameters stay as they are.
+        The manager then skips its execute ticks until then: a skill that waits for a
+        trajectory to end costs no tick. A stop, a preemption, a broken hold-condition, a
+        changed parameter and the end of its task reach it at once, as always. Good for
+        the ticks after this one only: an execute() that runs again says it anew or not at
+        all. A time already past changes nothing."""
+        t = float(sim_time_s)
+        if not (0.0 <= t < 9.2e9):  # (NaN too) int64 nanoseconds, a time of this clock
+            raise ValueError(f"idle_until({sim_time_s!r}): a sim time in seconds, 0 to 9.2e9")
+        self._idle_until_ns = int(t * 1e9)
 
     def onInit(self) -> bool:
         return True

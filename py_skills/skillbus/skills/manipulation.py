@@ -351,6 +351,11 @@ class _ArmMotion(PrimitiveBase):
             return self.success(f"at {self.what}")
         if tick_context.now_s() - self.started_at > MOVE_TIMEOUT_S:
             return self.fail(f"{self.label}: not at {self.what} after {MOVE_TIMEOUT_S:.0f} s", -3)
+        # Nothing to do before the trajectory's end: no tick until then (the manager still
+        # stops or preempts this skill at once).
+        until = self.arm.not_done_before(self.cmd)
+        if until is not None:
+            self.idle_until(min(until, self.started_at + MOVE_TIMEOUT_S))
         return self.step(f"moving to {self.what}")
 
     def onPreempt(self):

@@ -1,8 +1,10 @@
-"""A test library: one skill per condition class, grounding, and a hold-condition."""
+"""A test library: one skill per condition class, grounding, a hold-condition, and
+primitives that idle (PrimitiveBase.idle_until)."""
 
+from skillbus import tick_context
 from skillbus.skill import (ConditionAbstractRelation, ConditionGenerate, ConditionHasProperty, ConditionIsSpecified,
                             ConditionOnType, ConditionProperty, ConditionRelation, Element, InferInvalid, Loop,
-                            ParamTypes, SkillBase,
+                            ParallelFf, ParamTypes, SkillBase,
                             PrimitiveBase, SkillDescription)
 
 
@@ -108,6 +110,92 @@ class hold(PrimitiveBase):
     def execute(self):
         self.n += 1
         return self.step(f"holding {self.n}") if self.n < 10_000 else self.success("held")
+
+
+class idle_hold(PrimitiveBase):
+    """Hold's other implementation: idle (PrimitiveBase.idle_until) for 400 s at every
+    execute. The manager must still judge its hold-condition, and stop it, at every tick."""
+
+    def createDescription(self):
+        self.setDescription(Hold(), "idle_hold")
+
+    def execute(self):
+        self.idle_until(tick_context.now_s() + 400)
+        return self.step("idling")
+
+
+class IdleWait(SkillDescription):
+    def createDescription(self):
+        self.addParam("Seconds", 1.0, ParamTypes.Optional)
+
+
+class idle_wait(PrimitiveBase):
+    """Waits `Seconds` of the ticks' clock, idle in between; says how often it ran."""
+
+    def createDescription(self):
+        self.setDescription(IdleWait(), "idle_wait")
+
+    def onStart(self):
+        self.n, self.until = 0, tick_context.now_s() + self.params["Seconds"].value
+        return True
+
+    def execute(self):
+        self.n += 1
+        if tick_context.now_s() >= self.until:
+            return self.success(f"waited, executed {self.n} times")
+        self.idle_until(self.until)
+        return self.step(f"waiting, executed {self.n} times")
+
+
+class FlagWatch(SkillDescription):
+    def createDescription(self):
+        self.addParam("Flag", False, ParamTypes.Optional)
+
+
+class flag_watch(PrimitiveBase):
+    """Idle for 400 s unless its Flag is up: a sibling that raises it (the blackboard) must
+    get it ticked at once."""
+
+    def createDescription(self):
+        self.setDescription(FlagWatch(), "flag_watch")
+
+    def execute(self):
+        if self.params["Flag"].value:
+            return self.success("saw the flag")
+        self.idle_until(tick_context.now_s() + 400)
+        return self.step("watching")
+
+
+class flag_raise(PrimitiveBase):
+    """Raises Flag at its third execute."""
+
+    def createDescription(self):
+        self.setDescription(FlagWatch(), "flag_raise")
+
+    def onStart(self):
+        self.n = 0
+        return True
+
+    def execute(self):
+        self.n += 1
+        if self.n < 3:
+            return self.step("not yet")
+        self.params["Flag"].value = True
+        return self.success("raised")
+
+
+class WatchFlag(SkillDescription):
+    def createDescription(self):
+        self.addParam("Flag", False, ParamTypes.Optional)
+
+
+class watch_flag(SkillBase):
+    def createDescription(self):
+        self.setDescription(WatchFlag(), "watch_flag")
+
+    def expand(self, skill):
+        skill.setProcessor(ParallelFf())
+        skill(self.skill("FlagWatch", "flag_watch"), self.skill("FlagWatch", "flag_raise"))
 
 
 # ---- alternatives and InferInvalid -------------------------------------------------

@@ -1,0 +1,56 @@
+"""A primitive that idles (PrimitiveBase.idle_until) is not ticked until its time, while a
+broken hold-condition and a stop still reach it at once: the real manager, skill process
+and world model (wall clock). The skill process's reply is tests/py/test_idle_until.py;
+under lockstep, the pick-and-place demo (its moves idle until their trajectories end,
+with the same physics bit for bit: tests/integration/test_pick_and_place.py)."""
+
+import re
+import sys
+import time
+
+from test_skill_conditions import system  # noqa: F401  (the fixture: wm, manager, condition_skills)
+from test_skills import LIBS, cli
+
+
+def test_an_idle_primitive_is_executed_again_only_when_its_time_has_come(system):  # noqa: F811
+    t0 = time.monotonic()
+    rc, out, err = cli(system, "run", "IdleWait", "-p", "Seconds=1.0", "--timeout", "20")
+    took = time.monotonic() - t0
+    assert rc == 0, out + err
+    # START's execute, then the first tick at or after its time: 25 Hz ticks would have run
+    # it 26 times (a loaded machine may add one tick before the time, none more)
+    n = int(re.search(r"waited, executed (\d+) times", out).group(1))
+    assert 2 <= n <= 3, out
+    assert took >= 1.0, took
+
+
+def test_a_broken_hold_condition_stops_an_idle_primitive(system):  # noqa: F811
+    run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "--label", "idle_hold", "-p",
+                               "Object=skiros:Cube-3", "--timeout", "30", "--watch"], env={"PYTHONPATH": str(LIBS)})
+    run.wait_for("idling", 20, stream="stdout")
+    code = ("from skillbus.bus import open_bus; from skillbus.world import WorldModelInterface as W; "
+            "W(open_bus(), 't').set_relation('skiros:Table-1','skiros:contain','skiros:Cube-3', False)")
+    edit = system.start("edit", [sys.executable, "-c", code])
+    assert system.wait(edit, 30) == 0
+    t0 = time.monotonic()
+    assert system.wait(run, 20) == 1  # not 400 s later
+    assert time.monotonic() - t0 < 15
+    assert "hold-condition StillOnTable failed" in run.stdout(), run.stdout()
+
+
+def test_a_stop_reaches_an_idle_primitive_at_once(system):  # noqa: F811
+    run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "--label", "idle_hold", "-p",
+                               "Object=skiros:Cube-3", "--timeout", "30", "--watch"], env={"PYTHONPATH": str(LIBS)})
+    run.wait_for("idling", 20, stream="stdout")
+    rc, out, _ = cli(system, "stop", "1")
+    assert rc == 0 and "stopping" in out
+    assert system.wait(run, 20) == 1
+    assert "Failure" in run.stdout() and "preempted" in run.stdout(), run.stdout()
+
+
+def test_a_parameter_a_sibling_changes_reaches_an_idle_primitive_at_once(system):  # noqa: F811
+    # flag_watch idles for 400 s; flag_raise (beside it, ParallelFf) raises Flag at its
+    # third tick: the changed parameter gets flag_watch ticked, and it sees the flag.
+    rc, out, err = cli(system, "run", "WatchFlag", "--verbose", "--timeout", "20")
+    assert rc == 0, out + err
+    assert "saw the flag" in out, out
