@@ -8,11 +8,18 @@ import re
 import sys
 import time
 
-from test_skill_conditions import system  # noqa: F401  (the fixture: wm, manager, condition_skills)
+import pytest
+
+from test_skill_conditions import start_condition_system
 from test_skills import LIBS, cli
 
 
-def test_an_idle_primitive_is_executed_again_only_when_its_time_has_come(system):  # noqa: F811
+@pytest.fixture
+def system(sandbox, tmp_path):
+    return start_condition_system(sandbox, tmp_path / "wm")
+
+
+def test_an_idle_primitive_is_executed_again_only_when_its_time_has_come(system):
     t0 = time.monotonic()
     rc, out, err = cli(system, "run", "IdleWait", "-p", "Seconds=1.0", "--timeout", "20")
     took = time.monotonic() - t0
@@ -24,7 +31,7 @@ def test_an_idle_primitive_is_executed_again_only_when_its_time_has_come(system)
     assert took >= 1.0, took
 
 
-def test_a_broken_hold_condition_stops_an_idle_primitive(system):  # noqa: F811
+def test_a_broken_hold_condition_stops_an_idle_primitive(system):
     run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "--label", "idle_hold", "-p",
                                "Object=skiros:Cube-3", "--timeout", "30", "--watch"], env={"PYTHONPATH": str(LIBS)})
     run.wait_for("idling", 20, stream="stdout")
@@ -38,7 +45,7 @@ def test_a_broken_hold_condition_stops_an_idle_primitive(system):  # noqa: F811
     assert "hold-condition StillOnTable failed" in run.stdout(), run.stdout()
 
 
-def test_a_stop_reaches_an_idle_primitive_at_once(system):  # noqa: F811
+def test_a_stop_reaches_an_idle_primitive_at_once(system):
     run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "--label", "idle_hold", "-p",
                                "Object=skiros:Cube-3", "--timeout", "30", "--watch"], env={"PYTHONPATH": str(LIBS)})
     run.wait_for("idling", 20, stream="stdout")
@@ -48,7 +55,7 @@ def test_a_stop_reaches_an_idle_primitive_at_once(system):  # noqa: F811
     assert "Failure" in run.stdout() and "preempted" in run.stdout(), run.stdout()
 
 
-def test_a_parameter_a_sibling_changes_reaches_an_idle_primitive_at_once(system):  # noqa: F811
+def test_a_parameter_a_sibling_changes_reaches_an_idle_primitive_at_once(system):
     # flag_watch idles for 400 s; flag_raise (beside it, ParallelFf) raises Flag at its
     # third tick: the changed parameter gets flag_watch ticked, and it sees the flag.
     rc, out, err = cli(system, "run", "WatchFlag", "--verbose", "--timeout", "20")

@@ -14,11 +14,16 @@ REPO = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
 
 
-@pytest.fixture
-def system(sandbox, tmp_path):
-    start_wm(sandbox, tmp_path / "wm", scene=REPO / "deploy" / "scenes" / "demo.ttl")
+def start_condition_system(sandbox, data):
+    """The demo's world model (in `data`), a wall-clock manager and condition_skills."""
+    start_wm(sandbox, data, scene=REPO / "deploy" / "scenes" / "demo.ttl")
     start_system(sandbox, "condition_skills", world_model=True)
     return sandbox
+
+
+@pytest.fixture
+def system(sandbox, tmp_path):
+    return start_condition_system(sandbox, tmp_path / "wm")
 
 
 CASES = [
