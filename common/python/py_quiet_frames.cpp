@@ -5,6 +5,9 @@
 //       is None too); identity: bytes
 //     .set_subscribed(channels)
 //     .set_latest_only(channels)       (subscribed channels whose handler keeps the newest)
+//     .set_finger_watch(channel, width_lo_m, width_hi_m, force_lo_n, force_hi_n, position_lo_um,
+//                       position_hi_um, target_um, apart_um)   (finger_watch.hpp)
+//     .clear_watches()
 //     .wait(timeout_s, master, last_acked, last_sim_time, last_ack, running
 //           [, quiet_through_frame, quiet_before_ns])
 //         -> (datagram | None, (ip, port) | None, acked, last_acked, last_sim_time,
@@ -130,6 +133,30 @@ PyObject* quiet_set_latest_only(PyObject* self_obj, PyObject* channels) {
   Py_DECREF(it);
   if (PyErr_Occurred()) return nullptr;
   core->set_latest_only(std::move(out));
+  Py_RETURN_NONE;
+}
+
+PyObject* quiet_set_finger_watch(PyObject* self_obj, PyObject* args) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  PyObject* channel;
+  FingerWatch w;
+  long long lo = 0, hi = 0;
+  if (!PyArg_ParseTuple(args, "OddddLLdd", &channel, &w.width_lo_m, &w.width_hi_m, &w.force_lo_n, &w.force_hi_n, &lo,
+                        &hi, &w.target_um, &w.apart_um))
+    return nullptr;
+  std::string ch;
+  if (!utf8_of(channel, ch, "channel")) return nullptr;
+  w.position_lo_um = lo;
+  w.position_hi_um = hi;
+  core->set_finger_watch(ch, w);
+  Py_RETURN_NONE;
+}
+
+PyObject* quiet_clear_watches(PyObject* self_obj, PyObject*) {
+  QuietFrames* core = core_of(self_obj);
+  if (!core) return nullptr;
+  core->clear_watches();
   Py_RETURN_NONE;
 }
 
@@ -290,6 +317,9 @@ PyObject* quiet_lost_sends(PyObject* self_obj, PyObject*) {
 PyMethodDef quiet_methods[] = {
     {"set_subscribed", quiet_set_subscribed, METH_O, "The channels whose announced messages give a frame work."},
     {"set_latest_only", quiet_set_latest_only, METH_O, "Subscribed channels whose handler keeps only the newest."},
+    {"set_finger_watch", quiet_set_finger_watch, METH_VARARGS,
+     "A latest-only sim_state_t channel whose newest message must keep the fingers within bounds."},
+    {"clear_watches", quiet_clear_watches, METH_NOARGS, "No watches (set again before each wait)."},
     {"wait", quiet_wait, METH_VARARGS, "Acks quiet frames until a datagram for Python comes or the timeout."},
     {"hold", quiet_hold, METH_VARARGS, "A verified latest-only message Python held, for the core's frames."},
     {"release", quiet_release, METH_NOARGS, "Everything the core holds, back to Python."},

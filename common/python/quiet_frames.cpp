@@ -182,8 +182,7 @@ QuietFrames::Verdict QuietFrames::on_clock(QuietState& s, const uint8_t* d, size
   if (!verified(cfg_.clock_channel, d, n, payload_size)) return Verdict::Consumed;
   if (!expected.empty()) {
     pending_ = Pending{frame, c.header.sim_time_ns, Bytes(d, d + payload_size), std::move(expected)};
-    complete_pending(s);
-    return Verdict::Consumed;
+    return complete_pending(s);
   }
   ack_quiet(s, frame, c.header.sim_time_ns);
   return Verdict::Consumed;
@@ -216,7 +215,7 @@ QuietFrames::Verdict QuietFrames::place(QuietState& s, const std::string& channe
     return Verdict::Consumed;
   }
   ++held_count_;
-  if (pending_) complete_pending(s);
+  if (pending_) return complete_pending(s);
   return Verdict::Consumed;
 }
 
@@ -230,14 +229,15 @@ void QuietFrames::hold(const std::string& channel, const Bytes& payload, int64_t
   }
 }
 
-// The pending clock's frame acked once every message it announced is held; the newest
-// of each channel kept for Python, the slots before the frame dropped as stale (as the
-// inbox's take does).
-void QuietFrames::complete_pending(QuietState& s) {
+// The pending clock's frame acked once every message it announced is held and its
+// watches hold; the newest of each channel kept for Python, the slots before the frame
+// dropped as stale (as the inbox's take does). A broken watch: Python takes the frame.
+QuietFrames::Verdict QuietFrames::complete_pending(QuietState& s) {
   for (const auto& e : pending_->expected) {
     auto it = held_.find(SlotKey{e.channel, e.sender, e.frame});
-    if (it == held_.end() || it->second.size() < static_cast<size_t>(e.count)) return;
+    if (it == held_.end() || it->second.size() < static_cast<size_t>(e.count)) return Verdict::Consumed;
   }
+  if (!watches_.empty() && !watches_hold()) return Verdict::HandOver;
   for (const auto& e : pending_->expected) {
     auto it = held_.find(SlotKey{e.channel, e.sender, e.frame});
     if (it == held_.end()) continue;  // (listed twice)
@@ -261,6 +261,24 @@ void QuietFrames::complete_pending(QuietState& s) {
       ++it;
     }
   }
+  return Verdict::Consumed;
+}
+
+bool QuietFrames::watches_hold() const {
+  for (const auto& [channel, watch] : watches_) {
+    const Bytes* newest = nullptr;
+    Order newest_order{};
+    for (const auto& e : pending_->expected) {
+      if (e.channel != channel) continue;
+      auto it = held_.find(SlotKey{e.channel, e.sender, e.frame});
+      for (const auto& [seq, payload] : it->second) {
+        const Order order{e.frame, e.sender, seq};
+        if (!newest || newest_order < order) newest = &payload, newest_order = order;
+      }
+    }
+    if (newest && !finger_watch_holds(watch, newest->data(), newest->size())) return false;
+  }
+  return true;
 }
 
 void QuietFrames::hand_newest() {

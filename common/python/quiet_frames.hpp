@@ -18,7 +18,10 @@
 // Python's inbox would (every announced message, verified), keeps the newest per
 // channel, acks the frame, and hands the newest to Python when it next wakes. A
 // participant with a frame callback says how far its next frames would do nothing (the
-// horizon: a frame number and a sim time); frames past it go to Python.
+// horizon: a frame number and a sim time); frames past it go to Python. A participant that
+// reads a latest-only state for something it watches (the simulated gripper holding an
+// object) may give bounds the state must keep (finger_watch.hpp): a frame that breaks
+// them goes to Python.
 //
 // What the core verified is never handed back as a datagram (a second check would call
 // it a replay): it goes back as a payload, with the clock it was collecting, whenever
@@ -35,6 +38,7 @@
 #include <tuple>
 #include <vector>
 
+#include "finger_watch.hpp"
 #include "skillbus/auth.hpp"
 #include "skillbus/bus.hpp"
 #include "skillbus/digest.hpp"
@@ -96,6 +100,10 @@ class QuietFrames {
   void set_subscribed(std::set<std::string> channels) { subscribed_ = std::move(channels); }
   // Subscribed channels whose handler only keeps the newest message.
   void set_latest_only(std::set<std::string> channels) { latest_only_ = std::move(channels); }
+  // A latest-only channel of sim_state_t whose newest message in a frame must keep the
+  // fingers within `w` for the frame to be quiet (finger_watch.hpp); set before each wait.
+  void set_finger_watch(const std::string& channel, const FingerWatch& w) { watches_[channel] = w; }
+  void clear_watches() { watches_.clear(); }
 
   // Waits at most timeout_ms for a datagram this core does not consume, acking quiet
   // frames meanwhile. True with `out` filled: Python's to handle. False: the time is up,
@@ -133,7 +141,8 @@ class QuietFrames {
   // With the bus's opener; counted. `payload_size` out: the message without its seal.
   bool verified(const std::string& channel, const uint8_t* d, size_t n, size_t& payload_size);
   void ack_quiet(QuietState& s, int64_t frame, int64_t sim_time_ns);
-  void complete_pending(QuietState& s);
+  Verdict complete_pending(QuietState& s);
+  bool watches_hold() const;  // the pending frame's newest messages keep within their watches
   void hand_newest();
   void hand_all();
   void send_ack(const Bytes& ack);
@@ -154,6 +163,7 @@ class QuietFrames {
 
   QuietConfig cfg_;
   std::set<std::string> subscribed_, latest_only_;
+  std::map<std::string, FingerWatch> watches_;
   std::optional<Pending> pending_;
   std::map<SlotKey, std::map<int32_t, Bytes>> held_;           // verified, for coming frames
   size_t held_count_ = 0;

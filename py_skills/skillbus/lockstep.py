@@ -191,8 +191,10 @@ def expectations_for(announced: list[channel_count_t], subscribed: set[str], me:
 
 MessageHandler = Callable[[StampedMessage], None]
 FrameCallback = Callable[[int, int], None]
-# (last frame, sim time before which) the frame callback would do nothing, or None
-QuietHorizon = Callable[[], "tuple[int, int] | None"]
+# (last frame, sim time before which) the frame callback would do nothing, or None; with
+# a third element, watches: {latest-only channel: FingerWatch bounds} the newest message
+# of each of those channels must keep for a frame to stay quiet (skillbus.quiet_frames)
+QuietHorizon = Callable[[], "tuple[int, int] | tuple[int, int, dict] | None"]
 NO_HORIZON = (2**63 - 1, 2**63 - 1)
 
 
@@ -436,7 +438,8 @@ class LockstepParticipant:
                 self._take_back(self._quiet.core.release())  # (what it held is Python's again)
             self.bus.handle(timeout)
             return 0
-        q, (through_frame, before_ns) = found
+        q, (through_frame, before_ns, *watches) = found
+        q.set_watches(watches[0] if watches else {})
         try:  # what the inbox holds for coming frames on latest-only channels, the core's to place
             for key in [k for k in self.inbox.held if k[0] in self.latest_only]:
                 slot = self.inbox.held[key]

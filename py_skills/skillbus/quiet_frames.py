@@ -45,6 +45,7 @@ class QuietFrames:
         self._latest: list[str] = []  # the latest-only channels the core collects
         self._next_note = 0.0
         self._lost_sends = 0
+        self._watching = False
 
     def usable(self) -> bool:
         """Still the bus it was made for: the same one socket read, and the participant
@@ -60,6 +61,18 @@ class QuietFrames:
         self._latest = sorted(ch for ch in latest_only if self._lcm.subscribers(ch) == 1)
         self.core.set_subscribed(sorted(channels))
         self.core.set_latest_only(self._latest)
+
+    def set_watches(self, watches: dict) -> None:
+        """The bounds the newest message of a latest-only sim_state_t channel must keep for
+        a frame to stay quiet ({channel: FingerWatch's fields after the channel}: common/
+        python/finger_watch.hpp); set before each wait, {} for none. A watch on a channel
+        the core does not collect changes nothing: its messages give frames work anyway."""
+        if not watches and not self._watching:
+            return
+        self.core.clear_watches()
+        for channel, bounds in watches.items():
+            self.core.set_finger_watch(channel, *bounds)
+        self._watching = bool(watches)
 
     def feed(self, datagram: bytes, sender: object) -> None:
         """A datagram the core returned, to the bus's handlers (verified when signed)."""

@@ -32,7 +32,8 @@ import canopen
 
 from skillbus.can import cia402 as c
 from skillbus.can.eds import EDS, TPDO1_FIELDS  # noqa: F401  (EDS: also the runners' import)
-from skillbus.can.fingers import MAX_WIDTH_UM, FingerModel, SimFingers, sim_state_reading
+from skillbus.can.fingers import (AT_TARGET_UM, MAX_FORCE_N, MAX_WIDTH_UM, WIDTH_SLACK_UM, FingerModel, SimFingers,
+                                  sim_state_reading)
 from skillbus.can.pdo_codec import PdoCodec
 from skillbus.validate import BadValue, Rejects, integer, one_of
 
@@ -277,13 +278,34 @@ class GripperDevice:
             return True
         return abs(now[1] - last[1]) >= max(1, self._position_delta)
 
-    def quiet_horizon(self, frame: int) -> tuple[int, int] | None:
-        """Lockstep, after `frame`'s step with the fingers at rest: how far the next frames
-        would do nothing but count towards TPDO1's event timer, given no CAN frame and no
-        move (the last frame before the timer's TPDO, the sim time of the next
-        heartbeat); None when the next frame may do something."""
+    def finger_watch(self) -> tuple | None:
+        """Lockstep, holding an object: the bounds the physics' next states must keep for
+        the next frames to do nothing but count towards TPDO1's event timer and the time
+        blocked (common/python/finger_watch.hpp: width and set-point readable, the force
+        pushing with at least 0.9 of the limit, TPDO1's position within 0x2001 of the one
+        sent, the set-point taken and not reached; a contact). None unless the fingers are
+        stalled on an object they grip, in operation, after a TPDO1, with a force limit at
+        which no block can become an over-current fault."""
         with self.lock:
-            if self.model.moving:
+            m = self.model
+            if (self.state != c.OPERATION_ENABLED or not isinstance(m, SimFingers) or not m.moving
+                    or not m.in_contact or self._last_sent is None or self._since_sent >= self.event_every):
+                return None
+            if self.node.sdo[0x6073].raw > RATED_FORCE:
+                return None  # (its block would become an over-current fault after BLOCKED_TIMEOUT_S)
+            sent, delta = self._last_sent[1], max(1, self._position_delta)
+            lo, hi = -WIDTH_SLACK_UM * 1e-6, (MAX_WIDTH_UM + WIDTH_SLACK_UM) * 1e-6  # (sim_state_reading's)
+            return (lo, hi, 0.9 * m.force_limit_n, MAX_FORCE_N, sent - delta + 1, sent + delta - 1, m.target,
+                    float(AT_TARGET_UM))
+
+    def quiet_horizon(self, frame: int) -> tuple[int, int] | None:
+        """Lockstep, after `frame`'s step with the fingers at rest (or holding an object,
+        with finger_watch's bounds kept): how far the next frames would do nothing but
+        count towards TPDO1's event timer, given no CAN frame and no move (the last frame
+        before the timer's TPDO, the sim time of the next heartbeat); None when the next
+        frame may do something."""
+        with self.lock:
+            if self.model.moving and not self.model.in_contact:
                 return None
             quiet = self.event_every - self._since_sent - 1
         if quiet < 1:

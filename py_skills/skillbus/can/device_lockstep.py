@@ -34,9 +34,10 @@ def run(args) -> int:
     bad = [0]
 
     raw: list[bytes | None] = [None]
+    before: list[bytes | None] = [None]  # the state before raw's (the last of frames acked by the core)
 
     def on_state(m) -> None:
-        raw[0] = m.data
+        before[0], raw[0] = raw[0], m.data
 
     def take_state() -> None:
         # Decoded only while the fingers move or were just told to: at rest nothing in
@@ -44,7 +45,7 @@ def run(args) -> int:
         if raw[0] is None or at_rest():
             return
         s = decode_sim_state(raw[0])
-        raw[0] = None
+        raw[0] = before[0] = None
         if s is None:
             bad[0] += 1
             return
@@ -62,13 +63,27 @@ def run(args) -> int:
     def at_rest() -> bool:
         return not (fingers.moving or not fingers.acknowledged or last_state[0] is None)
 
+    holding = [False]  # the frames the core acks are held ones (finger_watch), not at rest
+
     def catch_up(frame: int, sim_time_ns: int) -> None:
-        """Frames acked within the horizon, at rest: what their steps would have done, before
-        this frame's CAN frames (an RPDO's TPDO restarts the event timer)."""
-        before, before_ns = p.previous_frame
-        if last_frame[0] is not None and before > last_frame[0]:
-            dev.frames_passed(before - last_frame[0])
-            last[0], last_frame[0] = before_ns, before
+        """Frames acked within the horizon: what their steps would have done, before this
+        frame's CAN frames (an RPDO's TPDO restarts the event timer). At rest they only
+        counted towards the timer; holding an object each stepped the fingers with its
+        state, the last of which is `before` (the watch kept them all within its bounds)."""
+        done, done_ns = p.previous_frame
+        if last_frame[0] is not None and done > last_frame[0]:
+            n = done - last_frame[0]
+            if holding[0]:
+                dt = ((done_ns - last[0]) // n) * 1e-9  # (each frame's (t - t_before) * 1e-9: one period)
+                s = decode_sim_state(before[0]) if before[0] is not None else None
+                if s is not None and take_sim_state(dev, fingers, s, state_ch):
+                    last_state[0] = s
+                for _ in range(n):
+                    dev.step(dt)
+            else:
+                dev.frames_passed(n)
+            last[0], last_frame[0] = done_ns, done
+        holding[0] = False
 
     def on_frame(frame: int, sim_time_ns: int) -> None:
         if last[0] is None:
@@ -79,10 +94,20 @@ def run(args) -> int:
         dev.step(dt)
         dev.heartbeat_if_due(sim_time_ns)
 
-    def quiet_horizon() -> tuple[int, int] | None:
-        if last_frame[0] is None or not at_rest() or not link.idle():
+    def quiet_horizon() -> tuple | None:
+        # (holding[0] stays as it is until catch_up: whatever the core acks until the next
+        # frame in Python is acked in one mode, since only such a frame changes the fingers)
+        if last_frame[0] is None or not link.idle():
             return None
-        return dev.quiet_horizon(last_frame[0])
+        if at_rest():
+            return dev.quiet_horizon(last_frame[0])
+        # Holding an object: quiet while the physics keeps the fingers as they are now.
+        watch = dev.finger_watch() if last_state[0] is not None and raw[0] is None else None
+        horizon = dev.quiet_horizon(last_frame[0]) if watch is not None else None
+        if horizon is None:
+            return None
+        holding[0] = True
+        return (*horizon, {state_ch: watch})
 
     framed = link.wrap(on_frame)
 
