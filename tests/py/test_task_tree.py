@@ -22,6 +22,8 @@ def test_changes_name_only_the_nodes_that_differ_and_a_shrunk_tree_says_its_size
     trees = TaskTrees()
     first = trees.apply("r1", progress(1, 1, "Running", [node(0, -1), node(1, 0), node(2, 1)]))
     assert first.new and sorted(first.nodes) == [0, 1, 2] and first.count == 3
+    later = trees.apply("r1", progress(1, 2, "Running", [node(0, -1), node(1, 0), node(2, 1)]))
+    assert later.nodes == {} and later.tick == 2  # only the tick moved (a primitive idle): a page shows it
     same = trees.apply("r1", progress(1, 2, "Running", [node(0, -1), node(1, 0), node(2, 1)]))
     assert same is None  # nothing changed: nothing to send
     shrunk = trees.apply("r1", progress(1, 3, "Running", [node(0, -1), node(1, 0, "Success")]))

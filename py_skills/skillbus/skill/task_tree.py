@@ -94,7 +94,8 @@ class TaskTrees:
 
     def apply(self, robot: str, progress: dict[str, Any]) -> TreeChange | None:
         """Takes one progress (skillbus.skill.cli.progress_json); the change it makes, or
-        None when it changes nothing (the same tree, or one older than that kept)."""
+        None when it changes nothing (the same tree at the same tick, or one older than
+        that kept)."""
         key = (robot, int(progress["task"]))
         tick, state, nodes = int(progress["tick"]), progress["state"], progress["nodes"]
         old = self.trees.get(key)
@@ -106,7 +107,9 @@ class TaskTrees:
             changed = dict(enumerate(nodes))
         else:
             changed = {i: n for i, n in enumerate(nodes) if i >= len(old.nodes) or old.nodes[i] != n}
-            if not changed and len(nodes) == len(old.nodes) and state == old.state:
+            # A later tick alone is a change (no nodes): a page shows the task's tick, which
+            # moves while every node stays as it was (a primitive idle until later).
+            if not changed and len(nodes) == len(old.nodes) and state == old.state and tick == old.tick:
                 return None
         if tree.ended:
             self._finished.append(key)
