@@ -138,8 +138,10 @@ State RemotePrimitive::call(int8_t action) {
 State RemotePrimitive::step() {
   std::vector<Param> now = gather_params(impl_.description, *scope_, ctx_.blackboard, nullptr, world_if_ready(ctx_));
   // A skill idle until later (idle_until_ns) is not ticked while what it would be given is
-  // what it answered with; a changed parameter reaches it at once.
-  const bool idle = !first_ && ctx_.sim_time_ns < idle_until_ns_ && same_params(now, params_);
+  // what it answered with; a changed parameter reaches it at once, and so does the loss of
+  // its process (dropped for its silence, or started again: call() names it).
+  const bool idle = !first_ && ctx_.sim_time_ns < idle_until_ns_ &&
+                    ctx_.registry.incarnation_of(impl_.process) == incarnation_ && same_params(now, params_);
   if (!idle) set_params(std::move(now));
   if (!first_) {  // hold-conditions, checked on every later tick (the first was checked at start)
     const std::string broken = check_hold(ctx_, impl_, params_);

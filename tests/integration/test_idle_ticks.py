@@ -5,6 +5,7 @@ under lockstep, the pick-and-place demo (its moves idle until their trajectories
 with the same physics bit for bit: tests/integration/test_pick_and_place.py)."""
 
 import re
+import signal
 import sys
 import time
 
@@ -61,3 +62,13 @@ def test_a_parameter_a_sibling_changes_reaches_an_idle_primitive_at_once(system)
     rc, out, err = cli(system, "run", "WatchFlag", "--verbose", "--timeout", "20")
     assert rc == 0, out + err
     assert "saw the flag" in out, out
+
+
+def test_a_killed_skill_process_fails_its_idle_primitive_once_the_manager_drops_it(system):
+    run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "--label", "idle_hold", "-p",
+                               "Object=skiros:Cube-3", "--timeout", "60", "--watch"], env={"PYTHONPATH": str(LIBS)})
+    run.wait_for("idling", 20, stream="stdout")
+    system.kill(next(p for p in system.procs if p.name == "proc1"), signal.SIGKILL)
+    # dropped after 3 s without a heartbeat (docs/skills.md, Liveness); not 400 s later
+    assert system.wait(run, 30) == 1
+    assert "skill process proc1 stopped answering while running idle_hold" in run.stdout(), run.stdout()
