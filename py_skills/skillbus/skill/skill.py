@@ -319,7 +319,8 @@ class PrimitiveBase(SkillCore):
         the same message and change nothing, as long as its parameters stay as they are.
         The manager then skips its execute ticks until then: a skill that waits for a
         trajectory to end costs no tick. A stop, a preemption, a broken hold-condition, a
-        changed parameter and the end of its task reach it at once, as always. Good for
+        changed parameter, the loss of its process and the end of its task reach it at
+        once, as always (docs/skills.md, "A primitive that waits"). Good for
         the ticks after this one only: an execute() that runs again says it anew or not at
         all. A time already past changes nothing."""
         t = float(sim_time_s)
