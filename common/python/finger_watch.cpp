@@ -10,7 +10,8 @@ namespace skillbus::native {
 bool finger_watch_holds(const FingerWatch& w, const uint8_t* payload, size_t n) {
   skillbus_msgs::sim_state_t s;
   try {  // (a negative count makes the generated decoder throw: Python's to judge)
-    if (s.decode(payload, 0, static_cast<int>(n)) < 0) return false;
+    // Every byte, as Python's decoder wants it (trailing bytes: it refuses the state).
+    if (s.decode(payload, 0, static_cast<int>(n)) != static_cast<int>(n)) return false;
   } catch (const std::exception&) {
     return false;
   }

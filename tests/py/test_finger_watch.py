@@ -115,8 +115,12 @@ def test_a_state_that_breaks_the_watch_hands_python_the_frame(rig, why):
     assert sorted(handed) == sorted([(1, CLOCK, clock(1, counts=[count("sim", STATE, 0)])), (2, STATE, payload)])
 
 
-def test_a_state_that_does_not_decode_goes_to_python(rig):
-    payload = state(0)[:-12]  # (cut: the generated decoder refuses it, as Python's does)
+@pytest.mark.parametrize("how", ["cut", "grown"])
+def test_a_state_that_does_not_decode_goes_to_python(rig, how):
+    # (Python's decoder refuses both: a state cut short, and one with bytes after its end)
+    payload = state(0)[:-12] if how == "cut" else state(0) + b"\0"
+    from skillbus.sim.state_decode import decode_sim_state
+    assert decode_sim_state(payload) is None
     acked, handed = frame_with(rig, 1, payload)
     assert acked == 0 and (2, STATE, payload) in handed
 

@@ -34,10 +34,14 @@ def run(args) -> int:
     bad = [0]
 
     raw: list[bytes | None] = [None]
-    before: list[bytes | None] = [None]  # the state before raw's (the last of frames acked by the core)
+    # The newest state of each frame heard since the last one taken, by its frame (handlers
+    # run in canonical order): catch_up steps with that of the last frame the core acked.
+    by_frame: dict[int, bytes] = {}
 
     def on_state(m) -> None:
-        before[0], raw[0] = raw[0], m.data
+        raw[0] = by_frame[m.stamp.frame] = m.data
+        while len(by_frame) > 4:
+            del by_frame[min(by_frame)]
 
     def take_state() -> None:
         # Decoded only while the fingers move or were just told to: at rest nothing in
@@ -45,7 +49,8 @@ def run(args) -> int:
         if raw[0] is None or at_rest():
             return
         s = decode_sim_state(raw[0])
-        raw[0] = before[0] = None
+        raw[0] = None
+        by_frame.clear()
         if s is None:
             bad[0] += 1
             return
@@ -69,13 +74,17 @@ def run(args) -> int:
         """Frames acked within the horizon: what their steps would have done, before this
         frame's CAN frames (an RPDO's TPDO restarts the event timer). At rest they only
         counted towards the timer; holding an object each stepped the fingers with its
-        state, the last of which is `before` (the watch kept them all within its bounds)."""
+        state, the last of which is the acked frame's (the watch kept them all within its
+        bounds)."""
         done, done_ns = p.previous_frame
         if last_frame[0] is not None and done > last_frame[0]:
             n = done - last_frame[0]
             if holding[0]:
                 dt = ((done_ns - last[0]) // n) * 1e-9  # (each frame's (t - t_before) * 1e-9: one period)
-                s = decode_sim_state(before[0]) if before[0] is not None else None
+                data = by_frame.get(done)
+                s = decode_sim_state(data) if data is not None else None
+                if data is not None and s is None:
+                    bad[0] += 1  # (as that frame would have counted it)
                 if s is not None and take_sim_state(dev, fingers, s, state_ch):
                     last_state[0] = s
                 for _ in range(n):
