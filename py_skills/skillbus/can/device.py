@@ -95,6 +95,7 @@ class GripperDevice:
         # 0x2001 likewise; an EDS without it (one written before it was added) keeps sending
         # every change, as the device did then.
         self._position_delta = self.node.sdo[0x2001].raw if 0x2001 in self.node.object_dictionary else 0
+        self._force_limit = self.node.sdo[0x6073].raw  # (0x6073, read by finger_watch at every frame holding)
         self.node.add_write_callback(self._note_written)
 
     # -- CAN side --------------------------------------------------------------------
@@ -136,9 +137,11 @@ class GripperDevice:
             raise canopen.SdoAbortedError(SDO_VALUE_RANGE) from None
 
     def _note_written(self, index: int, subindex: int, od, data: bytes) -> None:
-        """Keeps the objects read every lockstep frame (0x1017, 0x2001) as they are written."""
+        """Keeps the objects read every lockstep frame (0x1017, 0x2001, 0x6073) as they are written."""
         if index == 0x1017 and subindex == 0:
             self._heartbeat_ms = od.decode_raw(data)
+        elif index == 0x6073 and subindex == 0:
+            self._force_limit = od.decode_raw(data)
         elif index == 0x2001 and subindex == 0:
             self._position_delta = od.decode_raw(data)
 
@@ -212,7 +215,7 @@ class GripperDevice:
                 # (the force limit read only when it can matter: an object-dictionary read
                 # costs python-canopen about 4 us, and this runs every frame)
                 if (self.model.moving and self.model.in_contact and self.model.blocked_for > BLOCKED_TIMEOUT_S
-                        and self.node.sdo[0x6073].raw > RATED_FORCE):
+                        and self._force_limit > RATED_FORCE):
                     self._fault(c.EMCY_OVER_CURRENT)
                 elif self.model.following_error():
                     self._fault(c.EMCY_FOLLOWING_ERROR)
@@ -291,7 +294,7 @@ class GripperDevice:
             if (self.state != c.OPERATION_ENABLED or not isinstance(m, SimFingers) or not m.moving
                     or not m.in_contact or self._last_sent is None or self._since_sent >= self.event_every):
                 return None
-            if self.node.sdo[0x6073].raw > RATED_FORCE:
+            if self._force_limit > RATED_FORCE:
                 return None  # (its block would become an over-current fault after BLOCKED_TIMEOUT_S)
             sent, delta = self._last_sent[1], max(1, self._position_delta)
             lo, hi = -WIDTH_SLACK_UM * 1e-6, (MAX_WIDTH_UM + WIDTH_SLACK_UM) * 1e-6  # (sim_state_reading's)

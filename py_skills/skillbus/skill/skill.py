@@ -323,9 +323,13 @@ class PrimitiveBase(SkillCore):
         once, as always (docs/skills.md, "A primitive that waits"). Good for
         the ticks after this one only: an execute() that runs again says it anew or not at
         all. A time already past changes nothing."""
-        t = float(sim_time_s)
+        why = f"idle_until({sim_time_s!r}): a sim time in seconds, 0 to 9.2e9"
+        try:
+            t = float(sim_time_s)
+        except (TypeError, ValueError):
+            raise ValueError(why) from None
         if not (0.0 <= t < 9.2e9):  # (NaN too) int64 nanoseconds, a time of this clock
-            raise ValueError(f"idle_until({sim_time_s!r}): a sim time in seconds, 0 to 9.2e9")
+            raise ValueError(why)
         self._idle_until_ns = int(t * 1e9)
 
     def onInit(self) -> bool:
