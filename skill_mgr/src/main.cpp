@@ -6,6 +6,7 @@
 #include "skillbus/apps/lifecycle.hpp"
 #include "skillbus/apps/summary.hpp"
 #include "skillbus/auth.hpp"
+#include "skillbus_msgs/skill_tick_t.hpp"
 
 using namespace skillbus;
 
@@ -70,6 +71,14 @@ int main(int argc, char** argv) {
   out["digest"] = r.digest_hex();
   out["tasks"] = tasks;
   out["idle_ticks"] = mgr->idle_ticks();  // execute ticks a primitive's idle_until spared
+  // The ticks sent, by action (an END only where no reply said the instance ended).
+  const auto& sent = mgr->ticks_sent();
+  apps::Summary ticks = apps::Summary::object();
+  ticks["start"] = sent[skillbus_msgs::skill_tick_t::START];
+  ticks["execute"] = sent[skillbus_msgs::skill_tick_t::EXECUTE];
+  ticks["preempt"] = sent[skillbus_msgs::skill_tick_t::PREEMPT];
+  ticks["end"] = sent[skillbus_msgs::skill_tick_t::END];
+  out["ticks_sent"] = ticks;
   // Messages the bus refused (no key, a wrong key, replayed, stale, not this sender's channel).
   if (const auto* a = auth::stats_of(*bus)) out["bus_rejected"] = a->rejected;
   apps::print_summary(out);

@@ -242,6 +242,7 @@ void Manager::begin(const skill_start_t& req, int64_t id) {
                                                         opt_.robot_label});
   t->ctx->expand_timeout = opt_.expand_timeout;
   t->ctx->idle_ticks = &idle_ticks_;
+  t->ctx->ticks_sent = &ticks_sent_;
   // (instance ids name running primitives in skill processes: unique across tasks)
   if (impls.empty() || !bad.empty()) {
     const std::string why = impls.empty() ? unknown_skill_error(req.type, req.label) : bad;

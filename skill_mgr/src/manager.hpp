@@ -1,6 +1,7 @@
 // The skill manager process (see skill_mgr/README.md for its RPCs and channels).
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <deque>
 #include <map>
@@ -66,6 +67,8 @@ class Manager {
   const std::map<int64_t, std::string>& results() const { return results_; }
   // Execute ticks not sent: the primitive was idle (skill_tick_reply_t.idle_until_ns).
   int64_t idle_ticks() const { return idle_ticks_; }
+  // Ticks sent to skill processes, by action: START, EXECUTE, PREEMPT, END.
+  const std::array<int64_t, 4>& ticks_sent() const { return ticks_sent_; }
 
  private:
   void on_frame(int64_t frame, int64_t sim_time_ns);
@@ -100,6 +103,7 @@ class Manager {
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;
   int64_t idle_ticks_ = 0;
+  std::array<int64_t, 4> ticks_sent_{};
   static constexpr size_t kFinishedKept = 20;
   std::map<int64_t, skillbus_msgs::skill_progress_t> latest_;  // running and recently finished tasks
   std::string progress_channel_ = channel("SB_SKILL_PROGRESS");  // (named once: published every tick)

@@ -68,6 +68,7 @@ bool RemotePrimitive::start() {
   incarnation_ = ctx_.registry.incarnation_of(impl_.process);
   first_ = true;
   unresponsive_ = false;
+  ended_ = false;
   return true;
 }
 
@@ -86,6 +87,8 @@ State RemotePrimitive::call(int8_t action) {
                kFailed);
     return State::Failure;
   }
+  if (ctx_.ticks_sent && action >= 0 && action < static_cast<int8_t>(ctx_.ticks_sent->size()))
+    ++(*ctx_.ticks_sent)[static_cast<size_t>(action)];
   skill_tick_t t{};
   t.label = impl_.description.label;
   t.instance = instance_;
@@ -110,6 +113,7 @@ State RemotePrimitive::call(int8_t action) {
     params_text_stale_ = true;  // (whatever read the text while they were lent read none)
     set_result(reply.message, reply.code, reply.progress);
     wm_version_ = reply.wm_version;
+    ended_ = reply.ended;
     idle_until_ns_ = reply.state == skill_state_t::RUNNING ? reply.idle_until_ns : 0;
     // What the skill changed goes to the blackboard, an emptied value included; what it
     // sent back unchanged is not written (a parallel sibling may have written that key).
@@ -179,6 +183,9 @@ State RemotePrimitive::on_preempt() {
 }
 
 void RemotePrimitive::finish() {
+  // The tick that finished it, or its PREEMPT, ended the instance in the skill process
+  // (onEnd, as SkiROS2 within that tick): nothing left to send.
+  if (ended_) instance_ = 0;
   if (instance_ == 0 || unresponsive_) return;
   const std::string msg = message();
   const int c = code();

@@ -41,6 +41,7 @@ class RemotePrimitive : public Node {
   int64_t incarnation_ = 0;  // of the skill process that runs this instance
   bool first_ = true;
   bool unresponsive_ = false;  // its process did not answer: do not wait for it again
+  bool ended_ = false;  // its last reply said the tick ended the instance: no END to send
   int64_t wm_version_ = -1;    // the world version the skill has seen (from its last reply)
   // Until this sim time the skill's execute() would change nothing (its last reply's
   // idle_until_ns): execute ticks are skipped while its parameters stay the same.

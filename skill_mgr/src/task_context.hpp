@@ -2,6 +2,7 @@
 // the skill processes, the world replica, and the frame being ticked.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <functional>
 #include <string>
@@ -28,6 +29,9 @@ struct TaskContext {
   int64_t sim_time_ns = 0;
   std::chrono::milliseconds expand_timeout{30000};  // a compound's expansion (ManagerOptions)
   int64_t* idle_ticks = nullptr;  // the manager's count of execute ticks skipped (idle_until_ns)
+  // The manager's count of the ticks it sent, by action (skill_tick_t: START, EXECUTE,
+  // PREEMPT, END); an END only where no reply said the instance ended.
+  std::array<int64_t, 4>* ticks_sent = nullptr;
 };
 
 // The replica when it is loaded, else null (reads that may go without a world).

@@ -12,6 +12,7 @@ import time
 import pytest
 
 from test_skill_conditions import start_condition_system
+from conftest import last_json
 from test_skills import LIBS, cli
 
 
@@ -72,3 +73,28 @@ def test_a_killed_skill_process_fails_its_idle_primitive_once_the_manager_drops_
     # dropped after 3 s without a heartbeat (docs/skills.md, Liveness); not 400 s later
     assert system.wait(run, 30) == 1
     assert "skill process proc1 stopped answering while running idle_hold" in run.stdout(), run.stdout()
+
+
+def manager_summary(system) -> dict:
+    """The manager's summary, once it is stopped."""
+    mgr = next(p for p in system.procs if p.name == "skill_mgr")
+    system.kill(mgr, signal.SIGTERM)
+    system.wait(mgr, 20)
+    return last_json(mgr.stdout())
+
+
+def test_a_primitive_ends_within_the_tick_that_finishes_it_and_the_manager_sends_no_end(system):
+    """The skill process runs onEnd in the tick that finished a primitive and in its
+    PREEMPT (as SkiROS2), and says so in its reply: a round trip less at every end
+    (tests/py/test_tick_ends.py is the skill process's side)."""
+    rc, out, err = cli(system, "run", "IdleWait", "-p", "Seconds=0.2", "--timeout", "20")
+    assert rc == 0 and "waited" in out, out + err
+    run = system.start("run", [sys.executable, "-m", "skillbus.cli", "run", "Hold", "--label", "idle_hold", "-p",
+                               "Object=skiros:Cube-3", "--timeout", "30", "--watch"], env={"PYTHONPATH": str(LIBS)})
+    run.wait_for("idling", 20, stream="stdout")
+    rc, out, _ = cli(system, "stop", "2")
+    assert rc == 0 and "stopping" in out
+    assert system.wait(run, 20) == 1 and "preempted" in run.stdout(), run.stdout()
+    sent = manager_summary(system)["ticks_sent"]
+    assert sent["start"] == 2 and sent["preempt"] == 1, sent
+    assert sent["end"] == 0, sent  # (one a primitive before: 2)

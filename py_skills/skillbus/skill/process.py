@@ -274,6 +274,32 @@ class SkillProcess:
             return self._tick(t)
 
     def _tick(self, t: skill_tick_t) -> skill_tick_reply_t:
+        r = self._act(t)
+        if t.action == skill_tick_t.PREEMPT or (
+                t.action in (skill_tick_t.START, skill_tick_t.EXECUTE) and r.state != State.Running):
+            self._end(t, r)
+        return r
+
+    def _end(self, t: skill_tick_t, r: skill_tick_reply_t) -> None:
+        """As SkiROS2 does within the tick that finishes a primitive and right after its
+        onPreempt: onEnd, then the instance is forgotten, and the reply says so (the
+        manager then sends no END: a round trip less at every primitive's end). The
+        reply keeps the tick's state, message and code; its parameters (encoded from the
+        skill's Params when it is sent) and world-model version are those after onEnd.
+        An exception in onEnd is logged and changes nothing, as it did in an END."""
+        skill = self.instances.pop(t.instance, None)
+        if skill is not None:
+            try:
+                skill.onEnd()
+            except Exception:
+                log.error("%s.onEnd failed:\n%s", t.label, traceback.format_exc())
+            if self.wmi is not None:
+                r.wm_version = self.wmi.version
+        r.ended = True
+
+    def _act(self, t: skill_tick_t) -> skill_tick_reply_t:
+        """The tick's action on its instance (END included: a manager sends one where no
+        reply said the instance ended, e.g. after a tick that never answered)."""
         cls = self.classes.get(t.label)
         if cls is None or not issubclass(cls, PrimitiveBase):
             return self._reply(None, State.Failure, f"{self.name} has no primitive {t.label!r}", -1)

@@ -36,7 +36,7 @@ _U32 = struct.Struct(">I").pack
 _I32 = struct.Struct(">i").pack
 _B = struct.Struct(">b").pack
 _QDB = struct.Struct(">qdb").pack
-_IDQQI = struct.Struct(">idqqi").pack
+_REPLY_NUMBERS = struct.Struct(">idqqbi").pack  # code, progress, wm_version, idle_until_ns, ended, num_params
 
 
 def _encode_text(s: str) -> bytes:
@@ -93,7 +93,7 @@ def encode_tick_reply(r: skill_tick_reply_t) -> bytes:
     of its field's range is a struct.error)."""
     out: list = [_FINGERPRINT, _B(r.state)]
     _string(out, r.message)
-    out.append(_IDQQI(r.code, r.progress, r.wm_version, r.idle_until_ns, r.num_params))
+    out.append(_REPLY_NUMBERS(r.code, r.progress, r.wm_version, r.idle_until_ns, bool(r.ended), r.num_params))
     for i in range(r.num_params):
         _param(out, r.params[i])
     return b"".join(out)
@@ -254,8 +254,8 @@ class TickReply(skill_tick_reply_t):
     def as_message(self) -> skill_tick_reply_t:
         """The reply as LCM's generated type, its parameters as convert.param_msg makes them."""
         m = skill_tick_reply_t()
-        m.state, m.message, m.code, m.progress, m.wm_version, m.idle_until_ns = (
-            self.state, self.message, self.code, self.progress, self.wm_version, self.idle_until_ns)
+        m.state, m.message, m.code, m.progress, m.wm_version, m.idle_until_ns, m.ended = (
+            self.state, self.message, self.code, self.progress, self.wm_version, self.idle_until_ns, self.ended)
         m.params = [param_msg(p) for p in self.skill_params] if self.skill_params is not None else list(self.params)
         m.num_params = len(m.params)
         return m
@@ -264,7 +264,8 @@ class TickReply(skill_tick_reply_t):
         if self.skill_params is None:
             return encode_tick_reply(self)
         head = (_FINGERPRINT + _B(self.state) + _encode_text(self.message) +
-                _IDQQI(self.code, self.progress, self.wm_version, self.idle_until_ns, len(self.skill_params)))
+                _REPLY_NUMBERS(self.code, self.progress, self.wm_version, self.idle_until_ns, bool(self.ended),
+                               len(self.skill_params)))
         if _params_wire is not None:
             return head + _params_wire(self.skill_params)
         return head + b"".join([param_bytes(p) for p in self.skill_params])
