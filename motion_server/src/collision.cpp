@@ -120,6 +120,7 @@ struct CollisionModel::Impl {
   std::vector<dynamics::SkeletonPtr> fixtures;
   std::set<std::string> obstacle_names;
   std::shared_ptr<dynamics::SimpleFrame> held, map;
+  Eigen::Vector3d held_size = Eigen::Vector3d::Zero();  // held's box (set_held)
   std::shared_ptr<dynamics::VoxelGridShape> voxels;
   std::vector<Eigen::Vector3d> occupied;
   double resolution = 0;
@@ -227,6 +228,10 @@ CollisionModel::~CollisionModel() = default;
 
 void CollisionModel::set_held(const Eigen::Vector3d& size) {
   Impl& m = *impl_;
+  // The same box again (every plan sets it): the collision objects made for it stay.
+  const bool holds = size.minCoeff() > 0;
+  if (holds == static_cast<bool>(m.held) && (!holds || size == m.held_size)) return;
+  m.held_size = size;
   m.objects_stale = true;
   if (m.held) {
     m.names.erase(m.held.get());

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "path_search.hpp"
+#include "segment_order.hpp"
 
 namespace skillbus::motion {
 
@@ -55,9 +56,7 @@ struct Checker {
   bool valid(const Eigen::VectorXd& q) const { return world.clear(q, allowed); }
   bool segment_clear(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
     const int n = std::max(1, static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff() / step)));
-    for (int i = 1; i <= n; ++i)
-      if (!valid(a + (b - a) * (static_cast<double>(i) / n))) return false;
-    return true;
+    return all_valid_coarse_to_fine(n, [&](int i) { return valid(a + (b - a) * (static_cast<double>(i) / n)); });
   }
 };
 

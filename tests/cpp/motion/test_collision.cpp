@@ -174,6 +174,32 @@ TEST(Collision, ContactsTheMoveStartsInMayEndButNoneMayBegin) {
   EXPECT_NE(into.error.find("held object into 'table'"), std::string::npos) << into.error;
 }
 
+TEST(Collision, TheHeldBoxSetAgainIsTheSameAndAnotherReplacesIt) {
+  // (Every plan sets it; the same box again keeps the collision objects made for it.)
+  CollisionModel world(demo_scene());
+  const IkResult at_cube = solve_ik(kin(), top_down(0.4, 0.15, 0.42), home());  // the box 5 mm into the table
+  ASSERT_TRUE(at_cube.ok);
+  const auto held_touches = [&] {
+    for (const auto& t : world.touches(at_cube.q))
+      if (t.part == "held object") return true;
+    return false;
+  };
+  EXPECT_FALSE(held_touches());
+  world.set_held(Eigen::Vector3d::Constant(0.05));
+  EXPECT_TRUE(held_touches());
+  EXPECT_FALSE(world.clear(at_cube.q, {}));
+  world.set_held(Eigen::Vector3d::Constant(0.05));
+  EXPECT_TRUE(held_touches());
+  EXPECT_FALSE(world.clear(at_cube.q, {}));
+  world.set_held(Eigen::Vector3d::Constant(0.01));  // a smaller box: above the table
+  EXPECT_FALSE(held_touches());
+  world.set_held(Eigen::Vector3d::Zero());
+  EXPECT_FALSE(held_touches());
+  EXPECT_EQ(world.clear(at_cube.q, {}), world.touches(at_cube.q).empty());
+  world.set_held(Eigen::Vector3d::Constant(0.05));
+  EXPECT_TRUE(held_touches());
+}
+
 namespace {
 
 // The demo scene without its post, and the post as an occupancy map would hold it: every
