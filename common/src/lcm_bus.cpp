@@ -76,7 +76,6 @@ LcmBus::LcmBus(const std::string& url)
 }
 
 LcmBus::~LcmBus() {
-  sender_.reset();  // (sends what it still holds, on lanes still open)
   for (auto& [id, sub] : subs_)
     if (sub->lcm_sub) lcm_unsubscribe(lanes_[sub->lane], sub->lcm_sub);
   for (lcm_t* l : lanes_)
@@ -97,18 +96,9 @@ lcm_t* LcmBus::lane(int i) {
 void LcmBus::publish(const std::string& channel, const void* data, size_t size) {
   refuse_long_channel(channel);
   refuse_oversized(channel, size);
-  const int i = lane_index(lcm_lane_of(channel));
-  lane(i);  // (opened here, on the caller's thread, also when the send thread sends)
-  if (sender_) {
-    sender_->push(i, channel, data, size);
-    return;
-  }
-  send(i, channel, data, size);
-}
-
-bool LcmBus::send(int i, const std::string& channel, const void* data, size_t size) {
+  lcm_t* l = lane(lcm_lane_of(channel));
   errno = 0;
-  if (lcm_publish(lanes_[i], channel.c_str(), data, static_cast<unsigned int>(size)) == 0) return true;
+  if (lcm_publish(l, channel.c_str(), data, static_cast<unsigned int>(size)) == 0) return;
   const int e = errno;
   if (e == 0 || e == EMSGSIZE || e == EINVAL)  // LCM refused it (a channel name too long) or it can never fit
     throw BusError("LCM publish failed on " + channel + " (" + std::to_string(size) + " bytes)" +
@@ -116,28 +106,9 @@ bool LcmBus::send(int i, const std::string& channel, const void* data, size_t si
   // The network refused the send (down, unreachable, out of buffers): the message is lost,
   // as a datagram can be, and the protocols above notice and retry (RPC, lockstep resends)
   // or report it (a participant cut off). Counted and logged, never fatal.
-  const long n = ++lost_sends_;
-  if (n <= 5 || n % 1000 == 0)
-    SB_WARN("bus", "sending on " << channel << " failed (" << std::strerror(e) << "): message lost (#" << n << ")");
-  return false;
-}
-
-std::string LcmBus::send_from_thread(const std::vector<int>& cpus) {
-  if (url_.rfind("udpm://", 0) != 0) return "only a udpm:// bus sends from a thread (" + url_ + " delivers on the sender's thread)";
-  if (sender_) return "";
-  sender_ = std::make_unique<SendThread>(cpus, [this](int i, const std::string& ch, const std::vector<uint8_t>& d) {
-    try {
-      return send(i, ch, d.data(), d.size());
-    } catch (const BusError& e) {  // (checked before it was queued: LCM's own refusal, rare)
-      const long n = ++lost_sends_;
-      SB_WARN("bus", e.what() << ": message lost (#" << n << ")");
-      return false;
-    }
-  });
-  if (!sender_->placement_error().empty())
-    SB_WARN("bus", "the send thread runs where the kernel puts it: it cannot be held to the cores asked for ("
-                       << sender_->placement_error() << ")");
-  return "";
+  ++lost_sends_;
+  if (lost_sends_ <= 5 || lost_sends_ % 1000 == 0)
+    SB_WARN("bus", "sending on " << channel << " failed (" << std::strerror(e) << "): message lost (#" << lost_sends_ << ")");
 }
 
 UdpmReceiver& LcmBus::receiver(int i) {

@@ -15,12 +15,10 @@
 #include <lcm/lcm.h>
 
 #include <array>
-#include <atomic>
 #include <map>
 #include <memory>
 
 #include "skillbus/bus.hpp"
-#include "send_thread.hpp"
 #include "udpm_receiver.hpp"
 
 namespace skillbus {
@@ -37,8 +35,6 @@ class LcmBus : public Bus {
   std::chrono::steady_clock::time_point caught_up_at() const override {
     return direct_ ? caught_up_ : std::chrono::steady_clock::now();  // (LCM's own thread: cannot tell)
   }
-  // udpm:// only (memq:// delivers in the sender's thread: its handlers would run there).
-  std::string send_from_thread(const std::vector<int>& cpus) override;
 
  private:
   struct Sub {
@@ -50,10 +46,6 @@ class LcmBus : public Bus {
   static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user);
   static void deliver(Sub& sub, const std::string& channel, const uint8_t* data, size_t size);
   lcm_t* lane(int i);  // opened on first use
-  int lane_index(int i) const { return lane_urls_[i].empty() ? 0 : i; }  // (a single-lane URL: 0)
-  // Sends now; false when the network refused it (counted and logged). Throws BusError
-  // when LCM refuses it (it can never be sent).
-  bool send(int lane, const std::string& channel, const void* data, size_t size);
   UdpmReceiver& receiver(int i);  // opened on first use
   bool handle_direct(std::chrono::milliseconds timeout);
   void refilter(int lane);  // the lane's socket filter: its channels now (channel_filter.hpp)
@@ -75,11 +67,10 @@ class LcmBus : public Bus {
   // Datagrams that were no LCM message, and fragmented messages that lost a fragment.
   long undecodable() const;
   // Messages the network refused to send (logged; the protocols above retry or report).
-  long lost_sends() const { return lost_sends_.load(std::memory_order_relaxed); }
+  long lost_sends() const { return lost_sends_; }
 
  private:
-  std::atomic<long> lost_sends_{0};  // (counted by the send thread too)
-  std::unique_ptr<SendThread> sender_;  // send_from_thread(): sends go through it
+  long lost_sends_ = 0;
 };
 
 // Lane of a channel: 1 for many-to-one channels (names ending in _ACK or _JOIN), else 0.

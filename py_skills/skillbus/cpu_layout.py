@@ -24,12 +24,6 @@ core, and on a virtual machine a sleeping receiver on another core costs each se
 again before it runs. The participants' acks are sent from their core, where the demo's
 CPU is short.
 
-The physics server also sends each frame's state and clock from a thread on the other
-programs' cores (``sim_server --send-cpus``): each datagram wakes the participants that
-sleep on it, and on a virtual machine a wake-up across cores costs the sender several
-microseconds a woken process; sent from the physics' thread, that fan-out came before every
-step (docs/lockstep.md, "Sending from the participants' core").
-
 While the session runs the physics server also holds a CPU latency request of 0 µs
 (``sim_server --cpu-latency-us 0``, Linux PM QoS): idle cores poll instead of halting, so
 the clock and state that wake the participants each frame need no interrupt through the
@@ -115,9 +109,7 @@ def place(progs: list[Program], choice: str = "auto", allowed: set[int] | None =
         raise LayoutError(f"--physics-core {core}: taskset (util-linux) is not installed")
     batch_tool = chrt or shutil.which("chrt")
     batch = [batch_tool, "--batch", "0"] if batch_tool else []
-    # Each frame's state and clock go out from a thread on the others' cores: the fan-out
-    # that wakes the participants then costs their core, not the physics'.
-    physics_options = ["--ack-poll-us", str(ACK_POLL_US), "--send-cpus", cpu_list(others)]
+    physics_options = ["--ack-poll-us", str(ACK_POLL_US)]
     if os.access(latency_device, os.W_OK):
         physics_options += ["--cpu-latency-us", "0"]
         idle = "idle cores polling"

@@ -1,8 +1,5 @@
 // sim_server: the DART physics server. See sim_server/README.md.
-#include <sched.h>
-
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -53,19 +50,7 @@ int main(int argc, char** argv) {
   app.add_option("--message-timeout-ms", message_ms, "lockstep: how long to wait for an announced message");
   apps::add_ack_poll_option(app, ack_poll_us);
   apps::add_cpu_latency_option(app, cpu_latency_us);
-  std::vector<std::string> send_cpus;
-  apps::add_list_option(app, "--send-cpus", send_cpus,
-                        "lockstep with participants: send each frame's state and clock from a thread on these cores "
-                        "(the participants'), so that waking them costs the physics' core nothing (docs/lockstep.md)");
   apps::parse_or_exit(app, argc, argv);
-  for (const auto& text : send_cpus) {
-    char* end = nullptr;
-    const long cpu = std::strtol(text.c_str(), &end, 10);
-    if (end == text.c_str() || *end != '\0' || cpu < 0 || cpu >= CPU_SETSIZE)
-      apps::usage_error(app, "--send-cpus " + text + ": a core's number (0 to " + std::to_string(CPU_SETSIZE - 1) +
-                                 "), as taskset's --cpu-list gives them: 0,1");
-    o.send_cpus.push_back(static_cast<int>(cpu));
-  }
   if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
   o.join_timeout = std::chrono::milliseconds(join_ms);
   o.ack_timeout = std::chrono::milliseconds(ack_ms);

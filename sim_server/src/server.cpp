@@ -40,12 +40,6 @@ std::string state_channel(const std::string& robot) { return robot_channel("SB_S
 std::string gripper_channel(const std::string& robot) { return robot_channel("SB_SIM_GRIPPER_CMD", robot); }
 std::string reply_channel(const std::string& robot) { return robot_channel("SB_SIM_CMD_REPLY", robot); }
 std::string attach_channel(const std::string& robot) { return robot_channel("SB_SIM_ATTACH", robot); }
-
-std::string cpu_text(const std::vector<int>& cpus) {  // taskset's form: 0,1
-  std::string s;
-  for (int c : cpus) s += (s.empty() ? "" : ",") + std::to_string(c);
-  return s;
-}
 std::string camera_capture_channel() { return channel("SB_CAMERA_CAPTURE"); }
 std::string camera_cloud_channel() { return channel("SB_CAMERA_CLOUD"); }
 
@@ -466,16 +460,6 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
     end_s += std::chrono::duration<double>(wall::now() - t0).count();
     if (should_stop()) master.stop();  // a normal end: the participants finish cleanly
   };
-  // Each frame's state and clock, sent from the participants' core (Bus::send_from_thread):
-  // waking them then costs the physics' core one wake-up of the send thread a frame. With
-  // no participant there is nobody to wake: sent from here, as before.
-  if (!opt_.send_cpus.empty() && !opt_.participants.empty()) {
-    const std::string why = bus_.send_from_thread(opt_.send_cpus);
-    if (why.empty())
-      SB_INFO(kLog, "sending from a thread on core(s) " << cpu_text(opt_.send_cpus));
-    else
-      SB_WARN(kLog, "--send-cpus " << cpu_text(opt_.send_cpus) << " not used: " << why);
-  }
   const RunResult r = master.run();
   write_recording();
   ServerReport rep = report(r);

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 import sys
 import sysconfig
@@ -249,42 +248,6 @@ def test_pipelined_stepping_and_its_recorded_commands_replay_to_the_same_physics
                                     "--script", str(recorded), "--duration-s", "10"])
     assert sandbox.wait(alone, 120) == 0
     assert last_json(alone.stdout())["state_digest"] == r["sim"]["state_digest"]
-
-
-def test_sending_each_frame_from_a_thread_on_another_core_changes_nothing_in_the_session(sandbox, tmp_path):
-    """--send-cpus (the demo's placement: docs/lockstep.md): the frames' state and clock go
-    out from a thread on the participants' core; the same messages in the same order, so
-    the same physics, the same session and the same participant."""
-    cpu = str(min(os.sched_getaffinity(0)))
-    runs = {how: run_script_session(sandbox, grasp_lift_release(), 4.0, tmp_path / how, sim_args=args)
-            for how, args in (("direct", ("--pipeline",)), ("thread", ("--pipeline", "--send-cpus", cpu)))}
-    for r in runs.values():
-        assert r["sim"]["ok"], r["sim"]["error"]
-        assert r["script"]["ok"], r["script"]["error"]
-    assert f"sending from a thread on core(s) {cpu}" in runs["thread"]["sim_log"]
-    assert "sending from a thread" not in runs["direct"]["sim_log"]
-    for key in ("state_digest", "session_digest", "frames", "commands_accepted"):
-        assert runs["thread"]["sim"][key] == runs["direct"]["sim"][key], key
-    assert runs["thread"]["script"]["digest"] == runs["direct"]["script"]["digest"]
-
-
-@pytest.mark.parametrize("bad", ["x", "-1", "1.5", "99999"])
-def test_a_send_core_that_is_no_core_number_is_refused_at_start(sandbox, bad):
-    sim = sandbox.start("sim", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
-                                "--participants", "a", "--send-cpus", bad])
-    assert sandbox.wait(sim, 30) == 2
-    assert f"--send-cpus {bad}: a core's number" in sim.stderr()
-
-
-def test_without_participants_the_physics_sends_from_its_own_thread(sandbox, tmp_path):
-    """The physics alone (`--script`, as bench/pick_and_place.py runs it beside the demo)
-    has nobody to wake: the option changes nothing there."""
-    script_file = tmp_path / "script.json"
-    script_file.write_text(json.dumps(grasp_lift_release()))
-    alone = sandbox.start("alone", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()), "--script",
-                                    str(script_file), "--duration-s", "1", "--send-cpus", "0"])
-    assert sandbox.wait(alone, 60) == 0
-    assert "sending from a thread" not in alone.stderr()
 
 
 def test_recorded_commands_with_velocities_replay_to_the_same_physics(sandbox, tmp_path):

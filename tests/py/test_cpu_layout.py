@@ -20,8 +20,7 @@ def prefixes(layout):
     return {p.name: p.argv[:3] for p in layout.programs}
 
 
-# (the frames' state and clock sent from a thread on the others' core)
-POLL = ["--ack-poll-us", str(ACK_POLL_US), "--send-cpus", "0"]
+POLL = ["--ack-poll-us", str(ACK_POLL_US)]
 LATENCY = ["--cpu-latency-us", "0"]
 
 
@@ -49,11 +48,10 @@ def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_
     assert {p.name: p.argv[3:6] == BATCH for p in two.programs} == {"can_hub": True, "sim": False, "wm": True,
                                                                      "skills": True}
     assert commands(two) == [p.argv for p in PROGS]  # the commands themselves unchanged
-    # Alone on its core, the physics server polls for the acks instead of sleeping, sends
-    # each frame from a thread on the others' core, and asks for idle cores that poll
-    # while it runs.
+    # Alone on its core, the physics server polls for the acks instead of sleeping, and
+    # asks for idle cores that poll while it runs.
     assert two.physics_options == POLL + LATENCY
-    assert {p.name: p.argv[-6:] == POLL + LATENCY for p in two.programs} == {"can_hub": False, "sim": True,
+    assert {p.name: p.argv[-4:] == POLL + LATENCY for p in two.programs} == {"can_hub": False, "sim": True,
                                                                              "wm": False, "skills": False}
     assert 0 < ACK_POLL_US <= 5000  # a frame's acks, not a stalled participant's
     assert two.others == {0}
@@ -61,7 +59,6 @@ def test_auto_gives_the_physics_the_last_core_and_the_others_the_rest_under_the_
                         "on 0 (batch scheduling)")
     four = place(PROGS, "auto", {0, 2, 5, 7}, taskset=TASKSET, chrt=CHRT)
     assert prefixes(four)["sim"][2] == "7" and prefixes(four)["wm"][2] == "0,2,5"
-    assert four.physics_options[:4] == ["--ack-poll-us", str(ACK_POLL_US), "--send-cpus", "0,2,5"]
     assert [p.participant for p in four.programs] == [p.participant for p in PROGS]
 
 

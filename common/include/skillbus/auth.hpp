@@ -124,7 +124,6 @@ class AuthenticatedBus : public Bus {
   }
   std::string url() const override { return inner_->url(); }
   std::chrono::steady_clock::time_point caught_up_at() const override { return inner_->caught_up_at(); }
-  std::string send_from_thread(const std::vector<int>& cpus) override { return inner_->send_from_thread(cpus); }
   const Stats& stats() const { return opener_.stats(); }
   const std::string& identity() const { return identity_; }
 

@@ -52,15 +52,6 @@ class Bus {
   // loaded machine, a stopped debugger) has not heard senders that kept sending, and
   // must not call them dead. A bus that cannot tell says now.
   virtual std::chrono::steady_clock::time_point caught_up_at() const { return std::chrono::steady_clock::now(); }
-  // From now on, sends from a thread of its own, pinned to `cpus`: publish() queues the
-  // message and returns, and what this process publishes keeps its order. For a process
-  // whose own core is busier than its receivers' (the lockstep master on the physics'
-  // core: docs/lockstep.md, "Sending from the participants' core"). Returns "" when it
-  // does, else why not (the bus then sends on the caller's thread, as before).
-  virtual std::string send_from_thread(const std::vector<int>& cpus) {
-    (void)cpus;
-    return "this transport (" + url() + ") sends on the caller's thread only";
-  }
 };
 
 // The URL from the argument, else $SKILLBUS_BUS_URL, else kDefaultBusUrl.

@@ -24,7 +24,6 @@ class DropEveryNthBus : public Bus {
   bool handle(std::chrono::milliseconds t) override { return inner_->handle(t); }
   std::string url() const override { return inner_->url(); }
   std::chrono::steady_clock::time_point caught_up_at() const override { return inner_->caught_up_at(); }
-  std::string send_from_thread(const std::vector<int>& cpus) override { return inner_->send_from_thread(cpus); }
   long dropped() const { return dropped_; }
 
  private:

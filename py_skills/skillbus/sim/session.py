@@ -16,8 +16,7 @@ def run_script_session(box: Sandbox, script: dict[str, Any], duration_s: float, 
                        sim_args: tuple[str, ...] = (), scene: Path | None = None, timeout: float = 120.0,
                        name: str = "script") -> dict[str, Any]:
     """Runs sim_server (lockstep master, `duration_s` of sim time) and `skillbus sim-script`
-    with `script`. Returns {"sim": summary, "script": summary, "record": states and replies,
-    "sim_log": the physics server's log}."""
+    with `script`. Returns {"sim": summary, "script": summary, "record": states and replies}."""
     work_dir.mkdir(parents=True, exist_ok=True)
     script_file, out_file = work_dir / f"{name}.json", work_dir / f"{name}.out.json"
     script_file.write_text(json.dumps(script))
@@ -29,6 +28,5 @@ def run_script_session(box: Sandbox, script: dict[str, Any], duration_s: float, 
     box.wait(part, 30)
     result = {"sim": last_json(sim.stdout()) or {"ok": False, "error": f"no summary: {sim.stderr()[-2000:]}"},
               "script": last_json(part.stdout()) or {"ok": False, "error": f"no summary: {part.stderr()[-2000:]}"},
-              "record": json.loads(out_file.read_text()) if out_file.exists() else {},
-              "sim_log": sim.stderr()}
+              "record": json.loads(out_file.read_text()) if out_file.exists() else {}}
     return result

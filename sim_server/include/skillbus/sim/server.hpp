@@ -70,11 +70,6 @@ struct ServerOptions {
   // Lockstep: poll for the acks this long after the step before sleeping (MasterConfig::ack_poll;
   // for a server on a core of its own).
   std::chrono::microseconds ack_poll{0};
-  // Lockstep with participants: send from a thread on these cores, the participants'
-  // (Bus::send_from_thread): each frame's fan-out to them then happens on their core, not
-  // on the physics' (docs/lockstep.md, "Sending from the participants' core"). Empty:
-  // send from the physics' thread.
-  std::vector<int> send_cpus;
 };
 
 struct ServerReport {
