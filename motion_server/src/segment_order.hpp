@@ -1,6 +1,8 @@
 // Private to motion_core: the states of a straight joint segment checked in halving order.
 #pragma once
 
+#include <cstdint>
+
 namespace skillbus::motion {
 
 // Whether valid(i) holds for every i in 1..n, asked coarse to fine: first the states at
@@ -12,11 +14,11 @@ namespace skillbus::motion {
 template <class Valid>
 bool all_valid_coarse_to_fine(int n, Valid&& valid) {
   if (n < 1) return true;
-  int top = 1;
+  int64_t top = 1;  // (64-bit: i + 2 * stride stays in range for any int n)
   while (top <= n / 2) top *= 2;
-  for (int stride = top; stride >= 1; stride /= 2)
-    for (int i = stride; i <= n; i += 2 * stride)
-      if (!valid(i)) return false;
+  for (int64_t stride = top; stride >= 1; stride /= 2)
+    for (int64_t i = stride; i <= n; i += 2 * stride)
+      if (!valid(static_cast<int>(i))) return false;
   return true;
 }
 

@@ -128,7 +128,8 @@ def test_an_end_sent_anyway_finds_no_instance_and_calls_nothing_twice(process):
 
 
 def test_an_end_still_ends_an_instance_that_is_running(process):
-    """(A manager sends END where no reply said the instance ended: a tick that never came back.)"""
+    """(A manager sends END where no reply said the instance ended: a tick the process
+    refused, or one whose RPC failed with an error.)"""
     process.on_tick(tick("counter", skill_tick_t.START, Steps=5))
     r = on_the_wire(process.on_tick(tick("counter", skill_tick_t.END, Steps=5)))
     assert CALLS[-1] == "onEnd" and 7 not in process.instances

@@ -44,6 +44,7 @@ def reply(rng, cls=skill_tick_reply_t):
     r.state, r.message, r.code = rng.randrange(-128, 128), rng.choice(TEXT), rng.randrange(-2**31, 2**31)
     r.progress, r.wm_version = rng.uniform(0, 1), rng.randrange(-1, 2**40)
     r.idle_until_ns = rng.choice((0, rng.randrange(-2**63, 2**63)))
+    r.ended = rng.random() < 0.5
     for _ in range(rng.randrange(5)):
         p = skill_param_t()
         p.key, p.description, p.data_type, p.concept = (rng.choice(TEXT) for _ in range(4))
@@ -128,6 +129,7 @@ def params_reply(rng):
     r.state, r.message, r.code = rng.randrange(-128, 128), rng.choice(TEXT), rng.randrange(-2**31, 2**31)
     r.progress, r.wm_version = rng.uniform(0, 1), rng.randrange(-1, 2**40)
     r.idle_until_ns = rng.choice((0, rng.randrange(0, 2**63)))
+    r.ended = rng.random() < 0.5
     return r
 
 

@@ -299,7 +299,7 @@ class SkillProcess:
 
     def _act(self, t: skill_tick_t) -> skill_tick_reply_t:
         """The tick's action on its instance (END included: a manager sends one where no
-        reply said the instance ended, e.g. after a tick that never answered)."""
+        reply said the instance ended, e.g. after a tick this process refused)."""
         cls = self.classes.get(t.label)
         if cls is None or not issubclass(cls, PrimitiveBase):
             return self._reply(None, State.Failure, f"{self.name} has no primitive {t.label!r}", -1)

@@ -2,6 +2,7 @@
 // as in order, each state asked once (motion_server/src/segment_order.hpp).
 #include <gtest/gtest.h>
 
+#include <climits>
 #include <random>
 #include <set>
 #include <vector>
@@ -21,6 +22,9 @@ TEST(SegmentOrder, EveryStateIsAskedOnceCoarseToFine) {
     for (int i = 1; i <= n; ++i) EXPECT_EQ(seen.count(i), 1u) << "n " << n << " state " << i;
   }
   EXPECT_TRUE(all_valid_coarse_to_fine(0, [&](int) { ADD_FAILURE() << "asked with no state"; return false; }));
+  int first = 0;  // the largest n starts at the largest power of two under it, without overflow
+  EXPECT_FALSE(all_valid_coarse_to_fine(INT_MAX, [&](int i) { first = i; return false; }));
+  EXPECT_EQ(first, 1 << 30);
 }
 
 TEST(SegmentOrder, TheAnswerIsTheOneInOrderAndABlockInTheMiddleIsFoundAtOnce) {
