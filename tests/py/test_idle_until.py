@@ -10,10 +10,11 @@ import math
 import pytest
 
 from skillbus.bus import open_bus
-from skillbus.msgs import skill_param_t, skill_state_t, skill_tick_reply_t, skill_tick_t, skill_value_t
+from skillbus.msgs import skill_state_t, skill_tick_reply_t, skill_tick_t
 from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
 from skillbus.skill.process import SkillProcess
 from skillbus import tick_context
+from tick_messages import tick_msg
 
 
 class Wait(SkillDescription):
@@ -45,20 +46,7 @@ class idles_then_fails(PrimitiveBase):
 
 
 def tick(label: str, action: int, sim_s: float, **values) -> skill_tick_t:
-    t = skill_tick_t()
-    t.label, t.instance, t.action, t.frame, t.sim_time_ns = label, 1, action, int(sim_s * 50), int(sim_s * 1e9)
-    for key, v in values.items():
-        p = skill_param_t()
-        p.key = key
-        x = skill_value_t()
-        if isinstance(v, bool):
-            x.type, x.b = skill_value_t.BOOL, v
-        else:
-            x.type, x.f = skill_value_t.FLOAT, v
-        p.values, p.num_values = [x], 1
-        t.params.append(p)
-    t.num_params = len(t.params)
-    return skill_tick_t.decode(t.encode())
+    return tick_msg(label, action, frame=int(sim_s * 50), sim_time_ns=int(sim_s * 1e9), **values)
 
 
 @pytest.fixture

@@ -10,13 +10,14 @@ from __future__ import annotations
 import pytest
 
 from skillbus.bus import open_bus
-from skillbus.msgs import skill_param_t, skill_tick_t, skill_value_t
+from skillbus.msgs import skill_tick_t
 from skillbus.skill import (Element, ParallelFf, ParamTypes, PrimitiveBase, Serial, SkillBase, SkillDescription,
                             SkillWrapper, State)
 from skillbus.skill import ros_clock
 from skillbus.skill.convert import param_msg
 from skillbus.skill.process import SkillProcess
 from skillbus import tick_context
+from tick_messages import tick_msg
 
 
 # -- a library (this module is loaded by the skill process) ------------------------------------
@@ -77,17 +78,7 @@ class outer_b(_keyed):
 
 
 def tick(label: str, action: int, instance: int = 1, **values) -> skill_tick_t:
-    t = skill_tick_t()
-    t.label, t.instance, t.action, t.frame, t.sim_time_ns = label, instance, action, -1, 0
-    for key, v in values.items():
-        p = skill_param_t()
-        p.key = key
-        x = skill_value_t()
-        x.type, x.i = skill_value_t.INT, v
-        p.values, p.num_values = [x], 1
-        t.params.append(p)
-    t.num_params = len(t.params)
-    return skill_tick_t.decode(t.encode())
+    return tick_msg(label, action, instance=instance, **values)
 
 
 @pytest.fixture

@@ -12,9 +12,10 @@ import logging
 import pytest
 
 from skillbus.bus import open_bus
-from skillbus.msgs import skill_param_t, skill_state_t, skill_tick_reply_t, skill_tick_t, skill_value_t
+from skillbus.msgs import skill_state_t, skill_tick_reply_t, skill_tick_t
 from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
 from skillbus.skill.process import SkillProcess
+from tick_messages import tick_msg
 
 CALLS: list[str] = []
 
@@ -62,20 +63,7 @@ class raising_end(counter):
 
 
 def tick(label: str, action: int, **values) -> skill_tick_t:
-    t = skill_tick_t()
-    t.label, t.instance, t.action, t.frame, t.sim_time_ns = label, 7, action, -1, 0
-    for key, v in values.items():
-        p = skill_param_t()
-        p.key = key
-        x = skill_value_t()
-        if isinstance(v, bool):
-            x.type, x.b = skill_value_t.BOOL, v
-        else:
-            x.type, x.i = skill_value_t.INT, v
-        p.values, p.num_values = [x], 1
-        t.params.append(p)
-    t.num_params = len(t.params)
-    return skill_tick_t.decode(t.encode())
+    return tick_msg(label, action, instance=7, **values)
 
 
 @pytest.fixture
