@@ -17,10 +17,12 @@ messages of a channel are not lost while discovery runs.
 from __future__ import annotations
 
 import logging
+import math
 import struct
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 from skillbus.bus import BusError
 
@@ -29,6 +31,9 @@ _SYNC = 0xEDA1DA01
 _HEADER = struct.Struct(">IqqII")  # sync, event number, utime, channel length, data length
 log = logging.getLogger("dds-record")
 FLUSH_S = 0.1
+# The most messages one spin() writes before it returns, so that its caller looks at its stop:
+# a bus that sends faster than a recorder writes must not keep the recorder from stopping.
+SPIN_MAX = 1000
 DISCOVER_S = 0.005  # (a new topic is read at once: its first messages beyond the last 16 would be lost)
 
 
@@ -92,22 +97,33 @@ class DdsRecorder:
             if len(found) < 64:
                 return
 
-    def drain(self) -> None:
-        """Writes everything that has reached the recorder, without waiting for more."""
+    def drain(self, until: float = math.inf, abort: Callable[[], bool] = lambda: False) -> bool:
+        """Writes what has reached the recorder, without waiting for more: True once its
+        queues are empty; False when they were not by `until` (time.monotonic()) or
+        `abort()` (a bus sending faster than it writes)."""
         self.discover()
-        while self.bus.handle(0.0):
-            pass
-        self.log.flush()
+        try:
+            while self.bus.handle(0.0):
+                if time.monotonic() >= until or abort():
+                    return False
+            return True
+        finally:
+            self.log.flush()
 
-    def spin(self, timeout: float = DISCOVER_S) -> None:
+    def spin(self, timeout: float = DISCOVER_S) -> int:
+        """Writes what arrived, SPIN_MAX messages at most, waiting at most `timeout` for
+        one when none was waiting; returns how many it wrote."""
         now = time.monotonic()
         if now >= self._next_discovery:
             self.discover()
             self._next_discovery = now + DISCOVER_S
-        while self.bus.handle(0.0):
-            pass
-        self.bus.handle(timeout)
+        n = 0
+        while n < SPIN_MAX and self.bus.handle(0.0):
+            n += 1
+        if n == 0 and self.bus.handle(timeout):
+            n = 1
         self.log.flush_if_due()
+        return n
 
     def close(self) -> None:
         self.log.close()

@@ -13,6 +13,11 @@ from typing import Callable
 
 from skillbus.bus import BusError, resolve_url
 
+# How long a stop goes on writing what reached the recorder before it. A bus that keeps
+# sending faster than the recorder writes would keep it from ever ending; a second signal
+# ends it at once. (A full 4 MB socket buffer of small messages takes about 0.1 s.)
+DRAIN_S = 2.0
+
 
 def open_recorder(url: str, path: str):
     """The recorder of the bus `url`, writing `path`; BusError for a bus it cannot record
@@ -41,20 +46,26 @@ def main(args) -> int:
         return 2
     print("recording", file=sys.stderr, flush=True)
     deadline = time.monotonic() + args.seconds if args.seconds is not None else None
-    events = record_until(rec, lambda: bool(stop) or (deadline is not None and time.monotonic() >= deadline))
+    events = record_until(rec, lambda: bool(stop) or (deadline is not None and time.monotonic() >= deadline),
+                          abort=lambda: len(stop) >= 2)
     print(f'{{"events": {events}, "channels": {len(rec.channels)}}}', flush=True)
     return 0
 
 
-def record_until(rec, stopped: Callable[[], bool]) -> int:
+def record_until(rec, stopped: Callable[[], bool], drain_s: float = DRAIN_S,
+                 abort: Callable[[], bool] = lambda: False) -> int:
     """Runs the recorder `rec` until `stopped()`, then writes what had reached it by then
     and closes it; returns the events written. A stop (SIGTERM) can come while messages
     wait in the recorder's queues: on DDS their writers already have the recorder's
-    acknowledgement and will not send them again, so leaving them unread would lose them."""
+    acknowledgement and will not send them again, so leaving them unread would lose them.
+    Messages that keep coming after the stop are written for `drain_s` at most (or until
+    `abort()`); the log then ends, and stderr says so."""
     try:
         while not stopped():
             rec.spin()
-        rec.drain()
+        if not rec.drain(time.monotonic() + drain_s, abort):
+            print(f"record: messages were still coming when it stopped writing, {drain_s:g} s after the stop "
+                  "(or at a second signal): the log ends there", file=sys.stderr, flush=True)
     finally:
         events = rec.log.events
         rec.close()

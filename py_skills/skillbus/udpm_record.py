@@ -15,10 +15,13 @@ skillbus.dds_record.
 
 from __future__ import annotations
 
+import math
 import select
+import time
+from typing import Callable
 
 from skillbus.bus import BusError, check_multicast_interface, lane1_url, udpm_address
-from skillbus.dds_record import LogWriter
+from skillbus.dds_record import SPIN_MAX, LogWriter
 from skillbus.udpm import UdpmReceiver
 
 RECEIVE_BUFFER = 4 * 1024 * 1024
@@ -47,11 +50,12 @@ class UdpmRecorder:
             raise
 
     def spin(self, timeout: float = 0.05) -> int:
-        """Writes what arrived, waiting at most `timeout` for it; returns the datagrams read."""
+        """Writes what arrived, SPIN_MAX datagrams of each socket at most, waiting at most
+        `timeout` for it; returns the datagrams read."""
         ready, _, _ = select.select(self.receivers, [], [], timeout)
         read = 0
         for r in ready:
-            while True:
+            for _ in range(SPIN_MAX):
                 got = r.read()
                 if got is False:  # (nothing more now; None: a fragment, or a datagram that does not parse)
                     break
@@ -62,11 +66,17 @@ class UdpmRecorder:
         self.log.flush_if_due()
         return read
 
-    def drain(self) -> None:
-        """Writes everything in the sockets' buffers, without waiting for more."""
-        while self.spin(0.0):
-            pass
-        self.log.flush()
+    def drain(self, until: float = math.inf, abort: Callable[[], bool] = lambda: False) -> bool:
+        """Writes what is in the sockets' buffers, without waiting for more: True once they
+        are empty; False when they were not by `until` (time.monotonic()) or `abort()` (a
+        bus sending faster than it writes)."""
+        try:
+            while self.spin(0.0):
+                if time.monotonic() >= until or abort():
+                    return False
+            return True
+        finally:
+            self.log.flush()
 
     def close(self) -> None:
         if self.log is not None:

@@ -1,0 +1,166 @@
+"""A recorder under a flood still stops: each spin writes SPIN_MAX messages at most (so the
+recording loop looks at its stop), and a stop writes what keeps coming for DRAIN_S at most
+(or until a second signal), then says the log ends there. The buses here are stand-ins
+that never run dry; the real processes are tests/integration/test_record_flood.py."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import threading
+import time
+
+import can
+import pytest
+
+from skillbus import dds_record, record, udpm_record
+from skillbus.can import canlog
+from skillbus.dds_record import SPIN_MAX, LogWriter
+
+LIMIT_S = 20  # a recorder that never stops fails the test instead of hanging it
+
+
+def finishes(fn, *args, **kwargs):
+    """fn(*args) in a thread; its result, or a failure if it has not returned in LIMIT_S."""
+    out: dict = {}
+    t = threading.Thread(target=lambda: out.setdefault("r", fn(*args, **kwargs)), daemon=True)
+    t.start()
+    t.join(LIMIT_S)
+    assert not t.is_alive(), f"{fn.__name__} did not return within {LIMIT_S} s under a flood"
+    return out.get("r")
+
+
+class EndlessSocket:
+    """A receiver whose socket is always readable and which always has a datagram."""
+
+    def __init__(self) -> None:
+        self.a, self.b = socket.socketpair()
+        self.b.send(b"x")  # (readable for select, for ever: never read)
+        self.reads = 0
+
+    def fileno(self) -> int:
+        return self.a.fileno()
+
+    def read(self):
+        self.reads += 1
+        return ("SB_FLOOD", b"m")
+
+    def close(self) -> None:
+        self.a.close()
+        self.b.close()
+
+
+@pytest.fixture
+def flooded_udpm(tmp_path):
+    rec = udpm_record.UdpmRecorder.__new__(udpm_record.UdpmRecorder)
+    rec.channels, rec.receivers = set(), [EndlessSocket()]
+    rec.log = LogWriter(tmp_path / "flood.lcmlog")
+    yield rec
+    rec.close()
+
+
+class EndlessDdsBus:
+    """A DdsBus with a sample always waiting: each handle() gives one to the subscriber."""
+
+    def __init__(self, deliver) -> None:
+        self.deliver = deliver
+
+    def handle(self, timeout: float) -> bool:
+        self.deliver("SB_FLOOD", b"m")
+        return True
+
+    def close(self) -> None:
+        pass
+
+
+@pytest.fixture
+def flooded_dds(tmp_path):
+    rec = dds_record.DdsRecorder.__new__(dds_record.DdsRecorder)
+    rec.channels, rec.skipped = set(), {}
+    rec.log = LogWriter(tmp_path / "flood.lcmlog")
+    rec.bus = EndlessDdsBus(rec.log.write)
+    rec._next_discovery = float("inf")
+    rec.discover = lambda: None
+    yield rec
+    rec.close()
+
+
+@pytest.mark.parametrize("kind", ["udpm", "dds"])
+def test_a_spin_under_a_flood_returns_after_spin_max(kind, request):
+    rec = request.getfixturevalue(f"flooded_{kind}")
+    assert finishes(rec.spin, 0.0) == SPIN_MAX
+
+
+@pytest.mark.parametrize("kind", ["udpm", "dds"])
+def test_a_stop_under_a_flood_ends_after_the_drain_time_and_says_so(kind, request, capsys):
+    rec = request.getfixturevalue(f"flooded_{kind}")
+    calls = []
+
+    def stopped() -> bool:  # (the stop comes at the third look, in the middle of the flood)
+        calls.append(1)
+        return len(calls) >= 3
+
+    t0 = time.monotonic()
+    events = finishes(record.record_until, rec, stopped, drain_s=0.3)
+    took = time.monotonic() - t0
+    assert 0.3 <= took < 0.3 + 5, took
+    assert events > 2 * SPIN_MAX  # (what the spins before the stop and the drain wrote)
+    assert "still coming when it stopped writing, 0.3 s after the stop" in capsys.readouterr().err
+
+
+def test_a_second_signal_ends_the_drain_at_once(flooded_udpm):
+    t0 = time.monotonic()
+    finishes(record.record_until, flooded_udpm, lambda: True, drain_s=60, abort=lambda: time.monotonic() - t0 > 0.2)
+    assert time.monotonic() - t0 < 10
+
+
+def test_a_drain_that_empties_the_queues_writes_everything_and_says_nothing(tmp_path, capsys):
+    """(The stop as it was: what reached the recorder is written; no warning.)"""
+    class Some(EndlessSocket):
+        def __init__(self, n: int) -> None:
+            super().__init__()
+            self.left = n
+
+        def read(self):
+            if not self.left:
+                return False
+            self.left -= 1
+            return ("SB_SOME", b"m")
+
+    rec = udpm_record.UdpmRecorder.__new__(udpm_record.UdpmRecorder)
+    rec.channels, rec.receivers = set(), [Some(2500)]
+    rec.log = LogWriter(tmp_path / "some.lcmlog")
+    assert record.record_until(rec, lambda: True, drain_s=30) == 2500
+    assert capsys.readouterr().err == ""
+
+
+class EndlessCanBus:
+    """can.Bus as can-record opens it, with a frame always waiting."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        self.frame = can.Message(arbitration_id=0x185, data=b"\x00" * 8, is_extended_id=False)
+
+    def recv(self, timeout=None):
+        return self.frame
+
+    def shutdown(self) -> None:
+        pass
+
+
+def test_can_record_under_a_flood_stops_after_the_drain_time(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(canlog.can, "Bus", EndlessCanBus)
+    monkeypatch.setattr(canlog, "DRAIN_S", 0.3)
+    old = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)}
+    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGTERM))
+    try:
+        timer.start()
+        t0 = time.monotonic()
+        n = canlog.record("flood", str(tmp_path / "flood.log"), seconds=LIMIT_S)
+        took = time.monotonic() - t0
+    finally:
+        timer.cancel()
+        for s, h in old.items():
+            signal.signal(s, h)
+    assert took < 5, f"can-record took {took:.1f} s to stop under a flood"
+    assert n > 0 and "still coming when it stopped writing, 0.3 s after the stop" in capsys.readouterr().err
