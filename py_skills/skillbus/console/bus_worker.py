@@ -17,6 +17,9 @@ import time
 from typing import Any, Callable
 
 log = logging.getLogger("skillbus.console")
+# The most messages dispatched between two looks at the jobs, the chores and the stop: a
+# bus that sends faster than the console reads must not starve the web page's requests.
+DISPATCH_MAX = 1000
 
 
 class BusWorker:
@@ -74,8 +77,11 @@ class BusWorker:
             self._run_jobs()
             self._run_chores()
             try:
-                while self.bus.handle(0.0):
-                    pass
+                for _ in range(DISPATCH_MAX):
+                    if not self.bus.handle(0.0):
+                        break
+                else:  # (more waiting: the jobs and the stop first, then at once the rest)
+                    continue
             except Exception:
                 log.exception("the bus failed while dispatching")
             self._wake.wait(self._poll_s)
