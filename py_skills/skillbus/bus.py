@@ -102,6 +102,7 @@ def refuse_long_channel(channel: str) -> None:
 
 
 MAX_MESSAGE_BYTES = 1 << 24  # the largest message a receiver reassembles from LCM's fragments (as LCM)
+JUNK_CHECK = 256  # datagrams that dispatch nothing, read between two looks at the time
 
 
 def refuse_oversized(channel: str, size: int) -> None:
@@ -441,11 +442,19 @@ class LcmBus(Bus):
         receivers, sockets = self._read_orders[self._turn]  # (select asks a socket for its descriptor in C)
         self._turn ^= 1
         deadline = None
+        # A flood of datagrams nobody here reads (malformed, fragments never completed,
+        # channels the kernel's filter let through) must not hold the caller past its
+        # timeout: the time is looked at every JUNK_CHECK of them.
+        give_up = time.monotonic() + timeout
         while True:
             for r in receivers:
+                junk = 0
                 while (m := r.read()) is not False:
                     if m is not None and self._dispatch(m):
                         return True
+                    junk += 1
+                    if junk % JUNK_CHECK == 0 and time.monotonic() >= give_up:
+                        return False
             now = self._caught_up = time.monotonic()  # (every socket read empty)
             if deadline is None:
                 deadline = now + timeout
