@@ -214,11 +214,17 @@ bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {
   LcmReassembler::Message m;
   std::chrono::steady_clock::time_point deadline{};
   bool waited = false;
+  // A flood of datagrams that dispatch nothing (malformed, fragments never completed,
+  // channels nobody here reads) must not hold the caller past its timeout: the time is
+  // looked at every kJunkCheck of them.
+  constexpr int kJunkCheck = 256;
+  const auto give_up = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     for (int k = 0; k < n; ++k) {
-      for (;;) {
+      for (int junk = 1;; ++junk) {
         const auto got = rs[k]->read(m);
         if (got == UdpmReceiver::Read::kNothing) break;
+        if (junk % kJunkCheck == 0 && std::chrono::steady_clock::now() >= give_up) return false;
         if (got == UdpmReceiver::Read::kNone) continue;
         auto c = by_channel_.find(m.channel);
         if (c == by_channel_.end()) continue;
