@@ -221,21 +221,21 @@ bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {
   const auto give_up = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     for (int k = 0; k < n; ++k) {
-      for (int junk = 1;; ++junk) {
+      for (int junk = 0;;) {
         const auto got = rs[k]->read(m);
         if (got == UdpmReceiver::Read::kNothing) break;
-        if (junk % kJunkCheck == 0 && std::chrono::steady_clock::now() >= give_up) return false;
-        if (got == UdpmReceiver::Read::kNone) continue;
-        auto c = by_channel_.find(m.channel);
-        if (c == by_channel_.end()) continue;
-        // A handler may unsubscribe (itself or another): deliver to a copy of the list.
-        std::vector<int> ids;
-        for (const auto& [id, sub] : c->second) ids.push_back(id);
-        for (int id : ids) {
-          auto s = subs_.find(id);
-          if (s != subs_.end()) deliver(*s->second, m.channel, m.data, m.size);
+        auto c = got == UdpmReceiver::Read::kMessage ? by_channel_.find(m.channel) : by_channel_.end();
+        if (c != by_channel_.end()) {
+          // A handler may unsubscribe (itself or another): deliver to a copy of the list.
+          std::vector<int> ids;
+          for (const auto& [id, sub] : c->second) ids.push_back(id);
+          for (int id : ids) {
+            auto s = subs_.find(id);
+            if (s != subs_.end()) deliver(*s->second, m.channel, m.data, m.size);
+          }
+          return true;
         }
-        return true;
+        if (++junk % kJunkCheck == 0 && std::chrono::steady_clock::now() >= give_up) return false;
       }
     }
     const auto now = std::chrono::steady_clock::now();

@@ -53,6 +53,7 @@ _PROGRAMS = {
     "motion_server": "motion_server",
     "map_server": "map_server",
     "codec_peer": "tests/cpp",
+    "bus_junk_peer": "tests/cpp",
 }
 
 
