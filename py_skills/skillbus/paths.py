@@ -70,7 +70,7 @@ def binary(name: str) -> Path:
     >>> binary("wm")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
         ...
-    KeyError: "no program 'wm' in the build; the programs: codec_peer, map_server, ..."
+    KeyError: "no program 'wm' in the build; the programs: bus_junk_peer, codec_peer, ..."
     """
     if name not in _PROGRAMS:
         raise KeyError(f"no program {name!r} in the build; the programs: {', '.join(sorted(_PROGRAMS))}")
