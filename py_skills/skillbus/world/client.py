@@ -30,7 +30,7 @@ from skillbus.world.element import Element
 from skillbus.world.ontology_view import OntologyView
 from skillbus.world.skiros2_queries import SkiROS2Queries
 from skillbus.world.sparql import SparqlQueries
-from skillbus.world.wire import ElementsPage, decode_elements, query_all
+from skillbus.world.wire import ElementsPage, decode_elements, next_page_after, query_all
 
 # tick_element's decoded elements kept (a process runs a few primitives at once, each with
 # a few element parameters; the tick decoder keeps 32 distinct parameter encodings)
@@ -137,7 +137,10 @@ class WorldModelInterface(SparqlQueries, SkiROS2Queries):
             relations.update(page.relations)
             if len(page.elements) < self.SNAPSHOT_PAGE:
                 return elements, relations, first, last
-            after = page.elements[-1].id
+            try:
+                after = next_page_after(after, page.elements[-1].id, "wm.snapshot")
+            except RuntimeError as e:
+                raise WorldModelError(str(e)) from None
 
     def _changes_up_to(self, first: int, last: int, timeout: float = 2.0) -> list | None:
         """The changes first+1..last in order (they were made while the pages were read),

@@ -152,7 +152,25 @@ def query_all(call: Callable[[wm_query_t, float], Any], q: wm_query_t, page: int
         out.extend(rep.elements)
         if len(rep.elements) < size:
             return out
-        after = rep.elements[-1].id
+        after = next_page_after(after, rep.elements[-1].id, "wm.query")
+
+
+def next_page_after(after: str, last_id: str, what: str) -> str:
+    """The id the next page starts after: the last one of this page, which must come after
+    the one this page started after (or a server that does not page would be asked for the
+    same page for ever).
+
+    >>> next_page_after("", "skiros:A-1", "wm.query")
+    'skiros:A-1'
+    >>> next_page_after("skiros:B-2", "skiros:A-1", "wm.query")
+    Traceback (most recent call last):
+        ...
+    RuntimeError: wm.query: the page after 'skiros:B-2' ended at 'skiros:A-1', not past it: the world model server does not page by id
+    """
+    if not last_id > after:
+        raise RuntimeError(f"{what}: the page after {after!r} ended at {last_id!r}, not past it: the world model "
+                           "server does not page by id")
+    return last_id
 
 
 def _copy_query(q: wm_query_t) -> wm_query_t:
