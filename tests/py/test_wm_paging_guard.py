@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import threading
 
-
 from skillbus.msgs import wm_element_t, wm_elements_t, wm_query_t
 from skillbus.world import client as wm_client
 from skillbus.world.wire import PAGE, query_all
