@@ -3,6 +3,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <iterator>
 
 #include "skillbus/wm/convert.hpp"
@@ -82,6 +83,11 @@ bool WorldReplica::ensure(std::chrono::milliseconds timeout, std::string* why) {
         for (const auto& e : page.elements) elements[e.id] = wm::from_msg(e);
         for (const auto& r : page.relations) relations.insert(wm::from_msg(r));
         if (page.num_elements < kPage) break;
+        // Pages must advance by id, or a server that ignores `after` is asked for the same
+        // page for ever.
+        if (page.elements.empty() || !(page.elements.back().id > after))
+          throw std::runtime_error("the snapshot's page after '" + after + "' did not end past it: the world model "
+                                   "server does not page by id");
         after = page.elements.back().id;
       }
       auto have = [&] {
