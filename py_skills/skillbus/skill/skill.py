@@ -315,8 +315,9 @@ class PrimitiveBase(SkillCore):
     def idle_until(self, sim_time_s: float) -> None:
         """skillbus (SkiROS2 has no such call): called in execute() before it returns
         Running, the skill's word that until `sim_time_s` (seconds, the clock of its
-        ticks: ``skillbus.tick_context.now_s()``) its execute() would return Running with
-        the same message and change nothing, as long as its parameters stay as they are.
+        ticks: ``skillbus.tick_context.now_s()``) its execute() would return Running and
+        change nothing, as long as its parameters stay as they are (only its message
+        might say more, e.g. how far it is: the progress keeps the last one meanwhile).
         The manager then skips its execute ticks until then: a skill that waits for a
         trajectory to end costs no tick. A stop, a preemption, a broken hold-condition, a
         changed parameter, the loss of its process and the end of its task reach it at

@@ -4,8 +4,8 @@ with a value in the description, as SkiROS2 does it).
 
 The primitive drives the CANopen gripper of its skill process (``skills-process
 --gripper gripper0:5``) through the non-blocking driver: it sends one set-point and
-then only reads the latest status on each tick (and, while the fingers travel, is not
-ticked before they could have arrived: GripperPrimitive._idle_while_travelling). Grasp succeeds only when the device
+then only reads the latest status on each tick (and, while the fingers open, is not
+ticked before they could be open: GripperPrimitive._idle_while_travelling). Grasp succeeds only when the device
 reports an object gripped; it then writes into the world model that the gripper
 contains the object (and its old container no longer does), and finishes once its own
 replica shows it, so the manager's post-condition sees it too. Release opens and writes

@@ -13,24 +13,13 @@ from skillbus.world import poses
 
 OPEN_UM, CLOSED_UM = 80_000, 0
 TIMEOUT_S = 10.0
-# While the fingers travel, the primitive is not ticked before they could have arrived
+# While the fingers open, the primitive is not ticked before they could be open
 # (PrimitiveBase.idle_until), but at most FAULT_NOTICE_S at a time: a device fault, a lost
 # heartbeat or a gone bus on the way still fails the skill within that much sim time.
 FAULT_NOTICE_S = 0.2
 # What the arrival estimate leaves out, taken off it: the status's position is a TPDO that
 # moves in steps of 0x2001 (50 um) and the ticks' grid; a tenth of a second is ample.
 ARRIVAL_MARGIN_S = 0.1
-
-
-def object_side_um(obj) -> float:
-    """The side of an element's skiros:Size in um (a cube's), 0 when it has none usable."""
-    try:
-        if obj is None or not obj.hasProperty("skiros:Size"):
-            return 0.0
-        side = float(obj.getProperty("skiros:Size").value)
-    except (TypeError, ValueError):
-        return 0.0
-    return side * 1e6 if 0 < side < 1e3 else 0.0  # (NaN fails both)
 
 
 class GripperPrimitive(PrimitiveBase):
@@ -103,32 +92,22 @@ class GripperPrimitive(PrimitiveBase):
                                f"grasp: holding {obj.id or obj.label} at {width}")
 
     def _idle_while_travelling(self, position_um: int) -> None:
-        """Fingers on their way: the earliest a tick could find them arrived is after the
-        travel left at the speed the driver set (0x6081: the device never moves faster),
-        less ARRIVAL_MARGIN_S; no tick before then, FAULT_NOTICE_S at most at a time. The
+        """Fingers opening: the earliest a tick could find them open is after the travel
+        left at the speed the driver set (0x6081: the device never moves faster), less
+        ARRIVAL_MARGIN_S; no tick before then, FAULT_NOTICE_S at most at a time. The
         status's lag cancels out: the position it shows and the arrival it will show are
-        equally late. A grasp's travel ends at the latest at the object's Size (the
-        narrowest a box of that side can be across the fingers); a close, or a grasp of
-        an object without a Size, may meet something at any width, so it is ticked as
-        always."""
+        equally late. Fingers that stop on something on the way (a bin's wall) end the
+        command there, which the skill then sees FAULT_NOTICE_S late at most, as it does a
+        fault. A close or a grasp is ticked as always: it ends where the fingers touch
+        something, which may be at any width (a box is wider across the fingers than its
+        side when it is turned or tilted)."""
         velocity = float(getattr(self.gripper, "velocity", 0) or 0)  # um/s
-        left = self._travel_left_um(position_um)
-        if velocity <= 0 or left <= 0:
+        if self.command not in ("open", "release") or velocity <= 0:
             return
         now = tick_context.now_s()
-        arrival = now + left / velocity - ARRIVAL_MARGIN_S
+        arrival = now + (OPEN_UM - position_um) / velocity - ARRIVAL_MARGIN_S
         if arrival > now:
             self.idle_until(min(arrival, now + FAULT_NOTICE_S, self.started_at + TIMEOUT_S))
-
-    def _travel_left_um(self, position_um: int) -> float:
-        """How far the fingers must still move before this command could end (um), 0 when
-        that cannot be known."""
-        if self.command in ("open", "release"):
-            return OPEN_UM - position_um
-        if self.command == "grasp":
-            side = object_side_um(self.params["Object"].value)
-            return position_um - side if side else 0
-        return 0
 
     def onPreempt(self):
         """Stopped: fingers that are moving halt where they are (CiA 402 halt). Fingers that
