@@ -212,13 +212,11 @@ bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {
   }
   turn_ ^= 1;
   LcmReassembler::Message m;
-  std::chrono::steady_clock::time_point deadline{};
-  bool waited = false;
   // A flood of datagrams that dispatch nothing (malformed, fragments never completed,
   // channels nobody here reads) must not hold the caller past its timeout: the time is
-  // looked at every kJunkCheck of them.
+  // looked at every kJunkCheck of them, and the wait after them is what is left of it.
   constexpr int kJunkCheck = 256;
-  const auto give_up = std::chrono::steady_clock::now() + timeout;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     for (int k = 0; k < n; ++k) {
       for (int junk = 0;;) {
@@ -235,15 +233,11 @@ bool LcmBus::handle_direct(std::chrono::milliseconds timeout) {
           }
           return true;
         }
-        if (++junk % kJunkCheck == 0 && std::chrono::steady_clock::now() >= give_up) return false;
+        if (++junk % kJunkCheck == 0 && std::chrono::steady_clock::now() >= deadline) return false;
       }
     }
     const auto now = std::chrono::steady_clock::now();
     caught_up_ = now;  // (every socket read empty)
-    if (!waited) {
-      deadline = now + timeout;
-      waited = true;
-    }
     if (now >= deadline) return false;
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now + std::chrono::microseconds(999));
     pollfd fds[2];

@@ -441,11 +441,11 @@ class LcmBus(Bus):
         channels nobody here subscribed to are read and dropped meanwhile)."""
         receivers, sockets = self._read_orders[self._turn]  # (select asks a socket for its descriptor in C)
         self._turn ^= 1
-        deadline = None
         # A flood of datagrams nobody here reads (malformed, fragments never completed,
         # channels the kernel's filter let through) must not hold the caller past its
-        # timeout: the time is looked at every JUNK_CHECK of them.
-        give_up = time.monotonic() + timeout
+        # timeout: the time is looked at every JUNK_CHECK of them, and the wait after them
+        # is what is left of the timeout.
+        deadline = time.monotonic() + timeout
         while True:
             for r in receivers:
                 junk = 0
@@ -453,11 +453,9 @@ class LcmBus(Bus):
                     if m is not None and self._dispatch(m):
                         return True
                     junk += 1
-                    if junk % JUNK_CHECK == 0 and time.monotonic() >= give_up:
+                    if junk % JUNK_CHECK == 0 and time.monotonic() >= deadline:
                         return False
             now = self._caught_up = time.monotonic()  # (every socket read empty)
-            if deadline is None:
-                deadline = now + timeout
             left = deadline - now
             if left <= 0:
                 return False

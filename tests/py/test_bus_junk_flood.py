@@ -45,17 +45,43 @@ def test_handle_returns_at_its_timeout_under_a_flood_of_junk(what):
     assert junk.reads >= bus_mod.JUNK_CHECK
 
 
-def test_a_message_after_junk_is_still_dispatched():
+@pytest.mark.parametrize("at", [2, 256, 257, 1000])
+def test_a_message_after_junk_is_delivered_once_by_handle_0(at):
+    """handle(0.0) looks at the time at the 256th datagram that dispatched nothing and gives
+    up there: a wanted message read then or after is still delivered, once."""
     got = []
 
     class Then(Junk):
         def read(self):
             self.reads += 1
-            return None if self.reads < 1000 else ("SB_WANTED", b"m")
+            if self.reads < at:
+                return None
+            return ("SB_WANTED", b"m") if self.reads == at else False
 
     b = bus_mod.LcmBus.__new__(bus_mod.LcmBus)
     r = Then(None)
     b._read_orders = (([r], [r.sock]), ([r], [r.sock]))
     b._turn, b._caught_up = 0, 0.0
     b._by_channel = {"SB_WANTED": {1: lambda ch, d: got.append(d)}}
-    assert b._handle_direct(10.0) is True and got == [b"m"]
+    calls = [b._handle_direct(0.0) for _ in range(10)]
+    assert got == [b"m"] and calls.count(True) == 1, (got, calls)
+
+
+def test_junk_then_a_quiet_socket_waits_only_what_is_left_of_the_timeout():
+    """A first pass of junk that takes most of the timeout is not followed by a whole
+    timeout's wait."""
+    class SlowJunk(Junk):
+        def read(self):
+            self.reads += 1
+            if self.reads <= 2 * bus_mod.JUNK_CHECK - 1:
+                time.sleep(0.001)  # (about 0.5 s of junk in all)
+                return None
+            return False
+
+    b = bus_mod.LcmBus.__new__(bus_mod.LcmBus)
+    r = SlowJunk(None)
+    b._read_orders = (([r], [r.sock]), ([r], [r.sock]))
+    b._turn, b._by_channel, b._caught_up = 0, {}, 0.0
+    t0 = time.monotonic()
+    assert b._handle_direct(0.6) is False
+    assert time.monotonic() - t0 < 0.6 + 0.3
