@@ -25,15 +25,13 @@ from pathlib import Path
 from typing import Callable
 
 from skillbus.bus import BusError
+from skillbus.record import SPIN_MAX
 
 ENVELOPE_TYPE = "skillbus::Envelope"
 _SYNC = 0xEDA1DA01
 _HEADER = struct.Struct(">IqqII")  # sync, event number, utime, channel length, data length
 log = logging.getLogger("dds-record")
 FLUSH_S = 0.1
-# The most messages one spin() writes before it returns, so that its caller looks at its stop:
-# a bus that sends faster than a recorder writes must not keep the recorder from stopping.
-SPIN_MAX = 1000
 DISCOVER_S = 0.005  # (a new topic is read at once: its first messages beyond the last 16 would be lost)
 
 
@@ -105,7 +103,7 @@ class DdsRecorder:
         try:
             while self.bus.handle(0.0):
                 if time.monotonic() >= until or abort():
-                    return False
+                    return not self.bus.handle(0.0)  # (they may have just run dry)
             return True
         finally:
             self.log.flush()

@@ -21,7 +21,8 @@ import time
 from typing import Callable
 
 from skillbus.bus import BusError, check_multicast_interface, lane1_url, udpm_address
-from skillbus.dds_record import SPIN_MAX, LogWriter
+from skillbus.dds_record import LogWriter
+from skillbus.record import SPIN_MAX
 from skillbus.udpm import UdpmReceiver
 
 RECEIVE_BUFFER = 4 * 1024 * 1024
@@ -50,12 +51,12 @@ class UdpmRecorder:
             raise
 
     def spin(self, timeout: float = 0.05) -> int:
-        """Writes what arrived, SPIN_MAX datagrams of each socket at most, waiting at most
-        `timeout` for it; returns the datagrams read."""
+        """Writes what arrived, SPIN_MAX datagrams at most, waiting at most `timeout` for
+        it; returns the datagrams read."""
         ready, _, _ = select.select(self.receivers, [], [], timeout)
         read = 0
         for r in ready:
-            for _ in range(SPIN_MAX):
+            while read < SPIN_MAX:
                 got = r.read()
                 if got is False:  # (nothing more now; None: a fragment, or a datagram that does not parse)
                     break
@@ -73,7 +74,7 @@ class UdpmRecorder:
         try:
             while self.spin(0.0):
                 if time.monotonic() >= until or abort():
-                    return False
+                    return not select.select(self.receivers, [], [], 0)[0]  # (they may have just run dry)
             return True
         finally:
             self.log.flush()

@@ -16,7 +16,8 @@ import pytest
 
 from skillbus import dds_record, record, udpm_record
 from skillbus.can import canlog
-from skillbus.dds_record import SPIN_MAX, LogWriter
+from skillbus.dds_record import LogWriter
+from skillbus.record import SPIN_MAX
 
 LIMIT_S = 20  # a recorder that never stops fails the test instead of hanging it
 
@@ -34,9 +35,10 @@ def finishes(fn, *args, **kwargs):
 class EndlessSocket:
     """A receiver whose socket is always readable and which always has a datagram."""
 
-    def __init__(self) -> None:
+    def __init__(self, readable: bool = True) -> None:
         self.a, self.b = socket.socketpair()
-        self.b.send(b"x")  # (readable for select, for ever: never read)
+        if readable:
+            self.b.send(b"x")  # (readable for select, for ever: never read)
         self.reads = 0
 
     def fileno(self) -> int:
@@ -109,6 +111,39 @@ def test_a_stop_under_a_flood_ends_after_the_drain_time_and_says_so(kind, reques
     assert "still coming when it stopped writing, 0.3 s after the stop" in capsys.readouterr().err
 
 
+def test_a_spin_reads_spin_max_in_all_whatever_the_sockets(tmp_path):
+    rec = udpm_record.UdpmRecorder.__new__(udpm_record.UdpmRecorder)
+    rec.channels, rec.receivers = set(), [EndlessSocket(), EndlessSocket()]  # (both lanes flooded)
+    rec.log = LogWriter(tmp_path / "two.lcmlog")
+    try:
+        assert finishes(rec.spin, 0.0) == SPIN_MAX
+    finally:
+        rec.close()
+
+
+def test_a_drain_whose_time_ends_as_the_queues_run_dry_says_nothing(tmp_path, capsys):
+    """(The last messages written right at the drain's end: nothing was left, no warning.)"""
+    class LastOnesSlow(EndlessSocket):
+        def __init__(self) -> None:
+            super().__init__()
+            self.left = 3
+
+        def read(self):
+            if not self.left:
+                return False
+            self.left -= 1
+            time.sleep(0.2)
+            if not self.left:
+                self.a.recv(1)  # (select: nothing waiting once the last is read)
+            return ("SB_LAST", b"m")
+
+    rec = udpm_record.UdpmRecorder.__new__(udpm_record.UdpmRecorder)
+    rec.channels, rec.receivers = set(), [LastOnesSlow()]
+    rec.log = LogWriter(tmp_path / "last.lcmlog")
+    assert record.record_until(rec, lambda: True, drain_s=0.3) == 3
+    assert capsys.readouterr().err == ""
+
+
 def test_a_second_signal_ends_the_drain_at_once(flooded_udpm):
     t0 = time.monotonic()
     finishes(record.record_until, flooded_udpm, lambda: True, drain_s=60, abort=lambda: time.monotonic() - t0 > 0.2)
@@ -164,3 +199,40 @@ def test_can_record_under_a_flood_stops_after_the_drain_time(tmp_path, monkeypat
             signal.signal(s, h)
     assert took < 5, f"can-record took {took:.1f} s to stop under a flood"
     assert n > 0 and "still coming when it stopped writing, 0.3 s after the stop" in capsys.readouterr().err
+
+
+def test_a_signal_during_the_drain_after_seconds_ends_it(tmp_path, monkeypatch, flooded_udpm):
+    """`skillbus record --seconds S`: the recording ends by its time, and the first Ctrl-C
+    during its drain ends that (before, only a second one did)."""
+    import argparse
+    monkeypatch.setattr(record, "open_recorder", lambda url, path: flooded_udpm)
+    monkeypatch.setattr(record, "DRAIN_S", 60.0)
+    old = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGINT)}
+    timer = threading.Timer(0.6, os.kill, (os.getpid(), signal.SIGINT))
+    try:
+        timer.start()
+        t0 = time.monotonic()
+        rc = record.main(argparse.Namespace(file=str(tmp_path / "x.lcmlog"), url="udpm://239.255.76.67:7667", seconds=0.2))
+        took = time.monotonic() - t0
+    finally:
+        timer.cancel()
+        for sig, h in old.items():
+            signal.signal(sig, h)
+    assert rc == 0 and took < 10, took
+
+
+def test_can_record_a_signal_during_the_drain_after_seconds_ends_it(tmp_path, monkeypatch):
+    monkeypatch.setattr(canlog.can, "Bus", EndlessCanBus)
+    monkeypatch.setattr(canlog, "DRAIN_S", 60.0)
+    old = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGINT)}
+    timer = threading.Timer(0.6, os.kill, (os.getpid(), signal.SIGTERM))
+    try:
+        timer.start()
+        t0 = time.monotonic()
+        n = canlog.record("flood", str(tmp_path / "flood.log"), seconds=0.2)
+        took = time.monotonic() - t0
+    finally:
+        timer.cancel()
+        for sig, h in old.items():
+            signal.signal(sig, h)
+    assert n > 0 and took < 10, took

@@ -23,7 +23,7 @@ import canopen
 
 from skillbus.can import cia402 as c
 from skillbus.can.eds import EDS
-from skillbus.record import DRAIN_S
+from skillbus.record import DRAIN_S, say_drain_cut
 
 NMT_COMMANDS = {0x01: "start", 0x02: "stop", 0x80: "enter pre-operational", 0x81: "reset node",
                 0x82: "reset communication"}
@@ -39,7 +39,7 @@ def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: f
     """Writes every frame on the bus to `path` (candump format for .log) until `seconds`
     pass or SIGINT/SIGTERM; returns how many. OSError, ValueError (a file name python-can
     has no format for) or can.CanError, before it says it records, when it cannot."""
-    stop = [0]  # the signals received: the first stops the recording, a second its drain
+    stop = [0]  # the signals received: one stops the recording, one more its drain
 
     def on_signal(*_):
         stop[0] += 1
@@ -69,13 +69,13 @@ def record(channel: str, path: str, interface: str = "skillbus_vcan", seconds: f
         # Stopped: the frames that reached the recorder before the stop are kept too (a
         # stop is asked for after something was sent; it must be in the log), for
         # DRAIN_S at most: a bus that sends faster than this writes would keep it forever.
-        drain_end = time.monotonic() + DRAIN_S
+        drain_end, signals_at_stop = time.monotonic() + DRAIN_S, stop[0]
         while (msg := bus.recv(0.0)) is not None:
+            cut = time.monotonic() >= drain_end or stop[0] > signals_at_stop  # (and a frame still came)
             log.on_message_received(msg)
             n += 1
-            if time.monotonic() >= drain_end or stop[0] >= 2:
-                print(f"can-record: frames were still coming when it stopped writing, {DRAIN_S:g} s after the stop "
-                      "(or at a second signal): the log ends there", file=sys.stderr, flush=True)
+            if cut:
+                say_drain_cut("can-record", "frames", DRAIN_S)
                 break
     finally:  # nothing is lost on a stop: the file is flushed and closed
         log.stop()
