@@ -16,6 +16,18 @@ class EndlessBus:
         self.handled += 1
         return True
 
+    def caught_up_at(self) -> float:
+        return 0.0
+
+
+class JunkBus(EndlessBus):
+    """A bus flooded with datagrams nobody reads: each handle() gives up on them (False)
+    without having caught up."""
+
+    def handle(self, timeout: float) -> bool:
+        self.handled += 1
+        return False
+
 
 def test_jobs_chores_and_the_stop_get_through_a_flood():
     bus = EndlessBus()
@@ -27,6 +39,22 @@ def test_jobs_chores_and_the_stop_get_through_a_flood():
         assert w.submit(lambda: "served").result(timeout=10) == "served"
         assert w.submit(lambda: len(chores)).result(timeout=10) >= 1
         assert bus.handled >= bus_worker.DISPATCH_MAX  # (the flood was dispatched meanwhile)
+    finally:
+        w.stop(timeout=10)
+    assert not w._thread.is_alive()
+
+
+def test_a_bus_that_gives_up_on_junk_is_read_again_at_once():
+    """(Not after the poll period: the wanted messages behind the junk would wait, and a
+    socket flooded meanwhile overflows.)"""
+    import time
+    bus = JunkBus()
+    w = BusWorker(lambda: bus, poll_s=0.5)
+    w.start()
+    try:
+        time.sleep(0.5)
+        assert bus.handled > 20, bus.handled  # (about 1 with a wait of poll_s after each)
+        assert w.submit(lambda: "served").result(timeout=10) == "served"
     finally:
         w.stop(timeout=10)
     assert not w._thread.is_alive()

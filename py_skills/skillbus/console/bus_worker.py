@@ -77,11 +77,14 @@ class BusWorker:
             self._run_jobs()
             self._run_chores()
             try:
+                batch_began = time.monotonic()
                 for _ in range(DISPATCH_MAX):
                     if not self.bus.handle(0.0):
                         break
                 else:  # (more waiting: the jobs and the stop first, then at once the rest)
                     continue
+                if self.bus.caught_up_at() < batch_began:
+                    continue  # (a handle() that gave up on a flood of junk: the rest at once too)
             except Exception:
                 log.exception("the bus failed while dispatching")
             self._wake.wait(self._poll_s)
