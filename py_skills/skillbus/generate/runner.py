@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from skillbus.generate.config import GenerateConfig, as_dict
+from skillbus.generate.episode import WALL_SLACK_S
 from skillbus.generate.lerobot import DatasetWriter
 from skillbus.generate.uninterrupted import uninterrupted
 
@@ -105,15 +106,33 @@ def stop_workers() -> None:
                 p.terminate()
 
 
+# Beyond the episode's own bound on its session (max_sim_s + WALL_SLACK_S): the worker's
+# start (its namespaces, the interpreter) and the end of its processes.
+WORKER_SLACK_S = 120.0
+
+
+def worker_time_limit(cfg: GenerateConfig) -> float:
+    """How long a worker may take, wall clock, before it is killed and its episode counted
+    as broken (and run again, as a crashed one is): a worker stuck past its episode's own
+    limits must not hold the dataset's order for ever."""
+    return cfg.max_sim_s + WALL_SLACK_S + WORKER_SLACK_S
+
+
 def run_local(cfg: GenerateConfig, seed: int, request: int, attempt: int, work: Path) -> dict[str, Any]:
     out = work / f"result-{request:06d}-{attempt}.pkl"
     log = work / f"worker-{request:06d}-{attempt}.log"
+    limit = worker_time_limit(cfg)
     with open(log, "wb") as f:
         p = subprocess.Popen(worker_argv(cfg, seed, request, attempt, work, out), stdout=f, stderr=subprocess.STDOUT)
         with _live_lock:
             _live.add(p)
         try:
-            p.wait()
+            try:
+                p.wait(timeout=limit)
+            except subprocess.TimeoutExpired:
+                p.kill()  # (unshare's --kill-child then ends the episode's namespace with it)
+                p.wait(timeout=30)
+                return {"error": f"the worker gave no result within {limit:.0f} s (killed)"}
         finally:
             with _live_lock:
                 _live.discard(p)
