@@ -51,12 +51,13 @@ class UdpmRecorder:
             raise
 
     def spin(self, timeout: float = 0.05) -> int:
-        """Writes what arrived, SPIN_MAX datagrams at most, waiting at most `timeout` for
-        it; returns the datagrams read."""
+        """Writes what arrived, SPIN_MAX datagrams of each lane at most (a flooded lane does
+        not starve the other), waiting at most `timeout` for it; returns the datagrams
+        read."""
         ready, _, _ = select.select(self.receivers, [], [], timeout)
         read = 0
         for r in ready:
-            while read < SPIN_MAX:
+            for _ in range(SPIN_MAX):
                 got = r.read()
                 if got is False:  # (nothing more now; None: a fragment, or a datagram that does not parse)
                     break

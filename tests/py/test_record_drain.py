@@ -111,12 +111,26 @@ def test_a_stop_under_a_flood_ends_after_the_drain_time_and_says_so(kind, reques
     assert "still coming when it stopped writing, 0.3 s after the stop" in capsys.readouterr().err
 
 
-def test_a_spin_reads_spin_max_in_all_whatever_the_sockets(tmp_path):
+def test_a_flooded_lane_does_not_starve_the_other(tmp_path):
+    class Some(EndlessSocket):
+        def __init__(self) -> None:
+            super().__init__()
+            self.left = 5
+
+        def read(self):
+            self.reads += 1
+            if not self.left:
+                return False
+            self.left -= 1
+            return ("SB_LOCKSTEP_ACK", b"a")
+
+    flooded, acks = EndlessSocket(), Some()
     rec = udpm_record.UdpmRecorder.__new__(udpm_record.UdpmRecorder)
-    rec.channels, rec.receivers = set(), [EndlessSocket(), EndlessSocket()]  # (both lanes flooded)
+    rec.channels, rec.receivers = set(), [flooded, acks]  # (lane 0 flooded, lane 1 with 5 acks)
     rec.log = LogWriter(tmp_path / "two.lcmlog")
     try:
-        assert finishes(rec.spin, 0.0) == SPIN_MAX
+        assert finishes(rec.spin, 0.0) == SPIN_MAX + 5
+        assert flooded.reads == SPIN_MAX and acks.left == 0
     finally:
         rec.close()
 
