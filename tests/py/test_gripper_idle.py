@@ -82,22 +82,16 @@ def test_a_release_idles_until_the_fingers_could_be_open_capped_for_faults():
     assert execute_at(skill, 1.3)[1] == 0
 
 
-@pytest.mark.parametrize("side", [0.05, None, float("nan")])
-def test_a_grasp_may_touch_its_object_at_any_width_and_is_ticked_as_always(side):
+@pytest.mark.parametrize("cls, side", [(grasp, 0.05), (grasp, None), (grasp, float("nan")), (gripper_close, None)],
+                         ids=["grasp", "grasp-no-size", "grasp-nan-size", "close"])
+def test_a_grasp_or_close_may_touch_something_at_any_width_and_is_ticked_as_always(cls, side):
     """(A 50 mm cube turned by 20 degrees is 64 mm across the fingers: a grasp that idled
     until the fingers reached 50 mm would skip the tick that finds it gripped.)"""
     d = FakeDriver()
-    skill = started(grasp, d, side=side)
+    skill = started(cls, d, side=side)
     moving(d, 79_000)
     state, until = execute_at(skill, 1.0)
     assert (state, until) == (State.Running, 0)
-
-
-def test_a_close_may_meet_anything_and_is_ticked_as_always():
-    d = FakeDriver()
-    skill = started(gripper_close, d)
-    moving(d, 79_000)
-    assert execute_at(skill, 1.0)[1] == 0
 
 
 def test_no_idling_on_a_status_from_before_the_command_or_without_a_speed():

@@ -9,12 +9,10 @@ import math
 
 import pytest
 
-from skillbus.bus import open_bus
-from skillbus.msgs import skill_state_t, skill_tick_reply_t, skill_tick_t
+from skillbus.msgs import skill_state_t, skill_tick_t
 from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
-from skillbus.skill.process import SkillProcess
 from skillbus import tick_context
-from tick_messages import tick_msg
+from tick_messages import in_process, on_the_wire, tick_msg
 
 
 class Wait(SkillDescription):
@@ -51,13 +49,8 @@ def tick(label: str, action: int, sim_s: float, **values) -> skill_tick_t:
 
 @pytest.fixture
 def process():
-    proc = SkillProcess(open_bus("memq://"), "t", [__name__])
-    assert not proc.errors, proc.errors
-    return proc
+    return in_process(__name__)
 
-
-def on_the_wire(r) -> skill_tick_reply_t:
-    return skill_tick_reply_t.decode(r.encode())
 
 
 def test_a_running_skill_that_idles_says_until_when_in_its_reply(process):

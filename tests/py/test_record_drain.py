@@ -5,6 +5,7 @@ that never run dry; the real processes are tests/integration/test_record_flood.p
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import socket
@@ -184,6 +185,21 @@ def test_a_drain_that_empties_the_queues_writes_everything_and_says_nothing(tmp_
     assert capsys.readouterr().err == ""
 
 
+@contextlib.contextmanager
+def signal_after(delay_s: float, sig: int):
+    """`sig` to this process after `delay_s`; the handlers of SIGTERM and SIGINT (which the
+    recorders replace) as they were afterwards."""
+    old = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)}
+    timer = threading.Timer(delay_s, os.kill, (os.getpid(), sig))
+    try:
+        timer.start()
+        yield
+    finally:
+        timer.cancel()
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
 class EndlessCanBus:
     """can.Bus as can-record opens it, with a frame always waiting."""
 
@@ -200,17 +216,10 @@ class EndlessCanBus:
 def test_can_record_under_a_flood_stops_after_the_drain_time(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(canlog.can, "Bus", EndlessCanBus)
     monkeypatch.setattr(canlog, "DRAIN_S", 0.3)
-    old = {s: signal.getsignal(s) for s in (signal.SIGTERM, signal.SIGINT)}
-    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGTERM))
-    try:
-        timer.start()
+    with signal_after(0.2, signal.SIGTERM):
         t0 = time.monotonic()
         n = canlog.record("flood", str(tmp_path / "flood.log"), seconds=LIMIT_S)
         took = time.monotonic() - t0
-    finally:
-        timer.cancel()
-        for s, h in old.items():
-            signal.signal(s, h)
     assert took < 5, f"can-record took {took:.1f} s to stop under a flood"
     assert n > 0 and "still coming when it stopped writing, 0.3 s after the stop" in capsys.readouterr().err
 
@@ -221,32 +230,18 @@ def test_a_signal_during_the_drain_after_seconds_ends_it(tmp_path, monkeypatch, 
     import argparse
     monkeypatch.setattr(record, "open_recorder", lambda url, path: flooded_udpm)
     monkeypatch.setattr(record, "DRAIN_S", 60.0)
-    old = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGINT)}
-    timer = threading.Timer(0.6, os.kill, (os.getpid(), signal.SIGINT))
-    try:
-        timer.start()
+    with signal_after(0.6, signal.SIGINT):
         t0 = time.monotonic()
         rc = record.main(argparse.Namespace(file=str(tmp_path / "x.lcmlog"), url="udpm://239.255.76.67:7667", seconds=0.2))
         took = time.monotonic() - t0
-    finally:
-        timer.cancel()
-        for sig, h in old.items():
-            signal.signal(sig, h)
     assert rc == 0 and took < 10, took
 
 
 def test_can_record_a_signal_during_the_drain_after_seconds_ends_it(tmp_path, monkeypatch):
     monkeypatch.setattr(canlog.can, "Bus", EndlessCanBus)
     monkeypatch.setattr(canlog, "DRAIN_S", 60.0)
-    old = {sig: signal.getsignal(sig) for sig in (signal.SIGTERM, signal.SIGINT)}
-    timer = threading.Timer(0.6, os.kill, (os.getpid(), signal.SIGTERM))
-    try:
-        timer.start()
+    with signal_after(0.6, signal.SIGTERM):
         t0 = time.monotonic()
         n = canlog.record("flood", str(tmp_path / "flood.log"), seconds=0.2)
         took = time.monotonic() - t0
-    finally:
-        timer.cancel()
-        for sig, h in old.items():
-            signal.signal(sig, h)
     assert n > 0 and took < 10, took

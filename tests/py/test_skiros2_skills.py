@@ -9,15 +9,13 @@ from __future__ import annotations
 
 import pytest
 
-from skillbus.bus import open_bus
 from skillbus.msgs import skill_tick_t
 from skillbus.skill import (Element, ParallelFf, ParamTypes, PrimitiveBase, Serial, SkillBase, SkillDescription,
                             SkillWrapper, State)
 from skillbus.skill import ros_clock
 from skillbus.skill.convert import param_msg
-from skillbus.skill.process import SkillProcess
 from skillbus import tick_context
-from tick_messages import tick_msg
+from tick_messages import in_process, tick_msg
 
 
 # -- a library (this module is loaded by the skill process) ------------------------------------
@@ -84,9 +82,7 @@ def tick(label: str, action: int, instance: int = 1, **values) -> skill_tick_t:
 @pytest.fixture
 def process():
     EXPANDED.clear()
-    proc = SkillProcess(open_bus("memq://"), "t", [__name__])
-    assert not proc.errors, proc.errors
-    return proc
+    return in_process(__name__)
 
 
 # -- attributes ---------------------------------------------------------------------------------
@@ -120,7 +116,7 @@ def test_progress_counter_as_skiros2():
 
 
 def test_the_process_reports_codes_one_to_n_and_succeeds_on_tick_n():
-    proc = SkillProcess(open_bus("memq://"), "t", [__name__])
+    proc = in_process(__name__)
     replies = [proc.on_tick(tick("count_up", skill_tick_t.START, Until=10))]
     while replies[-1].state == State.Running and len(replies) < 20:
         replies.append(proc.on_tick(tick("count_up", skill_tick_t.EXECUTE, Until=10)))

@@ -11,11 +11,9 @@ import logging
 
 import pytest
 
-from skillbus.bus import open_bus
 from skillbus.msgs import skill_state_t, skill_tick_reply_t, skill_tick_t
 from skillbus.skill import ParamTypes, PrimitiveBase, SkillDescription
-from skillbus.skill.process import SkillProcess
-from tick_messages import tick_msg
+from tick_messages import in_process, on_the_wire, tick_msg
 
 CALLS: list[str] = []
 
@@ -69,13 +67,8 @@ def tick(label: str, action: int, **values) -> skill_tick_t:
 @pytest.fixture
 def process():
     CALLS.clear()
-    proc = SkillProcess(open_bus("memq://"), "t", [__name__])
-    assert not proc.errors, proc.errors
-    return proc
+    return in_process(__name__)
 
-
-def on_the_wire(r) -> skill_tick_reply_t:
-    return skill_tick_reply_t.decode(r.encode())
 
 
 def note(r: skill_tick_reply_t) -> str:

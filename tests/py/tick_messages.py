@@ -1,10 +1,25 @@
-"""A manager's tick as the skill process receives it, for tests that drive a SkillProcess
-in-process: skill_tick_t with one value per parameter (bool, int or float by its Python
-type), through the wire and back."""
+"""For tests that drive a SkillProcess in-process: the process itself (on a memq:// bus),
+a manager's tick as the process receives it (skill_tick_t with one value per parameter:
+bool, int or float by its Python type, through the wire and back), and a reply as the
+manager receives it."""
 
 from __future__ import annotations
 
-from skillbus.msgs import skill_param_t, skill_tick_t, skill_value_t
+from skillbus.bus import open_bus
+from skillbus.msgs import skill_param_t, skill_tick_reply_t, skill_tick_t, skill_value_t
+from skillbus.skill.process import SkillProcess
+
+
+def in_process(*libraries: str) -> SkillProcess:
+    """A skill process named "t" on its own memq:// bus with `libraries` loaded, none failed."""
+    proc = SkillProcess(open_bus("memq://"), "t", list(libraries))
+    assert not proc.errors, proc.errors
+    return proc
+
+
+def on_the_wire(r) -> skill_tick_reply_t:
+    """A reply as the manager decodes it."""
+    return skill_tick_reply_t.decode(r.encode())
 
 
 def tick_msg(label: str, action: int, instance: int = 1, frame: int = -1, sim_time_ns: int = 0,
