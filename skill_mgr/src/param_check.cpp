@@ -78,6 +78,20 @@ std::string check_given(const skillbus_msgs::skill_description_t& d, const std::
   return "";
 }
 
+std::string check_returned(const skillbus_msgs::skill_description_t& d, const std::vector<Param>& returned) {
+  for (const auto& p : returned) {
+    const skill_param_t* decl = declaration(d, p.key);
+    if (!decl) return "a parameter " + p.key + " that " + d.type + " does not have (it has: " + keys_of(d) + ")";
+    const int want = expected_value_type(decl->data_type);
+    if (want < 0) continue;  // a data type the manager does not know travels as it came
+    for (const auto& v : p.values)
+      if (v.type != want && !(want == skill_value_t::FLOAT && v.type == skill_value_t::INT))
+        return "parameter " + p.key + " as a " + value_type_name(v.type) + ", where " + d.type + " declares a " +
+               decl->data_type;
+  }
+  return "";
+}
+
 std::string fit_specified(const skillbus_msgs::skill_description_t& d, Param& p) {
   const skill_param_t* decl = declaration(d, p.key);
   if (!decl) return d.type + " has no parameter " + p.key;

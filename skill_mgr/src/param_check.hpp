@@ -22,6 +22,11 @@ namespace skillbus::skills {
 // "" or why the given parameters do not fit the description.
 std::string check_given(const skillbus_msgs::skill_description_t& d, const std::vector<Param>& given);
 
+// What a skill process answers a tick with: "" or the first parameter that the skill does
+// not have, or whose values are not of its declared type (whatever the parameter's own
+// data_type says). Such a value would reach the blackboard, and the skill's siblings.
+std::string check_returned(const skillbus_msgs::skill_description_t& d, const std::vector<Param>& returned);
+
 // Fills `p` (key and one text value) with the typed value of its declaration; "" or why not.
 // Bools: true/false/1/0 (any case); lists and dicts: JSON text, kept as JSON.
 std::string parse_text(const skillbus_msgs::skill_description_t& d, Param& p);

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "param_check.hpp"
 #include "skill_params.hpp"
 #include "skillbus_msgs/skill_state_t.hpp"
 #include "skillbus_msgs/skill_tick_reply_t.hpp"
@@ -16,13 +17,41 @@ namespace {
 
 constexpr int kFailed = skill_state_t::CODE_FAILED;
 
-// A state from the wire; anything unknown is a failure.
+// A state from the wire (a checked reply's: RUNNING, SUCCESS or FAILURE).
 State to_state(int8_t s) {
   switch (s) {
     case skill_state_t::RUNNING: return State::Running;
     case skill_state_t::SUCCESS: return State::Success;
     default: return State::Failure;
   }
+}
+
+const char* action_name(int8_t action) {
+  switch (action) {
+    case skill_tick_t::START: return "START";
+    case skill_tick_t::EXECUTE: return "EXECUTE";
+    case skill_tick_t::PREEMPT: return "PREEMPT";
+    case skill_tick_t::END: return "END";
+    default: return "tick";
+  }
+}
+
+// What is wrong with a reply, or "". Acted on, each would go wrong quietly:
+// - a parameter the skill does not have, or a value of another type than declared: written
+//   to the blackboard, it would reach the skill's siblings (a wrong value becoming another
+//   object);
+// - a state that is no tick's answer: the skill failed without a reason given;
+// - a START or EXECUTE answered RUNNING that says it ended the instance: ticked on, never
+//   sent its END (its onEnd never run where the process did not in fact forget it).
+std::string wrong_in_reply(const skillbus_msgs::skill_description_t& d, int8_t action,
+                          const skillbus_msgs::skill_tick_reply_t& r) {
+  if (const std::string bad = check_returned(d, r.params); !bad.empty()) return bad;
+  if (action == skill_tick_t::END) return "";  // (its state is not used)
+  if (r.state != skill_state_t::RUNNING && r.state != skill_state_t::SUCCESS && r.state != skill_state_t::FAILURE)
+    return "state " + std::to_string(r.state) + ", which is not RUNNING, SUCCESS or FAILURE";
+  if (r.ended && r.state == skill_state_t::RUNNING && action != skill_tick_t::PREEMPT)
+    return "RUNNING and said the same tick ended the instance (onEnd ran): a reply that contradicts itself";
+  return "";
 }
 
 std::string seconds(std::chrono::milliseconds d) {
@@ -111,6 +140,16 @@ State RemotePrimitive::call(int8_t action) {
     }
     params_ = std::move(t.params);
     params_text_stale_ = true;  // (whatever read the text while they were lent read none)
+    if (const std::string wrong = wrong_in_reply(impl_.description, action, reply); !wrong.empty()) {
+      // Not trusted to have ended it either: the END that follows the failure ends it
+      // where it still runs (and is answered "no running instance" where it does not).
+      ended_ = false;
+      set_result("skill process " + impl_.process + " answered the " + action_name(action) + " of " +
+                     impl_.description.label + " with " + wrong +
+                     (reply.message.empty() ? "" : " (its message: " + reply.message + ")"),
+                 kFailed);
+      return State::Failure;
+    }
     set_result(reply.message, reply.code, reply.progress);
     wm_version_ = reply.wm_version;
     ended_ = reply.ended;

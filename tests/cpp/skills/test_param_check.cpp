@@ -162,6 +162,24 @@ TEST(ParamCheck, GivenValuesMustHaveTheirParametersType) {
   EXPECT_EQ(check_given(d, {text("Nope", "1")}), "Echo has no parameter Nope (it has: N, Flag, Gain, Items)");
 }
 
+TEST(ParamCheck, ReturnedValuesAreTypedByTheDeclarationNotByThemselves) {
+  const auto d = echo();
+  Param n = text("N", "5");  // a reply that claims no data type: a str where N is an int
+  EXPECT_EQ(check_returned(d, {n}), "parameter N as a str, where Echo declares a int");
+  n.data_type = "int";  // nor one that claims the right type for the wrong value
+  EXPECT_EQ(check_returned(d, {n}), "parameter N as a str, where Echo declares a int");
+  EXPECT_EQ(check_returned(d, {text("Nope", "1")}), "a parameter Nope that Echo does not have (it has: N, Flag, Gain, Items)");
+  Param gain{};
+  gain.key = "Gain";
+  skill_value_t i{};
+  i.type = skill_value_t::INT;
+  i.i = 2;
+  gain.values = {i};
+  Param emptied{};
+  emptied.key = "N";  // a value taken away is the skill's to do
+  EXPECT_EQ(check_returned(d, {gain, emptied}), "");
+}
+
 TEST(Conditions, WhatCannotBeJudgedFailsWhateverTheDesiredState) {
   auto w = demo_world();
   Condition not_holding{};
