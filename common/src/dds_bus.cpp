@@ -29,8 +29,25 @@ bool is_request(const std::string& channel) {
   return channel.size() >= 4 && channel.compare(channel.size() - 4, 4, "_REQ") == 0;
 }
 
+bool ends_with(const std::string& s, const char* tail) {
+  const size_t n = std::char_traits<char>::length(tail);
+  return s.size() >= n && s.compare(s.size() - n, n, tail) == 0;
+}
+
+// State: what a publisher sends again and again, each message replacing the last (the
+// physics' arm and simulator state, the objects a camera sees, articulated joints).
 bool is_state(const std::string& channel) {
-  return channel.size() >= 6 && channel.compare(channel.size() - 6, 6, "_STATE") == 0;
+  return ends_with(channel, "_STATE") || ends_with(channel, "_OBJECTS") || ends_with(channel, "_ARTICULATION");
+}
+
+// How long before a reader existed a sample may have been written and still be delivered
+// to it. RPC requests: none (above). State: none either, as on LCM: a reader that comes
+// later wants the state as it is, and a writer's history for late joiners held a second
+// of it under lockstep (a probe reading the arm's pose saw where it had been before its
+// last move). What was written after the reader existed still arrives when discovery
+// matches them late.
+dds_duration_t late_joiner_window(const std::string& channel) {
+  return is_request(channel) || is_state(channel) ? 0 : kLateJoinerWindow;
 }
 
 std::string dds_error(dds_return_t r) { return dds_strretcode(r); }
@@ -211,7 +228,7 @@ int DdsBus::subscribe(const std::string& channel, Handler handler, int /*queue_c
     r.condition = dds_create_readcondition(r.reader, DDS_ANY_STATE);
     if (r.condition < 0 || dds_waitset_attach(waitset_, r.condition, r.condition) < 0)
       throw BusError("DDS read condition for " + channel);
-    r.since = dds_time() - (is_request(channel) ? 0 : kLateJoinerWindow);
+    r.since = dds_time() - late_joiner_window(channel);
     it = readers_.emplace(channel, std::move(r)).first;
     order_.push_back(channel);
   }

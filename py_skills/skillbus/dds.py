@@ -12,9 +12,10 @@ Quality of service per channel class (docs/transport.md, "DDS"):
 * everything by default (RPC, lockstep, the world model's change stream, skills):
   reliable, keep-all, transient-local with the last 16 kept for readers that match
   later: nothing published to a matched reader is lost;
-* state (names ending in ``_STATE``): reliable keep-last 32 (a reader that falls 32
-  behind gets the latest), or with ``state=best-effort`` best-effort keep-last 32, for
-  wall-clock state on a real network (never under lockstep: a lost state stops a run).
+* state (names ending in ``_STATE``, ``_OBJECTS``, ``_ARTICULATION``): reliable keep-last
+  1,024 (a reader that falls that far behind gets the latest), or with
+  ``state=best-effort`` best-effort, for wall-clock state on a real network (never under
+  lockstep: a lost state stops a run); a reader gets none written before it existed.
 
 Private by default: the participant talks on loopback only (no multicast; discovery by
 unicast to localhost); a $CYCLONEDDS_URI of the user's is used only where the network is
@@ -163,7 +164,20 @@ def config_xml(u: DdsUrl) -> str:
 
 
 def is_state(channel: str) -> bool:
-    return channel.endswith("_STATE")
+    """State: what a publisher sends again and again, each message replacing the last (the
+    physics' arm and simulator state, the objects a camera sees, articulated joints)."""
+    return channel.endswith(("_STATE", "_OBJECTS", "_ARTICULATION"))
+
+
+def late_joiner_window_ns(channel: str) -> int:
+    """How long before a reader existed a sample may have been written and still be
+    delivered to it. RPC requests: none (a restarted server must not execute its
+    predecessor's requests; the client's retry reaches it), as on LCM. State: none either,
+    as on LCM: a reader that comes later wants the state as it is, and a writer's history
+    for late joiners held a second of it under lockstep (a probe reading the arm's pose saw
+    where it had been before its last move). What was written after the reader existed
+    still arrives when discovery matches them late."""
+    return 0 if channel.endswith("_REQ") or is_state(channel) else LATE_JOINER_WINDOW_NS
 
 
 def wrap(data: bytes) -> bytes:
@@ -305,10 +319,7 @@ class DdsBus(Bus):
             cond = self._core.ReadCondition(r, self._mask)
             self._waitset.attach(cond)
             self._readers[channel] = (r, cond)
-            # An RPC request written before this reader existed is never delivered: a
-            # restarted server must not execute its predecessor's requests (the client's
-            # retry reaches it), as on LCM.
-            self._since[channel] = time.time_ns() - (0 if channel.endswith("_REQ") else LATE_JOINER_WINDOW_NS)
+            self._since[channel] = time.time_ns() - late_joiner_window_ns(channel)
             self._order.append(channel)
         sid = self._next_id
         self._next_id += 1
