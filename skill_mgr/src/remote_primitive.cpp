@@ -152,6 +152,12 @@ State RemotePrimitive::call(int8_t action) {
     }
     set_result(reply.message, reply.code, reply.progress);
     wm_version_ = reply.wm_version;
+    // What the skill wrote (or saw) is in the replica before anything after this tick
+    // reads the world: its post-conditions, and the next skill's element parameters, which
+    // are read from the replica (outside lockstep the change stream may lag the skill's
+    // commit reply; on DDS the next skill was handed the element as it was before).
+    if (ctx_.world && ctx_.world->ready() && wm_version_ > ctx_.world->store().version())
+      ctx_.world->wait_for(wm_version_, std::chrono::milliseconds(1000));
     ended_ = reply.ended;
     idle_until_ns_ = reply.state == skill_state_t::RUNNING ? reply.idle_until_ns : 0;
     // What the skill changed goes to the blackboard, an emptied value included; what it
@@ -201,11 +207,7 @@ State RemotePrimitive::step() {
   const int8_t action = first_ ? skill_tick_t::START : skill_tick_t::EXECUTE;
   first_ = false;
   const State s = call(action);
-  if (s == State::Success) {
-    // The skill's own last writes must be in the replica before its post-conditions are
-    // judged (outside lockstep the change stream may lag the skill's commit reply).
-    if (ctx_.world && wm_version_ >= 0 && !impl_.description.post.empty())
-      ctx_.world->wait_for(wm_version_, std::chrono::milliseconds(1000));
+  if (s == State::Success) {  // (the replica has the skill's writes: call)
     const std::string unmet = check_post(ctx_, impl_, params_);
     if (!unmet.empty()) {
       set_result(unmet, kFailed);

@@ -39,11 +39,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--crash-after-commits", o.crash_after_commits,
                  "tests: die after this many durable commits, before replying (-1: never)");
+  double hold_changes_ms = 0;
+  app.add_option("--hold-changes-ms", hold_changes_ms,
+                 "tests, with --wall-clock: publish each change this long after its commit (a slow change stream)")
+      ->check(CLI::NonNegativeNumber);
   bool repair = false;
   app.add_flag("--repair", repair,
                "check the --data directory and exit; a damaged journal is replaced by its intact records before "
                "the damage (the original kept as journal.bin.corrupt); see docs/world_model.md, Durability");
   apps::parse_or_exit(app, argc, argv);
+  o.hold_changes_ns = static_cast<int64_t>(hold_changes_ms * 1e6);
   if (repair) {  // no bus, no server: the files only
     const wm::RepairResult r = wm::repair_data_dir(o.data_dir);
     std::fprintf(r.exit_code == 0 ? stdout : stderr, "wm_server: %s\n", r.message.c_str());

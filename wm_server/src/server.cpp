@@ -268,9 +268,12 @@ wm_commit_t WorldModelServer::commit(wm_txn_t txn) {
   change.version = r.version;
   for (const auto& op : r.effect) change.ops.push_back(to_msg(op));
   change.num_ops = static_cast<int32_t>(change.ops.size());
-  pending_changes_.push_back(std::move(change));
+  if (opt_.wall_clock) {
+    publish_change_now(std::move(change));
+  } else {
+    pending_changes_.push_back(std::move(change));
+  }
   if (journal_.snapshot_due(opt_.snapshot_every)) snapshot(true);
-  if (opt_.wall_clock) on_frame(participant_.frame(), 0);  // publish the change now
   return c;
 }
 
@@ -283,9 +286,23 @@ void WorldModelServer::on_txn_message(const StampedMessage& m) {
   pending_results_.push_back(std::move(c));
 }
 
+void WorldModelServer::publish_change_now(wm_change_t change) {
+  if (opt_.hold_changes_ns > 0) {  // (tests: on_frame publishes it when its time has come)
+    held_changes_.emplace_back(std::chrono::steady_clock::now() + std::chrono::nanoseconds(opt_.hold_changes_ns),
+                               std::move(change));
+    return;
+  }
+  pending_changes_.push_back(std::move(change));
+  on_frame(participant_.frame(), 0);
+}
+
 void WorldModelServer::on_frame(int64_t, int64_t) {
   // Changes and lockstep results go out inside a frame so that they are stamped,
   // counted and delivered in canonical order (RPC commits between frames wait here).
+  while (!held_changes_.empty() && held_changes_.front().first <= std::chrono::steady_clock::now()) {
+    pending_changes_.push_back(std::move(held_changes_.front().second));
+    held_changes_.pop_front();
+  }
   for (auto& c : pending_results_) participant_.publish(channel("SB_WM_TXN_RESULT"), c);
   for (auto& ch : pending_changes_) participant_.publish(channel("SB_WM_CHANGES"), ch);
   pending_results_.clear();

@@ -161,8 +161,11 @@ void WorldModelServer::announce_reset() {
   wm_change_t change{};
   change.version = store_.version();
   change.reset = true;
-  pending_changes_.push_back(change);
-  if (opt_.wall_clock) on_frame(participant_.frame(), 0);
+  if (opt_.wall_clock) {
+    publish_change_now(change);
+  } else {
+    pending_changes_.push_back(change);
+  }
 }
 
 wm_lock_t WorldModelServer::on_lock(const wm_lock_t& req) {

@@ -1,6 +1,7 @@
 // The world model server process (see wm_server/README.md for its channels and RPCs).
 #pragma once
 
+#include <chrono>
 #include <deque>
 #include <map>
 #include <memory>
@@ -37,6 +38,7 @@ struct ServerOptions {
   long snapshot_every = 1000;               // commits between snapshots
   size_t recent_memory = 4096;              // transactions remembered for exactly-once
   long crash_after_commits = -1;            // tests: die (_exit) after this many durable commits, before replying
+  int64_t hold_changes_ns = 0;              // tests, wall clock: publish each change this long after it (a slow change stream)
   // The largest reply of get, query and snapshot, encoded: a larger one is refused,
   // naming paging. An LCM message over UDP is lost whole with any of its 64 KB
   // fragments, and a default receive buffer (208 KB) holds about three of them.
@@ -117,6 +119,8 @@ class WorldModelServer {
   std::map<std::string, int64_t> last_request_;  // client -> the highest request id answered (kept past recent_)
   std::deque<std::string> recent_order_;
   std::vector<skillbus_msgs::wm_change_t> pending_changes_;
+  std::deque<std::pair<std::chrono::steady_clock::time_point, skillbus_msgs::wm_change_t>> held_changes_;  // hold_changes_ns
+  void publish_change_now(skillbus_msgs::wm_change_t change);  // (wall clock)
   std::vector<skillbus_msgs::wm_commit_t> pending_results_;
   std::string startup_report_;
   std::string ontology_report_;  // what was loaded from --ontology
