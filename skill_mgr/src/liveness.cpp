@@ -1,5 +1,7 @@
 #include "liveness.hpp"
 
+#include <algorithm>
+
 #include "skillbus/log.hpp"
 #include "skillbus_msgs/skill_alive_t.hpp"
 
@@ -9,7 +11,7 @@ using skillbus_msgs::skill_alive_t;
 using steady = std::chrono::steady_clock;
 
 Liveness::Liveness(Bus& bus, Registry& registry, std::string manager_name, std::chrono::milliseconds timeout)
-    : bus_(bus), registry_(registry), name_(std::move(manager_name)), timeout_(timeout) {
+    : bus_(bus), registry_(registry), name_(std::move(manager_name)), timeout_(timeout), last_check_(steady::now()) {
   incarnation_ =
       std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   subscription_ = bus_.subscribe(channel("SB_SKILL_HEARTBEAT"), [this](const std::string&, const uint8_t* data, size_t size) {
@@ -42,6 +44,18 @@ void Liveness::announce() {
 
 void Liveness::drop_silent() {
   const auto now = steady::now();
+  // The manager did not check for a while (stopped in a debugger or by a signal, starved
+  // on a loaded machine, or at its start, waiting seconds for a world model while the
+  // processes registered): the heartbeats sent meanwhile may still be on their way
+  // through the transport (on DDS through Cyclone's own threads, which stopped with it
+  // and deliver late joiners' history later, so caught_up_at below cannot tell), and
+  // that time is not the processes' silence. A process that really stopped is still
+  // dropped, that much later.
+  if (now - last_check_ > timeout_ / 2) {
+    const auto gap = now - last_check_;
+    for (auto& entry : heard_from_) entry.second = std::min(entry.second + gap, now);
+  }
+  last_check_ = now;
   // Silent up to the last moment the manager had read everything that had come: after
   // the manager itself was not scheduled for seconds, the heartbeats wait in its socket
   // (a stopped manager dropped every process's skills when it went on).

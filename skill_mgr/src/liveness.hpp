@@ -37,6 +37,7 @@ class Liveness {
   int64_t incarnation_ = 0;  // this run of the manager (an identity, not behaviour)
   std::map<std::string, std::chrono::steady_clock::time_point> heard_from_;  // process -> last heartbeat
   std::chrono::steady_clock::time_point last_announce_{};
+  std::chrono::steady_clock::time_point last_check_;  // drop_silent's last run (first: the manager's start)
   int subscription_ = -1;
 };
 
