@@ -11,7 +11,7 @@ import sys
 import textwrap
 import time
 
-from conftest import last_json
+from conftest import last_json, lcm_only
 from skillbus.lockstep_session import python_participant_argv
 
 FLOOD = textwrap.dedent('''
@@ -50,6 +50,7 @@ def flooding(sandbox):
     return floods
 
 
+@lcm_only("udpm:// datagrams that are no LCM message")
 def test_a_cpp_master_names_who_never_joined_during_a_flood(sandbox, binary):
     floods = flooding(sandbox)
     t0 = time.monotonic()
@@ -64,6 +65,7 @@ def test_a_cpp_master_names_who_never_joined_during_a_flood(sandbox, binary):
     assert time.monotonic() - t0 < 15
 
 
+@lcm_only("udpm:// datagrams that are no LCM message")
 def test_a_python_participant_names_the_missing_master_during_a_flood(sandbox):
     floods = flooding(sandbox)
     t0 = time.monotonic()
@@ -78,6 +80,7 @@ def test_a_python_participant_names_the_missing_master_during_a_flood(sandbox):
     assert time.monotonic() - t0 < 15
 
 
+@lcm_only("udpm:// datagrams that are no LCM message")
 def test_a_lockstep_session_during_a_flood_loses_nothing(sandbox, tmp_path):
     """Every clock, ack and stamped message still reaches its reader among the junk: the
     C++ master and participant and the Python participants end with the digests of a run
@@ -128,6 +131,7 @@ PY_READER = textwrap.dedent('''
 ''')
 
 
+@lcm_only("udpm:// datagrams that are no LCM message")
 def test_a_wanted_message_behind_255_junk_datagrams_is_delivered(sandbox, binary, tmp_path):
     env = {"SKILLBUS_KEY_FILE": "none"}
     flag = tmp_path / "queued"

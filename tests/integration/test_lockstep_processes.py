@@ -10,7 +10,7 @@ import time
 
 import pytest
 
-from conftest import TRANSPORTS, last_json, python_tool
+from conftest import SANDBOX_TRANSPORT, TRANSPORTS, last_json, python_tool
 from support.skip_policy import cannot_run
 from skillbus.lockstep_session import python_participant_argv, run_session
 from skillbus.netns import Sandbox
@@ -356,8 +356,11 @@ def test_a_master_polling_for_acks_sleeps_far_less_and_gives_the_same_digests(sa
     (plain_digest, plain_parts, plain_sleeps), (poll_digest, poll_parts, poll_sleeps) = runs[0], runs[200_000]
     assert poll_digest == plain_digest and poll_parts == plain_parts
     # sleeping on the socket: about once a frame on an idle machine, a third of the frames when
-    # a loaded one has the acks already there (seen in CI); polling: the joins and the end only
-    assert poll_sleeps < frames / 10 and plain_sleeps > max(frames / 10, 5 * poll_sleeps), runs
+    # a loaded one has the acks already there (seen in CI); polling: the joins and the end only.
+    # (The process's sleeps: on DDS, Cyclone's own receive and timer threads sleep and wake
+    # whatever the master does, so only the digests are compared there.)
+    if SANDBOX_TRANSPORT == "lcm":
+        assert poll_sleeps < frames / 10 and plain_sleeps > max(frames / 10, 5 * poll_sleeps), runs
 
 
 def test_a_master_refuses_a_negative_or_huge_ack_poll(sandbox, binary):
