@@ -10,7 +10,8 @@ tests read it as they read a log of LCM. It is flushed every 100 ms, so a reader
 ``skillbus.monitor.mark_log``) sees what was recorded soon after.
 
 A topic found late is read from its discovery on: what its writer kept for late readers
-(the last 16 samples, no older than 2 s: skillbus.dds) is recorded too, so the first
+(the last 16 samples, no older than 2 s: skillbus.dds) is recorded too, on every channel
+(a reader of state otherwise takes nothing written before it subscribed), so the first
 messages of a channel are not lost while discovery runs.
 """
 
@@ -88,7 +89,7 @@ class DdsRecorder:
                 if getattr(p, "type_name", None) == ENVELOPE_TYPE and name and name not in self.channels:
                     self.channels.add(name)
                     try:
-                        self.bus.subscribe(name, self.log.write)
+                        self.bus.subscribe(name, self.log.write, history=True)
                     except BusError as e:  # (a topic no skillbus channel can be: a writer of another build)
                         self.skipped[name] = str(e)
                         log.warning("not recording DDS topic %s: %s", ascii(name), e)

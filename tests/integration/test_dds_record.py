@@ -2,7 +2,7 @@
 found by discovery (also one that appears after the recorder started), is recorded in
 order, with its bytes as sent, and the file reads as an LCM log. A topic that carried a
 burst before the recorder found it keeps what its writer holds for late readers (the
-last 16)."""
+last 16), a state channel's too."""
 
 import sys
 import textwrap
@@ -33,7 +33,23 @@ WRITER = textwrap.dedent('''
             matched()
         time.sleep(0.002)
     matched()
+    time.sleep(1.0)  # (the burst's history, sent to the recorder that matched late: wait_acknowledged)
     assert bus.wait_acknowledged(30), "the recorder did not acknowledge everything"  # (it cannot be lost now)
+''')
+
+# 30 messages on a state channel at once, all written before the recorder can know the
+# topic; then it stays while the recorder reads the topic: a writer that is gone cannot
+# hand a reader that matched it late what it kept (being matched and acknowledged does
+# not say the history was sent).
+STATE_BURST = textwrap.dedent('''
+    import time
+    from skillbus.bus import open_bus
+    bus = open_bus()
+    for i in range(30):
+        bus.publish("SB_TEST_F_STATE", b"s%d" % i)
+    assert bus.wait_matched("SB_TEST_F_STATE", 30), "the recorder never read SB_TEST_F_STATE"
+    time.sleep(2.0)
+    assert bus.wait_acknowledged(30), "the recorder did not acknowledge everything"
 ''')
 
 
@@ -49,8 +65,12 @@ def test_every_topic_is_recorded_in_order_as_an_lcm_log(tmp_path):
                          env={"SKILLBUS_KEY_FILE": "none"})
         burst = box.start("burst", [sys.executable, "-c", WRITER.replace("SB_TEST_A", "SB_TEST_D")
                                     .replace("SB_TEST_B", "SB_TEST_E"), "0"], env={"SKILLBUS_KEY_FILE": "none"})
+        # the same burst on state channels, whose readers otherwise take nothing written
+        # before they subscribed (skillbus.dds): the recorder takes their history too
+        burst_state = box.start("burst_state", [sys.executable, "-c", STATE_BURST], env={"SKILLBUS_KEY_FILE": "none"})
         assert box.wait(late, 60) == 0, late.stderr()
         assert box.wait(burst, 60) == 0, burst.stderr()
+        assert box.wait(burst_state, 60) == 0, burst_state.stderr()
         wait_until(lambda: log.stat().st_size > 0, 10, "the log to be written")
         box.kill(rec, 15)  # (SIGTERM: it closes the log and prints its summary)
         assert box.wait(rec, 20) == 0, rec.stderr()
@@ -64,7 +84,8 @@ def test_every_topic_is_recorded_in_order_as_an_lcm_log(tmp_path):
     assert by_channel["SB_TEST_B"] == 2 * [bytes(3000 + i) for i in range(0, 50, 5)]
     burst = by_channel["SB_TEST_D"]  # written before the recorder could know the topic
     assert len(burst) >= 16 and burst == [b"a%d" % i for i in range(50 - len(burst), 50)], burst
-    assert summary["events"] == len(events) and summary["channels"] == 5
+    assert by_channel["SB_TEST_F_STATE"] == [b"s%d" % i for i in range(14, 30)]  # the last 16 of 30
+    assert summary["events"] == len(events) and summary["channels"] == 6
     assert [ev.eventnum for ev in events] == list(range(len(events)))
     assert all(a.timestamp <= b.timestamp + 1000 for a, b in zip(events, events[1:]))
 
