@@ -54,7 +54,7 @@ _PROGRAMS = {
     "map_server": "map_server",
     "codec_peer": "tests/cpp",
     "bus_junk_peer": "tests/cpp",
-    "bus_first_peer": "tests/cpp",
+    "bus_late_reader_peer": "tests/cpp",
 }
 
 
@@ -71,7 +71,7 @@ def binary(name: str) -> Path:
     >>> binary("wm")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
         ...
-    KeyError: "no program 'wm' in the build; the programs: bus_first_peer, bus_junk_peer, ..."
+    KeyError: "no program 'wm' in the build; the programs: bus_junk_peer, bus_late_reader_peer, ..."
     """
     if name not in _PROGRAMS:
         raise KeyError(f"no program {name!r} in the build; the programs: {', '.join(sorted(_PROGRAMS))}")
