@@ -106,3 +106,13 @@ def test_an_ack_timeout_for_someone_who_is_no_participant_is_named():
     r = run("sb_clock", "--participants", "a,b", "--ack-timeout-ms-of", "c=100")
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
     assert r.stderr == "sb_clock: error: --ack-timeout-ms-of names 'c', who is not among --participants (see --help)\n"
+
+
+def test_the_world_models_change_hold_is_for_the_wall_clock_only():
+    # (under lockstep changes go out in frames, for everyone alike: a hold would be ignored)
+    r = run("wm_server", "--hold-changes-ms", "300")
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stderr.startswith("wm_server: error: --hold-changes-ms requires --wall-clock"), r.stderr
+    assert len(r.stderr.splitlines()) == 1, r.stderr
+    r = run("wm_server", "--hold-changes-ms", "-1", "--wall-clock")
+    assert r.returncode == 2 and "--hold-changes-ms" in r.stderr, r.stderr

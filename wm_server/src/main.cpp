@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
                         "scene imports (owl:imports) the ontology IRI it declares");
   app.add_option("--scene", o.scene_file, "a Turtle scene loaded when the data directory is empty")->type_name("FILE");
   app.add_option("--name", o.name, "its lockstep participant name");
-  app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");
+  CLI::Option* wall_clock = app.add_flag("--wall-clock", o.wall_clock, "run on the wall clock instead of in lockstep");
   app.add_option("--period-ms", period_ms, "wall clock: the frame period, ms")->check(apps::positive());
   app.add_option("--snapshot-every", o.snapshot_every, "commits between snapshots");
   app.add_option("--sparql-max-examined", o.sparql_max_examined,
@@ -42,7 +42,8 @@ int main(int argc, char** argv) {
   double hold_changes_ms = 0;
   app.add_option("--hold-changes-ms", hold_changes_ms,
                  "tests, with --wall-clock: publish each change this long after its commit (a slow change stream)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->needs(wall_clock);  // (under lockstep changes go out in frames, for everyone alike)
   bool repair = false;
   app.add_flag("--repair", repair,
                "check the --data directory and exit; a damaged journal is replaced by its intact records before "
