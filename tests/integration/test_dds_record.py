@@ -84,7 +84,8 @@ def test_every_topic_is_recorded_in_order_as_an_lcm_log(tmp_path):
     assert by_channel["SB_TEST_B"] == 2 * [bytes(3000 + i) for i in range(0, 50, 5)]
     burst = by_channel["SB_TEST_D"]  # written before the recorder could know the topic
     assert len(burst) >= 16 and burst == [b"a%d" % i for i in range(50 - len(burst), 50)], burst
-    assert by_channel["SB_TEST_F_STATE"] == [b"s%d" % i for i in range(14, 30)]  # the last 16 of 30
+    state = by_channel["SB_TEST_F_STATE"]  # the last 16 of 30 at least (more when it found the topic early)
+    assert len(state) >= 16 and state == [b"s%d" % i for i in range(30 - len(state), 30)], state
     assert summary["events"] == len(events) and summary["channels"] == 6
     assert [ev.eventnum for ev in events] == list(range(len(events)))
     assert all(a.timestamp <= b.timestamp + 1000 for a, b in zip(events, events[1:]))
