@@ -4,12 +4,16 @@
 #include <cstdlib>
 #include <regex>
 
+#include "channel_names.hpp"
 #include "envelope.h"
 #include "skillbus/log.hpp"
 
 namespace skillbus {
 
 namespace {
+
+using detail::ends_with;
+
 // A state reader keeps this many samples it has not taken (like LCM's 4 MB receive buffer,
 // so a burst, a flood of forgeries included, does not push a frame's state out before it
 // is read); keep-last, so a slow reader never holds its writer back.
@@ -25,14 +29,7 @@ constexpr dds_duration_t kLateJoinerWindow = DDS_SECS(2);  // of those, only wha
 // An RPC request written before a server's reader existed is never delivered to it: a
 // restarted server must not execute its predecessor's requests (the client's retry
 // reaches it), as on LCM.
-bool is_request(const std::string& channel) {
-  return channel.size() >= 4 && channel.compare(channel.size() - 4, 4, "_REQ") == 0;
-}
-
-bool ends_with(const std::string& s, const char* tail) {
-  const size_t n = std::char_traits<char>::length(tail);
-  return s.size() >= n && s.compare(s.size() - n, n, tail) == 0;
-}
+bool is_request(const std::string& channel) { return ends_with(channel, "_REQ"); }
 
 // State: what a publisher sends again and again, each message replacing the last (the
 // physics' arm and simulator state, the objects a camera sees, articulated joints).

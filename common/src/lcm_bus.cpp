@@ -9,16 +9,13 @@
 #include <fstream>
 #include <regex>
 
+#include "channel_names.hpp"
 #include "skillbus/channel_filter.hpp"
 #include "skillbus/log.hpp"
 
 namespace skillbus {
 
-namespace {
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-}  // namespace
+using detail::ends_with;
 
 int lcm_lane_of(const std::string& channel) {
   return ends_with(channel, "_ACK") || ends_with(channel, "_JOIN") ? 1 : 0;
