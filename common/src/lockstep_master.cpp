@@ -108,6 +108,11 @@ void LockstepMaster::stop(const std::string& reason) {
   stop_reason_ = reason;
 }
 
+bool LockstepMaster::asked_to_stop() {
+  if (!stop_requested_ && interrupted && interrupted()) stop_requested_ = true;
+  return stop_requested_;
+}
+
 void LockstepMaster::on_join(const uint8_t* d, size_t n, const std::string& ch) {
   skillbus_msgs::lockstep_join_t j{};
   if (!decode_msg(d, n, j)) return bad_.record(ch, "not a lockstep_join_t", n);
@@ -179,6 +184,13 @@ bool LockstepMaster::wait_for_joins(std::string& error) {
     if (!restarted_.empty()) {
       error = restarted_;
       return false;
+    }
+    if (asked_to_stop()) {
+      std::vector<std::string> missing;
+      for (const auto& p : expected_)
+        if (!joined_.count(p)) missing.push_back(p);
+      SB_INFO(kLog, "stopped before the first frame (asked to, while " << join_names(missing) << " had not joined)");
+      return false;  // (no error: a stop asked for)
     }
     if (steady::now() >= say_waiting_at) {
       bus_.publish(clock_channel(), waiting_clock.data(), waiting_clock.size());
@@ -267,6 +279,14 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
               " within " + secs_text(late_after);
       return false;
     }
+    if (asked_to_stop()) {  // the frame stays unfinished: not counted, not in the session digest
+      std::vector<std::string> waiting;
+      for (const auto& p : expected_)
+        if (!acks_.count(p)) waiting.push_back(p);
+      SB_INFO(kLog, "stopped in frame " << frame << " (asked to, while waiting for the ack of " << join_names(waiting)
+                                        << ")");
+      return false;  // (no error: a stop asked for)
+    }
     if (now >= resend_at) {
       const bool first = resend_at == start;
       bus_.publish(clock_channel(), clock.data(), clock.size());
@@ -317,6 +337,10 @@ bool LockstepMaster::run_frame(int64_t frame, int64_t sim_time, std::vector<Chan
               " (noticed by master " + cfg_.name + ")";
       return false;
     }
+    if (asked_to_stop()) {
+      SB_INFO(kLog, "stopped in frame " << frame << " (asked to, while waiting for " << miss << ")");
+      return false;  // (no error: a stop asked for)
+    }
     bus_.handle(polling() ? std::chrono::milliseconds(0) : std::min(left, std::chrono::milliseconds(50)));
   }
   try {
@@ -354,7 +378,7 @@ RunResult LockstepMaster::run() {
     SB_INFO(kLog, "all " << expected_.size() << " participant(s) joined; starting frames of "
                          << cfg_.frame_period_ns / 1e6 << " ms");
     std::vector<ChannelCount> carried;
-    while ((cfg_.frames < 0 || frame < cfg_.frames) && !stop_requested_) {
+    while ((cfg_.frames < 0 || frame < cfg_.frames) && !asked_to_stop()) {
       if (!run_frame(frame, sim_time, carried, error)) break;
       if (end_at_ >= 0 && frame >= end_at_) stop_requested_ = true;  // a normal end, asked for
       ++frame;

@@ -59,6 +59,11 @@ void LockstepParticipant::request_end(int64_t after_frames, const std::string& w
 
 void LockstepParticipant::stop() { stop_requested_ = true; }
 
+bool LockstepParticipant::asked_to_stop() {
+  if (!stop_requested_ && interrupted && interrupted()) stop_requested_ = true;
+  return stop_requested_;
+}
+
 void LockstepParticipant::on_clock(const uint8_t* d, size_t n, const std::string& ch) {
   skillbus_msgs::lockstep_clock_t c{};
   if (!decode_msg(d, n, c)) return bad_.record(ch, "not a lockstep_clock_t", n);
@@ -153,6 +158,10 @@ RunResult LockstepParticipant::run_lockstep() {
   auto last_event = steady::now();
   auto next_join = last_event;
   while (!have_clock_ && !stop_seen_) {
+    if (asked_to_stop()) {
+      SB_INFO("lockstep " + cfg_.name, "stopped before the first frame (asked to, while waiting for the master's clock)");
+      return r;
+    }
     const auto now = steady::now();
     if (now - std::max(last_event, master_heard_) > cfg_.clock_timeout) {
       fail("lockstep: joined, but no clock from the master, nor word that it waits for the others to join, within " +
@@ -167,16 +176,27 @@ RunResult LockstepParticipant::run_lockstep() {
   }
   wall_start = steady::now();
 
-  while (!stop_requested_) {
+  // A stop asked while waiting (interrupted) ends the run at once: the frame in hand is not
+  // acked. Said in the log, since the master only sees the ack missing.
+  auto stopped_waiting = [&](const std::string& for_what) {
+    SB_INFO("lockstep " + cfg_.name, "stopped after frame " << last_acked_ << " (asked to, while waiting for " << for_what
+                                                               << ")");
+  };
+  while (!asked_to_stop()) {
     // Wait for the clock of the next frame.
     last_event = steady::now();
     while (!have_clock_ && !stop_seen_) {
+      if (asked_to_stop()) break;
       if (steady::now() - std::max(last_event, master_heard_) > cfg_.clock_timeout) {
         fail("lockstep: no clock after frame " + std::to_string(last_acked_) + " within " +
              std::to_string(cfg_.clock_timeout.count() / 1000.0).substr(0, 4) + " s (master " + master_ + " gone?)");
         return r;
       }
       bus_.handle(milliseconds(50));
+    }
+    if (stop_requested_ && !have_clock_) {
+      stopped_waiting("the clock of frame " + std::to_string(last_acked_ + 1));
+      break;
     }
     if (stop_seen_ && !have_clock_) break;
     Clock clk = std::move(next_clock_);
@@ -189,10 +209,14 @@ RunResult LockstepParticipant::run_lockstep() {
     std::string miss;
     for (miss = inbox_.missing(expected); !miss.empty() && !stop_seen_; miss = inbox_.missing(expected)) {
       const auto left = std::chrono::duration_cast<milliseconds>(deadline - steady::now());
-      if (left.count() <= 0) break;
+      if (left.count() <= 0 || asked_to_stop()) break;
       bus_.handle(std::min(left, milliseconds(50)));
     }
     if (stop_seen_) break;
+    if (!miss.empty() && stop_requested_) {
+      stopped_waiting("frame " + std::to_string(clk.frame) + "'s message on " + miss);
+      break;
+    }
     outbox_.begin_frame(clk.frame, clk.sim_time_ns);
     if (!miss.empty()) {
       const std::string e = "message lost on " + miss + " (noticed by " + cfg_.name + ")";
@@ -231,7 +255,7 @@ RunResult LockstepParticipant::run_wall_clock() {
   const auto start = steady::now();
   auto anchor = start;  // frame 0's due time, moved on when the loop falls behind
   const auto period = std::chrono::nanoseconds(cfg_.wall_frame_period_ns);
-  for (int64_t frame = 0; !stop_requested_ && (cfg_.wall_frames < 0 || frame < cfg_.wall_frames); ++frame) {
+  for (int64_t frame = 0; !asked_to_stop() && (cfg_.wall_frames < 0 || frame < cfg_.wall_frames); ++frame) {
     auto due = anchor + frame * period;
     // Behind by more than a frame (a long frame: an expansion, a planner, a stalled
     // machine): the frames missed are not run back to back, which would tick skills many

@@ -51,9 +51,7 @@ int main(int argc, char** argv) {
     LockstepParticipant p(*bus, pc);
     service->set_lockstep(true);
     p.subscribe(clouds, [&](const StampedMessage& m) { service->on_cloud_part(m.data.data(), m.data.size(), m.channel); });
-    p.on_frame = [&](int64_t, int64_t) {
-      if (apps::stop_requested()) p.stop();
-    };
+    p.interrupted = [] { return apps::stop_requested() != 0; };  // (also while it waits for a clock)
     p.after_frame = [&](int64_t frame) {
       service->set_completed_frame(frame);
       service->rpc().retry_deferred();

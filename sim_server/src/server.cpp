@@ -458,8 +458,10 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
       physics_->step_frame();
     }
     end_s += std::chrono::duration<double>(wall::now() - t0).count();
-    if (should_stop()) master.stop();  // a normal end: the participants finish cleanly
   };
+  // A stop (SIGTERM, Ctrl-C) ends the session even while the master waits for a join or an
+  // ack: the participants are told, and finish cleanly.
+  master.interrupted = should_stop;
   const RunResult r = master.run();
   write_recording();
   ServerReport rep = report(r);

@@ -457,10 +457,8 @@ std::string Manager::unknown_skill_error(const std::string& type, const std::str
 
 RunResult Manager::run_until(std::function<bool()> should_stop) {
   SB_INFO(kLog, "serving " << rpc_request_channel("SKILL") << " on " << bus_.url());
-  participant_.on_frame = [this, should_stop](int64_t f, int64_t t) {
-    on_frame(f, t);
-    if (should_stop()) participant_.stop();
-  };
+  participant_.on_frame = [this](int64_t f, int64_t t) { on_frame(f, t); };
+  participant_.interrupted = should_stop;  // (also while it waits for a clock: LockstepParticipant)
   const RunResult r = participant_.run();
   // A lockstep session that ends in an error (a participant died) ends the tasks with it.
   for (auto& [id, t] : tasks_) {

@@ -531,10 +531,8 @@ wm_transform_t WorldModelServer::on_transform(const wm_transform_t& req) const {
 
 RunResult WorldModelServer::run_until(std::function<bool()> should_stop) {
   SB_INFO(kLog, "serving " << rpc_request_channel("WM") << " on " << bus_.url() << ": " << startup_report_);
-  participant_.on_frame = [this, should_stop](int64_t f, int64_t t) {
-    on_frame(f, t);
-    if (should_stop()) participant_.stop();
-  };
+  participant_.on_frame = [this](int64_t f, int64_t t) { on_frame(f, t); };
+  participant_.interrupted = should_stop;  // (also while it waits for a clock: LockstepParticipant)
   return participant_.run();
 }
 

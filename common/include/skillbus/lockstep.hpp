@@ -78,6 +78,11 @@ class LockstepMaster {
 
   RunResult run();
   void stop(const std::string& reason = "");  // from a callback: end after this frame
+  // A stop asked from outside (SIGTERM, Ctrl-C: apps::stop_requested), checked in every
+  // wait as well as between frames: a master waiting for a join, an ack or a message ends
+  // at once (the frame in hand unfinished and not counted), and tells the participants
+  // that the session is over, as a stop() does.
+  std::function<bool()> interrupted;
   const BadInputCounter& bad_input() const { return bad_; }
   const MasterConfig& config() const { return cfg_; }
   // Where frames' wall time went, for benchmarks (never behaviour): per participant the
@@ -137,6 +142,7 @@ class LockstepMaster {
   std::chrono::steady_clock::time_point clock_sent_{};
   std::chrono::steady_clock::time_point own_work_done_{};  // on_clock_sent returned (or the clock went out)
   bool polling() const;  // still polling for this frame's acks (MasterConfig::ack_poll)
+  bool asked_to_stop();  // stop() or interrupted(), remembered
   std::string last_acker_;
   std::map<std::string, double> ack_seconds_;
   std::map<std::string, double> held_seconds_;
@@ -172,6 +178,11 @@ class LockstepParticipant {
 
   RunResult run();
   void stop();
+  // A stop asked from outside (SIGTERM, Ctrl-C: apps::stop_requested), checked in every
+  // wait as well as between frames: a participant waiting to join, for a clock or for a
+  // frame's messages ends at once (the frame in hand is not acked; the master names it
+  // when its ack timeout passes), instead of when the master or its timeout ends it.
+  std::function<bool()> interrupted;
   // Asks the master to end the session `after_frames` after the current frame (published
   // with this frame, so the end is at a frame the participant's work decides).
   void request_end(int64_t after_frames, const std::string& why);
@@ -189,6 +200,7 @@ class LockstepParticipant {
   RunResult run_wall_clock();
   void on_clock(const uint8_t* d, size_t n, const std::string& ch);
   void send_ack(int64_t frame, int64_t sim_time, const std::string& error);
+  bool asked_to_stop();  // stop() or interrupted(), remembered
 
   Bus& bus_;
   ParticipantConfig cfg_;
