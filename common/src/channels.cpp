@@ -21,7 +21,7 @@ bool starts_with(const std::string& s, const char* prefix) { return s.rfind(pref
 bool robot_scoped(const std::string& name) {
   // The managers' discovery channel is shared: it is how a client finds every robot.
   if (name == "SB_SKILL_MANAGERS") return false;
-  for (const char* p : {"SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_"})
+  for (const char* p : {"SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_SKTREE_", "SB_MOTION_", "SB_CAN_"})
     if (starts_with(name, p)) return true;
   return name == "SB_SIM_STATE" || name == "SB_SIM_GRIPPER_CMD" || name == "SB_SIM_CMD_REPLY" || name == "SB_SIM_ATTACH";
 }

@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 import re
 
-_SCOPED_PREFIXES = ("SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_MOTION_", "SB_CAN_")
+_SCOPED_PREFIXES = ("SB_ROBOT_", "SB_SKILL_", "SB_SKPROC_", "SB_SKTREE_", "SB_MOTION_", "SB_CAN_")
 _SCOPED = frozenset({"SB_SIM_STATE", "SB_SIM_GRIPPER_CMD", "SB_SIM_CMD_REPLY", "SB_SIM_ATTACH"})
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 MAX_ROBOT_NAME = 24  # LCM's channel names end at 63 bytes: NAME/ and the longest robot channel must fit
@@ -31,6 +31,18 @@ _robot: str | None = None  # set_robot(); None: $SKILLBUS_ROBOT
 def robot_scoped(name: str) -> bool:
     """Whether `name` is one of a robot's own channels (else shared by all robots)."""
     return name.startswith(_SCOPED_PREFIXES) or name in _SCOPED
+
+
+def expand_area(process: str) -> str:
+    """The RPC area where skill process `process` expands its compounds for anyone holding
+    the bus key (`skillbus tree SKILL`). Not the process's own area ("SKPROC_" + NAME): the
+    system's policy lets only the manager send there, since that is where skills are
+    ticked. As long as the process's own area, so that every process name fits both.
+
+    >>> expand_area("skills"), len(expand_area("skills")) == len("SKPROC_SKILLS")
+    ('SKTREE_SKILLS', True)
+    """
+    return "SKTREE_" + process.upper()
 
 
 def valid_robot_name(robot: str) -> bool:

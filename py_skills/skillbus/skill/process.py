@@ -29,6 +29,7 @@ from skillbus.msgs import skill_register_t, skill_tick_reply_t, skill_tick_t, sk
 from skillbus.skill.tick_decode import TickDecoder
 from skillbus.skill.tick_wire import TickReply
 from skillbus.rpc import RpcBadRequest, RpcClient, RpcDefer, RpcError, RpcServer, reply_channel, request_channel
+from skillbus.channels import expand_area
 from skillbus.waiting import WaitTimeout, wait_until
 from skillbus import tick_context as context
 from skillbus.robot import interfaces
@@ -159,8 +160,14 @@ class SkillProcess:
         self._ticks = TickDecoder()
         self.server.add_raw_method("tick", self._tick_raw)
         self.server.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
-        for name in ("tick", "expand"):  # defer before decoding: a tick is decoded once
-            self.server.methods[name] = self._frame_gate(self.server.methods[name])
+        for method in ("tick", "expand"):  # defer before decoding: a tick is decoded once
+            self.server.methods[method] = self._frame_gate(self.server.methods[method])
+        # The same expansion for anyone holding the bus key (`skillbus tree SKILL`): the
+        # process's own area is the manager's alone under the system's policy (only it
+        # ticks skills), so an operator's request there was dropped and waited out its
+        # timeout. An expansion acts on nothing; what it reads is the world as it is.
+        self.expansions = RpcServer(bus, expand_area(self.name))  # (SB_SKTREE_<NAME>_REQ)
+        self.expansions.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
         if participant is not None:
             # A tick of frame n is answered only after this process has finished its own
             # frame n, so the skill always sees the world-model replica and the devices as

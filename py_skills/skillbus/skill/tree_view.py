@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 from skillbus.msgs import skill_param_t, skill_start_t, skill_tick_t, skill_tree_t, skill_value_t
 from skillbus.rpc import RpcClient, RpcError
+from skillbus.channels import expand_area
 
 MAX_DEPTH = 12
 EXPAND_TIMEOUT_S = 30.0
@@ -137,7 +138,7 @@ class Expander:
         t.label, t.action, t.frame, t.sim_time_ns = d.label, skill_tick_t.EXPAND, -1, 0
         t.params = [_named(p, k) for k, p in params.items() if p.values or k in given]
         t.num_params = len(t.params)
-        area = "SKPROC_" + proc.upper()
+        area = expand_area(proc)  # (not the process's own area: that is the manager's alone)
         client = self.clients.setdefault(area, RpcClient(self.bus, area, "tree", robot=self.robot))
         try:
             tree = client.call("expand", t, skill_tree_t, timeout=EXPAND_TIMEOUT_S)
