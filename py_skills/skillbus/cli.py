@@ -174,6 +174,25 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:  # Ctrl-C in a command that has nothing to clean up: no traceback
         print("interrupted", file=sys.stderr)
         return 130
+    except OSError as e:
+        # A file or folder the command cannot use (a run folder under a file or in /proc,
+        # a full disk, no permission), or a wait that timed out: one line naming it, as
+        # every command's own errors, not a traceback.
+        print(f"error: skillbus {args.command}: {os_error_text(e)}", file=sys.stderr)
+        return 1
+
+
+def os_error_text(e: OSError) -> str:
+    """What went wrong and with which file, in a line.
+
+    >>> os_error_text(FileNotFoundError(2, "No such file or directory", "/proc/nope"))
+    "No such file or directory: '/proc/nope'"
+    >>> os_error_text(TimeoutError("no answer within 5 s"))
+    'no answer within 5 s'
+    """
+    if e.strerror and e.filename is not None:
+        return f"{e.strerror}: {e.filename!r}" + (f" -> {e.filename2!r}" if e.filename2 is not None else "")
+    return str(e) or type(e).__name__
 
 
 PROFILE_ENV = "SKILLBUS_PROFILE_DIR"
