@@ -1,7 +1,9 @@
 #include "skillbus/sim/server.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -60,6 +62,7 @@ SimServer::SimServer(Bus& bus, ServerOptions options) : bus_(bus), opt_(std::mov
   if (opt_.duration_s > 0)
     opt_.frames = static_cast<int64_t>(std::llround(opt_.duration_s / (physics_->scene().physics.frame_ms * 1e-3)));
   if (!opt_.script_file.empty()) script_ = load_script(opt_.script_file);
+  if (const std::string why = write_recording(); !why.empty()) throw SceneError(why);  // (empty for now)
   rpc_ = std::make_unique<RpcServer>(bus_, "SIM");
   add_services();
 }
@@ -223,13 +226,32 @@ void SimServer::record(size_t robot, const ArmCommand* arm, const GripperCommand
   recorded_.push_back(step.dump());
 }
 
-void SimServer::write_recording() const {
-  if (opt_.record_script.empty()) return;
+std::string SimServer::write_recording() const {
+  if (opt_.record_script.empty()) return "";
+  errno = 0;
   std::ofstream out(opt_.record_script);
-  out << "{\"record_every\": 10, \"steps\": [\n";
-  for (size_t i = 0; i < recorded_.size(); ++i) out << "  " << recorded_[i] << (i + 1 < recorded_.size() ? ",\n" : "\n");
-  out << "]}\n";
-  if (!out) SB_ERROR(kLog, "cannot write the recorded script to " << opt_.record_script);
+  if (out) {
+    out << "{\"record_every\": 10, \"steps\": [\n";
+    for (size_t i = 0; i < recorded_.size(); ++i)
+      out << "  " << recorded_[i] << (i + 1 < recorded_.size() ? ",\n" : "\n");
+    out << "]}\n";
+    out.close();
+  }
+  if (out) return "";
+  const int e = errno;
+  return "cannot write the recorded script to " + opt_.record_script + (e ? std::string(": ") + std::strerror(e) : "");
+}
+
+// A run's result with the recording's fate: a run whose commands could not be written
+// where --record-script asked is not ok (the caller asked for them).
+static RunResult with_recording(RunResult r, const std::string& failed) {
+  if (failed.empty()) return r;
+  SB_ERROR("sim_server", failed);
+  if (r.ok) {
+    r.ok = false;
+    r.error = failed;
+  }
+  return r;
 }
 
 void SimServer::on_gripper(size_t robot, const uint8_t* data, size_t size, const std::string& ch) {
@@ -462,8 +484,8 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   // A stop (SIGTERM, Ctrl-C) ends the session even while the master waits for a join or an
   // ack: the participants are told, and finish cleanly.
   master.interrupted = should_stop;
-  const RunResult r = master.run();
-  write_recording();
+  RunResult run = master.run();  // (then the recording: an argument's order is unspecified)
+  const RunResult r = with_recording(std::move(run), write_recording());
   ServerReport rep = report(r);
   rep.bad_input += master.bad_input().total();
   rep.frame_start_seconds = start_s;
@@ -509,7 +531,7 @@ ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop)
   r.sim_time_ns = frame * period_ns;
   r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
   r.digest = physics_->digest();
-  return report(r);
+  return report(with_recording(r, write_recording()));
 }
 
 }  // namespace skillbus::sim

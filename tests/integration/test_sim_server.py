@@ -223,6 +223,29 @@ def test_control_services_in_wall_clock_mode(sandbox, binary, tmp_path):
     assert last_json(sim.stdout())["ok"]
 
 
+def test_record_script_is_written_on_the_wall_clock_too_and_refused_at_start_where_it_cannot_be(sandbox, binary,
+                                                                                                  tmp_path):
+    # Before, --record-script was written only at a lockstep session's end: on the wall
+    # clock nothing was written and the run said ok; and a path it could not write to was
+    # found out (in the log only, the run still ok) after the whole run.
+    recorded = tmp_path / "recorded.json"
+    sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()), "--wall-clock",
+                                "--speed", "4", "--record-script", str(recorded)])
+    assert sim_cli(sandbox, "status")[0] == 0
+    sandbox.kill(sim, 15)
+    assert sandbox.wait(sim, 15) == 0, sim.stderr()[-2000:]
+    assert last_json(sim.stdout())["ok"]
+    assert json.loads(recorded.read_text()) == {"record_every": 10, "steps": []}  # (no command came)
+
+    nowhere = tmp_path / "afile"
+    nowhere.write_text("not a folder")
+    refused = sandbox.start("refused", [str(binary("sim_server")), "--scene", str(paths.demo_scene()), "--wall-clock",
+                                        "--record-script", str(nowhere / "recorded.json")])
+    assert sandbox.wait(refused, 30) == 2
+    assert f"cannot start: cannot write the recorded script to {nowhere}/recorded.json: Not a directory" \
+        in refused.stderr(), refused.stderr()
+
+
 def test_pause_is_refused_under_lockstep(sandbox, binary):
     sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()),
                           "--participants", "late", "--join-timeout-ms", "20000"])

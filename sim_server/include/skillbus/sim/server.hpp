@@ -140,7 +140,10 @@ class SimServer {
   void apply_pending();
   std::vector<std::string> recorded_;  // script steps (JSON) of the accepted commands
   void record(size_t robot, const ArmCommand* arm, const GripperCommand* gripper, const AttachCommand* attach = nullptr);
-  void write_recording() const;
+  // Writes --record-script ("" when done, else why not). The file is written once the
+  // run ends, in either mode; made at start, so that a path it cannot be written to is
+  // refused then rather than found out after the run.
+  std::string write_recording() const;
   size_t script_next_ = 0;
 };
 
