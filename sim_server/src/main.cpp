@@ -52,6 +52,13 @@ int main(int argc, char** argv) {
   apps::add_cpu_latency_option(app, cpu_latency_us);
   apps::parse_or_exit(app, argc, argv);
   if (o.scene_file.empty()) apps::usage_error(app, "--scene FILE is required (e.g. deploy/scenes/demo.scene.json)");
+  // An option of the other mode would be ignored without a word: refused, naming it.
+  for (const char* lockstep_only : {"--participants", "--end-when-asked-by", "--pipeline", "--join-timeout-ms",
+                                    "--ack-timeout-ms", "--ack-timeout-ms-of", "--message-timeout-ms", "--ack-poll-us"})
+    if (o.wall_clock && app.count(lockstep_only) > 0)
+      apps::usage_error(app, std::string(lockstep_only) + " is for lockstep: not with --wall-clock");
+  if (!o.wall_clock && app.count("--speed") > 0)
+    apps::usage_error(app, "--speed is for the wall clock: it needs --wall-clock (under lockstep the frames set the pace)");
   o.join_timeout = std::chrono::milliseconds(join_ms);
   o.ack_timeout = std::chrono::milliseconds(ack_ms);
   o.ack_timeout_of = apps::parse_ack_timeouts(app, ack_of);

@@ -44,6 +44,9 @@ int main(int argc, char** argv) {
   apps::parse_or_exit(app, argc, argv);
   if (o.end_session_after_frames >= 0 && (o.start_at_first_tick.empty() || o.wall_clock))
     apps::usage_error(app, "--end-session-after-task needs --start and lockstep (no --wall-clock)");
+  for (const char* wall_only : {"--period-ms", "--liveness-ms"})  // (ignored without a word under lockstep)
+    if (!o.wall_clock && app.count(wall_only) > 0)
+      apps::usage_error(app, std::string(wall_only) + " is for the wall clock: it needs --wall-clock");
   o.robot_label = current_robot();
   o.frame_period_ns = static_cast<int64_t>(period_ms * 1e6);
   if (o.frame_period_ns <= 0) apps::usage_error(app, "--period-ms must be positive");

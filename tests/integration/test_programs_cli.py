@@ -116,3 +116,25 @@ def test_the_world_models_change_hold_is_for_the_wall_clock_only():
     assert len(r.stderr.splitlines()) == 1, r.stderr
     r = run("wm_server", "--hold-changes-ms", "-1", "--wall-clock")
     assert r.returncode == 2 and "--hold-changes-ms" in r.stderr, r.stderr
+
+
+# An option of the other clock mode was ignored without a word (a user's --speed under
+# lockstep, --participants on the wall clock): each is refused, naming it.
+OTHER_MODE = [
+    ("sim_server", ["--scene", "x.scene.json", "--wall-clock", "--participants", "a"], "--participants"),
+    ("sim_server", ["--scene", "x.scene.json", "--wall-clock", "--pipeline"], "--pipeline"),
+    ("sim_server", ["--scene", "x.scene.json", "--wall-clock", "--join-timeout-ms", "100"], "--join-timeout-ms"),
+    ("sim_server", ["--scene", "x.scene.json", "--wall-clock", "--ack-timeout-ms", "100"], "--ack-timeout-ms"),
+    ("sim_server", ["--scene", "x.scene.json", "--wall-clock", "--ack-poll-us", "100"], "--ack-poll-us"),
+    ("sim_server", ["--scene", "x.scene.json", "--speed", "2"], "--speed"),
+    ("skill_mgr", ["--liveness-ms", "100"], "--liveness-ms"),
+    ("skill_mgr", ["--period-ms", "20"], "--period-ms"),
+    ("wm_server", ["--period-ms", "20"], "--period-ms"),
+]
+
+
+@pytest.mark.parametrize("name, args, option", OTHER_MODE, ids=[f"{n}{o}" for n, a, o in OTHER_MODE])
+def test_an_option_of_the_other_clock_mode_is_refused_naming_it(name, args, option):
+    r = run(name, *args)
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    assert r.stderr.startswith(f"{name}: error: {option} is for ") and len(r.stderr.splitlines()) == 1, r.stderr

@@ -49,6 +49,8 @@ int main(int argc, char** argv) {
                "check the --data directory and exit; a damaged journal is replaced by its intact records before "
                "the damage (the original kept as journal.bin.corrupt); see docs/world_model.md, Durability");
   apps::parse_or_exit(app, argc, argv);
+  if (!o.wall_clock && app.count("--period-ms") > 0)  // (ignored without a word under lockstep)
+    apps::usage_error(app, "--period-ms is for the wall clock: it needs --wall-clock");
   o.hold_changes_ns = static_cast<int64_t>(hold_changes_ms * 1e6);
   if (repair) {  // no bus, no server: the files only
     const wm::RepairResult r = wm::repair_data_dir(o.data_dir);
