@@ -99,8 +99,10 @@ def build_parser() -> argparse.ArgumentParser:
     dev.add_argument("--interface", default="skillbus_vcan", help="python-can interface (socketcan on real CAN)")
     dev.add_argument("--node-id", type=int, default=5)
     dev.add_argument("--eds", default=None)
-    dev.add_argument("--object-width", type=float, default=None, help="um: an object between the fingers")
-    dev.add_argument("--period-ms", type=float, default=10.0)
+    dev.add_argument("--object-width", type=float, default=None,
+                     help="um: an object between the fingers (standalone only: with the physics, its objects are)")
+    dev.add_argument("--period-ms", type=float, default=None,
+                     help="the device's step on the wall clock, ms (default 10; not with --lockstep: the frames step it)")
     dev.add_argument("--lockstep", action="store_true",
                      help="be a lockstep participant driving the physics server's fingers")
     dev.add_argument("--physics", action="store_true",

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import logging
 import struct
+import sys
 import threading
 from pathlib import Path
 
@@ -379,7 +380,20 @@ def step_on_the_wall_clock(dev: GripperDevice, dt: float) -> None:
 def main(args) -> int:
     """``skillbus gripper-device``: the runner its options ask for."""
     logging.basicConfig(level=logging.INFO)
-    if getattr(args, "lockstep", False):
+    # An option the chosen runner would ignore without a word: refused, naming it.
+    lockstep, physics = getattr(args, "lockstep", False), getattr(args, "physics", False)
+    refused = ("--lockstep and --physics: one or the other (--lockstep: in frames with the physics server; "
+               "--physics: on the wall clock with it)" if lockstep and physics else
+               "--period-ms is for the wall clock: under --lockstep the frames step the device" if lockstep
+               and getattr(args, "period_ms", None) is not None else
+               "--object-width is for the standalone device: with the physics server its objects are between the "
+               "fingers" if (lockstep or physics) and getattr(args, "object_width", None) is not None else "")
+    if refused:
+        print(f"error: gripper-device: {refused}", file=sys.stderr)
+        return 2
+    if getattr(args, "period_ms", None) is None:
+        args.period_ms = 10.0
+    if lockstep:
         from skillbus.can import device_lockstep as runner
     elif getattr(args, "physics", False):
         from skillbus.can import device_physics as runner
