@@ -56,11 +56,21 @@ class MapSource {
     std::vector<Eigen::Vector3d> voxels;
     voxels.reserve(r.voxels.size());
     for (const auto& v : r.voxels) voxels.emplace_back(v[0], v[1], v[2]);
-    if (voxels != last_ || r.resolution != resolution_) {  // rebuilding the grid costs; the map seldom changes
+    if (!holding_ || voxels != last_ || r.resolution != resolution_) {  // rebuilding the grid costs; the map seldom changes
       world.set_map(voxels, r.resolution);
       last_ = std::move(voxels);
       resolution_ = r.resolution;
+      holding_ = true;
     }
+  }
+
+  // The collision model without the map (a straight line's check): the next update puts
+  // it back. (What the cache remembers is what the model holds: a line cleared the model
+  // while the cache still held the map, and the next joint-space move, seeing the map
+  // unchanged, was planned against fixtures alone, through what the map held.)
+  void take_out(motion::CollisionModel& world) {
+    world.set_map({}, 0);
+    holding_ = false;
   }
 
  private:
@@ -70,6 +80,7 @@ class MapSource {
   double lo_[3], hi_[3];
   std::vector<Eigen::Vector3d> last_;
   double resolution_ = 0;
+  bool holding_ = false;  // the collision model holds last_ (a line takes it out)
 };
 
 skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::CollisionModel& world, MapSource* map,
@@ -110,7 +121,7 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::Collisi
   // The map for joint-space moves only: a straight line is how a skill goes the last
   // centimetres to what it grasps or where it places, which the map holds as occupied.
   if (map && !req.cartesian) map->update(world, req.as_of_frame);
-  if (map && req.cartesian) world.set_map({}, 0);
+  if (map && req.cartesian) map->take_out(world);
   const motion::Plan p = motion::plan_motion(k, pr, &world);
   out.ok = p.ok;
   out.error = p.error;

@@ -1,6 +1,6 @@
 """The motion service off the happy path, over the bus: a held box of impossible size is
 refused naming it; with --map and no map server, a straight line (which never asks the
-map) is still planned."""
+map) is still planned; a line never leaves the next joint-space move without the map."""
 
 from __future__ import annotations
 
@@ -41,3 +41,52 @@ def test_bad_held_boxes_are_refused_and_lines_need_no_map(sandbox):
     for case in ("huge", "negative"):
         assert "a held object's sides must be within [0, 2] m" in r[case].get("refused", ""), r
     assert r["line"] == {"ok": True, "how": "line", "error": ""}, r  # no map server: a line does not ask it
+
+
+MAP_PROBE = r'''
+import json, sys
+from skillbus.bus import open_bus
+from skillbus.msgs import motion_plan_t, motion_request_t
+from skillbus.rpc import RpcClient, RpcError
+rpc = RpcClient(open_bus(None), "MOTION", "probe")
+def ask(cartesian, start, target):
+    r = motion_request_t()
+    r.joint_names = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"]; r.num_joints = 6
+    r.start = start
+    r.target = target; r.cartesian = cartesian; r.step_m = 0.01; r.speed_scale = 0.5
+    r.held = [0.0, 0.0, 0.0]; r.as_of_frame = -1
+    p = rpc.call("plan", r, motion_plan_t, timeout=30.0)
+    return p
+home = [0.0, 0.2, 1.6, 0.0, 1.3416, 0.0]
+first = ask(False, home, [0.45, 0.0, 0.6, 0.0, 1.0, 0.0, 0.0])  # a joint-space move: the map goes in
+assert first.ok, first.error
+low = ask(True, home, [0.4, 0.0, 0.43, 0.0, 1.0, 0.0, 0.0])  # a line down beside the red cube
+assert low.ok, low.error
+across = ask(False, list(low.goal), [0.4, 0.3, 0.43, 0.0, 1.0, 0.0, 0.0])  # low across where the red cube is
+print(json.dumps({"low": low.how, "across": {"ok": across.ok, "how": across.how, "error": across.error}}))
+'''
+
+
+def test_a_straight_line_leaves_the_map_in_the_next_joint_moves_check(sandbox, tmp_path):
+    # A line is checked without the map (it goes the last centimetres to what the map holds
+    # as occupied), so the line took the map out of the collision model; the map's cache
+    # still held it, so the next joint-space move (the map unchanged) was planned against
+    # the fixtures alone: straight through the red cube, which only the map holds.
+    from test_occupancy_map import camera_scene, cli
+    maps = tmp_path / "maps"
+    maps.mkdir()
+    sandbox.start("sim", [str(paths.binary("sim_server")), "--scene", str(camera_scene(tmp_path)), "--wall-clock"])
+    mapper = sandbox.start("map", [str(paths.binary("map_server")), "--maps", str(maps)])
+    mapper.wait_for("serving", 30)
+    motion = sandbox.start("motion", [str(paths.binary("motion_server")), "--scene", str(paths.demo_scene()), "--map"])
+    motion.wait_for("serving", 30)
+    assert cli(sandbox, "camera", "capture", "overhead")[0] == 0
+    import time
+    deadline = time.monotonic() + 15
+    while cli(sandbox, "map", "info")[1]["clouds"] < 1:
+        assert time.monotonic() < deadline
+        time.sleep(0.2)
+    p = sandbox.start("probe", [sys.executable, "-c", MAP_PROBE])
+    assert sandbox.wait(p, 120) == 0, p.stderr()
+    r = json.loads(p.stdout().strip().splitlines()[-1])
+    assert r["low"] == "line" and r["across"]["how"] != "direct", r
