@@ -290,3 +290,32 @@ def test_a_request_larger_than_a_receiver_takes_fails_at_once_naming_the_limit(t
     cli = sandbox.start("cli-bad", [sys.executable, "-m", "skillbus.cli", "wm", "load", "--on-server", "../big"])
     assert sandbox.wait(cli, 60) != 0
     assert "scene" in cli.stderr() and "Traceback" not in cli.stderr(), cli.stderr()[-2000:]
+
+
+@pytest.mark.parametrize("value, why", [('"NaN"^^xsd:float', "is not a finite number"),
+                                        ('"INF"^^xsd:float', "is not a finite number"),
+                                        ('"1e999"^^xsd:float', "is not a finite number"),
+                                        ('"99999999999999999999"^^xsd:int', "is beyond a 64-bit integer")],
+                         ids=["nan", "inf", "overflow", "int-overflow"])
+def test_a_scene_with_a_value_a_commit_would_refuse_is_refused_and_changes_nothing(sandbox, tmp_path, value, why):
+    # Before, a scene's NaN, infinity or out-of-range number was stored (only commits were
+    # checked): it reached the skill manager's replica, which then refused every read of
+    # the world, so that every task failed with "no world model".
+    import sys
+    start_server(sandbox, wm_binary(), tmp_path / "data")
+
+    def cli(*args):
+        p = sandbox.start(f"cli-{args[0]}-{len(sandbox.procs)}", [sys.executable, "-m", "skillbus.cli", "wm", *map(str, args)])
+        return sandbox.wait(p, 60), p.stdout(), p.stderr()
+
+    bad = tmp_path / "bad.ttl"
+    bad.write_text(SCENE.read_text().replace('skiros:PositionZ "0.425"^^xsd:float', f"skiros:PositionZ {value}", 1))
+    assert bad.read_text() != SCENE.read_text()
+    rc, out, err = cli("load", bad)
+    assert rc == 1 and why in err and "PositionZ" in err, (rc, out, err)
+    rc, out, err = cli("get", "skiros:Cube-2")  # the world as it was
+    assert rc == 0 and "skiros:PositionZ = 0.425" in out, out + err
+    # and at start: the server names it and does not start
+    refused = sandbox.start("wm-bad", [wm_binary(), "--wall-clock", "--data", tmp_path / "other", "--scene", bad])
+    assert sandbox.wait(refused, 30) != 0
+    assert why in refused.stderr(), refused.stderr()

@@ -1,6 +1,8 @@
 #include "skillbus/wm/scene.hpp"
 
+#include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <map>
 #include <set>
@@ -13,14 +15,21 @@ Value literal_value(const Term& t, const std::string& where) {
   const std::string dt = t.datatype.empty() ? "" : t.datatype.substr(t.datatype.find('#') + 1);
   const char* s = t.value.c_str();
   char* end = nullptr;
+  // A scene's values are checked as a commit's are (convert.cpp): a NaN, an infinity or a
+  // number beyond the type's range is refused, naming it, never stored (stored, it reached
+  // every replica: the manager's then refused every read of the world, failing each task).
   if (dt == "float" || dt == "double" || dt == "decimal") {
     const double d = std::strtod(s, &end);
     if (end == s || *end) throw WmError(where + ": '" + t.value + "' is not a number");
+    if (!std::isfinite(d))  // (NaN, inf, and an overflow: HUGE_VAL)
+      throw WmError(where + ": '" + t.value + "' is not a finite number");
     return d;
   }
   if (dt == "int" || dt == "integer" || dt == "long" || dt == "short") {
+    errno = 0;
     const long long i = std::strtoll(s, &end, 10);
     if (end == s || *end) throw WmError(where + ": '" + t.value + "' is not an integer");
+    if (errno == ERANGE) throw WmError(where + ": '" + t.value + "' is beyond a 64-bit integer");
     return static_cast<int64_t>(i);
   }
   if (dt == "boolean") {
