@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <stdexcept>
 #include <nlohmann/json.hpp>
 
 #include "skillbus/wm/convert.hpp"
@@ -67,6 +69,8 @@ std::string check_given(const skillbus_msgs::skill_description_t& d, const std::
       const bool ok = v.type == want || (want == skill_value_t::FLOAT && v.type == skill_value_t::INT);
       if (!ok)
         return "parameter " + p.key + " of " + d.type + " is a " + decl->data_type + ", not a " + value_type_name(v.type);
+      if (v.type == skill_value_t::FLOAT && !std::isfinite(v.f))  // (no skill process would take it)
+        return "parameter " + p.key + " of " + d.type + ": " + std::to_string(v.f) + " is not a finite number";
       if (want == skill_value_t::JSON) {
         const auto j = nlohmann::json::parse(v.s, nullptr, false);
         if (j.is_discarded() || (decl->data_type == "list" && !j.is_array()) ||
@@ -84,10 +88,13 @@ std::string check_returned(const skillbus_msgs::skill_description_t& d, const st
     if (!decl) return "a parameter " + p.key + " that " + d.type + " does not have (it has: " + keys_of(d) + ")";
     const int want = expected_value_type(decl->data_type);
     if (want < 0) continue;  // a data type the manager does not know travels as it came
-    for (const auto& v : p.values)
+    for (const auto& v : p.values) {
       if (v.type != want && !(want == skill_value_t::FLOAT && v.type == skill_value_t::INT))
         return "parameter " + p.key + " as a " + value_type_name(v.type) + ", where " + d.type + " declares a " +
                decl->data_type;
+      if (v.type == skill_value_t::FLOAT && !std::isfinite(v.f))
+        return "parameter " + p.key + " as " + std::to_string(v.f) + ", not a finite number";
+    }
   }
   return "";
 }
@@ -122,6 +129,12 @@ std::string fit_specified(const skillbus_msgs::skill_description_t& d, Param& p)
 std::string parse_text(const skillbus_msgs::skill_description_t& d, Param& p) {
   const skill_param_t* decl = declaration(d, p.key);
   if (!decl) return d.type + " has no parameter " + p.key + " (it has: " + keys_of(d) + ")";
+  // Text is one text value (--start's KEY=VALUE): anything else given without a data type
+  // would be read as its empty text, another value than the one sent.
+  if (p.values.size() > 1 || (p.values.size() == 1 && p.values[0].type != skill_value_t::STRING))
+    return "parameter " + p.key + ": a value without its data type must be one text value, not " +
+           std::to_string(p.values.size()) + " value(s) of type " +
+           value_type_name(p.values.empty() ? skill_value_t::STRING : p.values[0].type);
   const std::string text = p.values.empty() ? "" : p.values[0].s;
   const std::string what = "parameter " + p.key + ": '" + text + "' is ";
   skill_value_t v{};
@@ -141,10 +154,13 @@ std::string parse_text(const skillbus_msgs::skill_description_t& d, Param& p) {
         v.type = skill_value_t::INT;
         v.i = std::stoll(text, &used);
       }
+    } catch (const std::out_of_range&) {  // (a number beyond the type: 1e999, 2^70)
+      return what + (t == "float" ? "not a finite float" : "beyond a 64-bit integer");
     } catch (const std::exception&) {
       used = 0;
     }
     if (text.empty() || used != text.size()) return what + "not a " + t;
+    if (t == "float" && !std::isfinite(v.f)) return what + "not a finite float";
   } else if (t == "bool") {
     const std::string b = lower(text);
     v.type = skill_value_t::BOOL;

@@ -2,6 +2,8 @@
 // is an error naming it, never another value.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "conditions.hpp"
 #include "grounding.hpp"
 #include "param_check.hpp"
@@ -178,6 +180,41 @@ TEST(ParamCheck, ReturnedValuesAreTypedByTheDeclarationNotByThemselves) {
   Param emptied{};
   emptied.key = "N";  // a value taken away is the skill's to do
   EXPECT_EQ(check_returned(d, {gain, emptied}), "");
+}
+
+TEST(ParamCheck, ANonFiniteFloatIsRefusedGivenAsTextOrReturned) {
+  // Before, a start with Gain=nan was acknowledged and queued, and only the skill
+  // process's check of its START tick refused it.
+  const auto d = echo();
+  for (const char* t : {"nan", "inf", "-inf", "1e999"}) {
+    Param p = text("Gain", t);
+    EXPECT_EQ(parse_text(d, p), std::string("parameter Gain: '") + t + "' is not a finite float") << t;
+  }
+  Param gain{};
+  gain.key = "Gain";
+  gain.data_type = "float";
+  skill_value_t f{};
+  f.type = skill_value_t::FLOAT;
+  f.f = std::nan("");
+  gain.values = {f};
+  EXPECT_EQ(check_given(d, {gain}), "parameter Gain of Echo: nan is not a finite number");
+  EXPECT_EQ(check_returned(d, {gain}), "parameter Gain as nan, not a finite number");
+}
+
+TEST(ParamCheck, AValueWithoutItsDataTypeMustBeOneTextValue) {
+  // A forged start whose value has no data type was read as its text: an int sent for a
+  // string parameter became "", another value than the one sent.
+  const auto d = echo();
+  Param n{};
+  n.key = "N";
+  skill_value_t i{};
+  i.type = skill_value_t::INT;
+  i.i = 5;
+  n.values = {i};
+  EXPECT_EQ(parse_text(d, n), "parameter N: a value without its data type must be one text value, not 1 value(s) of type int");
+  Param two = text("N", "5");
+  two.values.push_back(two.values[0]);
+  EXPECT_EQ(parse_text(d, two), "parameter N: a value without its data type must be one text value, not 2 value(s) of type str");
 }
 
 TEST(Conditions, WhatCannotBeJudgedFailsWhateverTheDesiredState) {
