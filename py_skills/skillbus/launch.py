@@ -69,8 +69,10 @@ def bus_security() -> dict[str, str]:
 def write_config(run_dir: Path, programs: list[Program], lockstep: bool, bus_url: str | None = None) -> Path:
     run_dir = run_dir.resolve()
     logs = run_dir / "logs"
+    if not run_dir.exists():  # (a folder of the user's keeps its mode: --run-dir /tmp made /tmp 0700)
+        run_dir.mkdir(parents=True, mode=0o700)
+        os.chmod(run_dir, 0o700)
     logs.mkdir(parents=True, exist_ok=True, mode=0o700)
-    os.chmod(run_dir, 0o700)
     os.chmod(logs, 0o700)
     env = {"PYTHONUNBUFFERED": "1", "SKILLBUS_BUS_URL": bus_url or os.environ.get("SKILLBUS_BUS_URL", ""),
            "PATH": os.environ.get("PATH", ""), **bus_security(),
@@ -111,6 +113,7 @@ def write_config(run_dir: Path, programs: list[Program], lockstep: bool, bus_url
         ]
     conf = run_dir / "supervisord.conf"
     conf.write_text("\n".join(lines))
+    os.chmod(conf, 0o600)  # (its programs' environment: the key file's path, the policy's)
     return conf
 
 
