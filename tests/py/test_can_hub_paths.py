@@ -55,3 +55,16 @@ def test_a_stale_socket_is_replaced(tmp_path):
     first.listener.close()  # died without cleaning up
     second = hub.Hub(tmp_path / "g.sock")
     second.close()
+
+
+def test_a_live_hubs_socket_is_never_taken_over(tmp_path):
+    # Before, a second hub on the same channel unlinked the first one's socket: the first
+    # hub's clients were cut off from everyone who connected later (one bus split in two).
+    first = hub.Hub(tmp_path / "g.sock")
+    try:
+        inode = (tmp_path / "g.sock").stat().st_ino
+        with pytest.raises(hub.UnsafePath, match="a CAN hub already serves .*g.sock: not taking its bus over"):
+            hub.Hub(tmp_path / "g.sock")
+        assert (tmp_path / "g.sock").stat().st_ino == inode  # the first hub's socket, untouched
+    finally:
+        first.close()

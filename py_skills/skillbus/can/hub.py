@@ -83,6 +83,25 @@ class Client:
         self.reset = False  # it closed with records of ours unread (ECONNRESET, reported once)
 
 
+def refuse_a_live_hub(path: Path) -> None:
+    """UnsafePath when a hub answers at `path`: a second hub there took the path over, and
+    the first one's clients (a device, a driver) went on talking among themselves, cut off
+    from everyone who connected after: one CAN bus split in two, without a word. Only a
+    refused connection (a hub that died) leaves a socket that may be replaced."""
+    probe = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+    probe.settimeout(1.0)
+    try:
+        probe.connect(str(path))
+    except (ConnectionRefusedError, FileNotFoundError):
+        return  # stale
+    except OSError as e:
+        raise UnsafePath(f"{path}: a CAN hub may still serve it ({e.strerror or e}): not taking it over") from None
+    finally:
+        probe.close()
+    raise UnsafePath(f"a CAN hub already serves {path}: not taking its bus over (stop that hub first, or choose "
+                     "another CAN channel)")
+
+
 class Hub:
     def __init__(self, path: Path, queue_limit: int = QUEUE_LIMIT, stall_timeout: float = 2.0) -> None:
         self.path = path
@@ -96,6 +115,7 @@ class Hub:
             if not stat.S_ISSOCK(st.st_mode) or st.st_uid != os.getuid():
                 raise UnsafePath(f"{path} exists and is not a socket of this user's: not removing it "
                                  f"(choose another CAN channel path)")
+            refuse_a_live_hub(path)
             path.unlink()  # a stale socket from a hub that died
         self.listener = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         old_umask = os.umask(0o177)  # the socket is born 0600: only this user connects
