@@ -7,6 +7,7 @@ import os
 import sys
 
 from skillbus.log import setup_logging
+from skillbus import cli_values
 
 
 def _at_least_one(text: str) -> int:
@@ -44,10 +45,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "core; nothing with one core), off (the kernel places them), or the core's number; "
                         "default auto")
     ls = sub.add_parser("lockstep-session", help="a lockstep session of demo participants without physics")
-    ls.add_argument("--frames", type=int, default=1000)
-    ls.add_argument("--python", type=int, default=3, help="Python participants")
-    ls.add_argument("--cpp", type=int, default=1, help="C++ participants")
-    ls.add_argument("--timeout", type=float, default=120.0, help="seconds before the run is abandoned")
+    ls.add_argument("--frames", type=cli_values.count, default=1000)
+    ls.add_argument("--python", type=cli_values.count, default=3, help="Python participants")
+    ls.add_argument("--cpp", type=cli_values.count, default=1, help="C++ participants")
+    ls.add_argument("--timeout", type=cli_values.seconds, default=120.0, help="seconds before the run is abandoned")
     ls.add_argument("--json", action="store_true", help="print the summary as JSON")
     la = sub.add_parser("launch", help="start the system under supervisord")
     la.add_argument("--run-dir", default="runs/launch")
@@ -62,22 +63,22 @@ def build_parser() -> argparse.ArgumentParser:
                                        "losing none under load (lcm-logger drops when its queue of 30 fills)")
     rc.add_argument("file", help="the LCM log to write")
     rc.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
-    rc.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
+    rc.add_argument("--seconds", type=cli_values.seconds, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
     dr = sub.add_parser("dds-record", help="record every skillbus channel of a DDS domain into an LCM log file")
     dr.add_argument("file", help="the LCM log to write")
     dr.add_argument("--url", default=None, help="the DDS bus (default: $SKILLBUS_BUS_URL)")
-    dr.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
+    dr.add_argument("--seconds", type=cli_values.seconds, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
     rp = sub.add_parser("replay", help="play a recorded LCM log back onto the bus")
     rp.add_argument("log")
     rp.add_argument("--url", default=None)
-    rp.add_argument("--speed", type=float, default=1.0)
+    rp.add_argument("--speed", type=cli_values.positive, default=1.0)
     rp.add_argument("--channels", default=None, help="a regular expression of the channels to play")
 
     p = sub.add_parser("lockstep-participant", help="run a demo lockstep participant")
     p.add_argument("--name", required=True)
     p.add_argument("--url", default=None, help="bus URL (default: $SKILLBUS_BUS_URL or udpm default)")
     p.add_argument("--wall-clock", action="store_true", help="run on the wall clock, without a master")
-    p.add_argument("--frames", type=int, default=None, help="wall-clock mode: stop after this many frames")
+    p.add_argument("--frames", type=cli_values.count, default=None, help="wall-clock mode: stop after this many frames")
     p.add_argument("--bare", action="store_true", help="no demo traffic: only the lockstep protocol")
     p.add_argument("--listen", action="store_true", help="with --bare: hear (and fold) SB_DEMO_CMD, publish nothing")
     p.add_argument("--every", type=_at_least_one, default=1, help="test: publish SB_DEMO_CMD in every N-th frame only")
@@ -85,23 +86,23 @@ def build_parser() -> argparse.ArgumentParser:
                    help="test: read only the newest SB_DEMO_STATE (latest-only) and act in every N-th frame")
     p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
     p.add_argument("--slow-at-frame", type=int, default=-1, help="test: take --slow-s seconds over this frame")
-    p.add_argument("--slow-s", type=float, default=0.8, help="test: how long the slow frame takes (s)")
+    p.add_argument("--slow-s", type=cli_values.seconds, default=0.8, help="test: how long the slow frame takes (s)")
     p.add_argument("--lose-acks-every", type=int, default=0, help="test: lose every N-th ack")
-    p.add_argument("--clock-timeout", type=float, default=10.0)
-    p.add_argument("--message-timeout", type=float, default=2.0)
+    p.add_argument("--clock-timeout", type=cli_values.seconds, default=10.0)
+    p.add_argument("--message-timeout", type=cli_values.seconds, default=2.0)
     hub = sub.add_parser("can-hub", help="run a virtual SocketCAN bus (a hub on a Unix socket)")
     hub.add_argument("--channel", default="vcan0", help="a name (socket under $SKILLBUS_CAN_DIR) or a socket path")
     hub.add_argument("--queue-limit", type=int, default=20000, help="records queued per client before back-pressure")
-    hub.add_argument("--stall-timeout", type=float, default=2.0,
+    hub.add_argument("--stall-timeout", type=cli_values.seconds, default=2.0,
                      help="disconnect a client that takes nothing for this long while over its queue limit")
     dev = sub.add_parser("gripper-device", help="the simulated CANopen (CiA 402) gripper, standalone")
     dev.add_argument("--channel", default="vcan0")
     dev.add_argument("--interface", default="skillbus_vcan", help="python-can interface (socketcan on real CAN)")
-    dev.add_argument("--node-id", type=int, default=5)
+    dev.add_argument("--node-id", type=cli_values.node_id, default=5)
     dev.add_argument("--eds", default=None)
-    dev.add_argument("--object-width", type=float, default=None,
+    dev.add_argument("--object-width", type=cli_values.non_negative, default=None,
                      help="um: an object between the fingers (standalone only: with the physics, its objects are)")
-    dev.add_argument("--period-ms", type=float, default=None,
+    dev.add_argument("--period-ms", type=cli_values.positive, default=None,
                      help="the device's step on the wall clock, ms (default 10; not with --lockstep: the frames step it)")
     dev.add_argument("--lockstep", action="store_true",
                      help="be a lockstep participant driving the physics server's fingers")
@@ -115,10 +116,10 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("file", help="where to write (.log: candump format)")
     rec.add_argument("--channel", default="vcan0")
     rec.add_argument("--interface", default="skillbus_vcan", help="python-can interface (socketcan on real CAN)")
-    rec.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at SIGINT)")
+    rec.add_argument("--seconds", type=cli_values.seconds, default=None, help="stop after this long (default: at SIGINT)")
     cl = sub.add_parser("can-log", help="print a candump log decoded as CANopen")
     cl.add_argument("file")
-    cl.add_argument("--node-id", type=int, default=5)
+    cl.add_argument("--node-id", type=cli_values.node_id, default=5)
     cl.add_argument("--eds", default=None, help="the device's EDS (default: the skillbus gripper's)")
     cl.add_argument("--json", action="store_true",
                     help="print a JSON list of the frames: time, COB-ID, data and what it means")

@@ -9,6 +9,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from skillbus import cli_values
 
 ROBOT_HELP = "the robot whose skill manager's skills to plan with (default: the one without a robot name)"
 
@@ -17,7 +18,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("plan", help="plan skills for goals (Fast Downward), print the plan (docs/planning.md)")
     p.add_argument("goal", help='facts, comma-separated: "(skiros:contain skiros:Bin-5 skiros:Cube-2), (...)"')
     p.add_argument("--optimal", action="store_true", help="the fewest skills (A* with LM-cut), not the first plan")
-    p.add_argument("--time-limit", type=float, default=10.0, metavar="S", help="seconds of planning at most")
+    p.add_argument("--time-limit", type=cli_values.seconds, default=10.0, metavar="S", help="seconds of planning at most")
     p.add_argument("--pddl", type=Path, metavar="DIR", help="also write domain.pddl and problem.pddl there")
     p.add_argument("--json", action="store_true", help="the plan as one JSON object")
     p.add_argument("--url", default=None)

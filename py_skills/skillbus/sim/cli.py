@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from skillbus import cli_values
 
 COMMANDS = ("sim", "sim-script", "scene", "camera", "map")
 
@@ -16,7 +17,7 @@ def add_parsers(sub) -> None:
     s.add_argument("scene", nargs="?", default="", help="load-scene: a scene's name in the server's scenes folder (sim_server --scenes; "
                         "by default the folder of its --scene file), e.g. demo")
     s.add_argument("--url", default=None)
-    s.add_argument("--timeout", type=float, default=5.0)
+    s.add_argument("--timeout", type=cli_values.seconds, default=5.0)
     s.add_argument("--json", action="store_true", help="JSON also for digest (status and the others always are)")
 
     p = sub.add_parser("sim-script", help="play a command script against the physics server (lockstep)")
@@ -24,7 +25,7 @@ def add_parsers(sub) -> None:
     p.add_argument("--name", default="script")
     p.add_argument("--url", default=None)
     p.add_argument("--out", default=None, help="write the recorded states and replies here (JSON)")
-    p.add_argument("--clock-timeout", type=float, default=10.0)
+    p.add_argument("--clock-timeout", type=cli_values.seconds, default=10.0)
     p.add_argument("--robot", default=None, metavar="NAME",
                    help="the robot the script drives (its channels NAME/SB_ROBOT_..., NAME/SB_SIM_...)")
 
@@ -35,7 +36,7 @@ def add_parsers(sub) -> None:
                                                  "(the organized cloud, height x width x 3, optical frame)")
     cam.add_argument("--next", action="store_true",
                      help="do not ask: wait for the camera's next capture (its rate_hz; works under lockstep)")
-    cam.add_argument("--timeout", type=float, default=5.0)
+    cam.add_argument("--timeout", type=cli_values.seconds, default=5.0)
     cam.add_argument("--url", default=None)
 
     mp = sub.add_parser("map", help="the occupancy map (map_server): what it holds, the state at points, "
@@ -43,7 +44,7 @@ def add_parsers(sub) -> None:
     mp.add_argument("action", choices=["info", "state", "box", "free-area", "save", "load", "clear"])
     mp.add_argument("args", nargs="*", help="state: X Y Z [X Y Z ...]; box and free-area: XMIN YMIN ZMIN XMAX YMAX "
                                             "ZMAX; save and load: a map's name in the server's --maps folder")
-    mp.add_argument("--timeout", type=float, default=5.0)
+    mp.add_argument("--timeout", type=cli_values.seconds, default=5.0)
     mp.add_argument("--url", default=None)
 
     sc = sub.add_parser("scene", help="scene files: check one, or turn it into the world model's Turtle scene")

@@ -21,6 +21,7 @@ from skillbus.skill.params import ParamTypes
 from skillbus.skill.skill import State
 from skillbus.waiting import poll_until
 from skillbus.world.element import Element
+from skillbus import cli_values
 
 # Names of the IDL's numbers (skill_state_t, skill_param_t), for printing.
 STATES = {int(s): s.name for s in State}
@@ -127,7 +128,7 @@ def add_parsers(sub) -> None:
     sp.add_argument("--interface", action="append", default=None, metavar="NAME=MODULE[:ARG]",
                     help="a robot interface for the skills, e.g. arm=skillbus.robot.arm (repeatable)")
     sp.add_argument("--url", default=None)
-    sp.add_argument("--register-timeout", type=float, default=30.0)
+    sp.add_argument("--register-timeout", type=cli_values.seconds, default=30.0)
     sp.add_argument("--standalone", action="store_true",
                     help="serve ticks without a skill manager: no registration, no heartbeat (for a "
                          "program that ticks the process itself, e.g. bench/tick_rtt_bench)")
@@ -152,7 +153,7 @@ def add_parsers(sub) -> None:
     run.add_argument("-p", "--param", action="append", default=[], metavar="KEY=VALUE")
     run.add_argument("--watch", action="store_true", help="show the live tree while it runs")
     run.add_argument("-v", "--verbose", action="store_true", help="show each primitive's parameters")
-    run.add_argument("--timeout", type=float, default=0.0,
+    run.add_argument("--timeout", type=cli_values.seconds_or_never, default=0.0,
                      help="stop the task after this many seconds and exit 3 (0: never)")
     run.add_argument("--detach", action="store_true",
                      help="print the task id and return at once, leaving the task running (skillbus stop ID)")
@@ -165,7 +166,7 @@ def add_parsers(sub) -> None:
                                       "elsewhere too); exit as run's; an interrupt leaves the task running")
     wa.add_argument("task", type=int)
     wa.add_argument("-v", "--verbose", action="store_true", help="show each primitive's parameters")
-    wa.add_argument("--timeout", type=float, default=0.0, help="stop watching after this many seconds, exit 3 (0: never)")
+    wa.add_argument("--timeout", type=cli_values.seconds_or_never, default=0.0, help="stop watching after this many seconds, exit 3 (0: never)")
     wa.add_argument("--json", action="store_true", help="each tree shown as a JSON line, then the result")
     wa.add_argument("--url", default=None)
     wa.add_argument("--robot", default=None, metavar="NAME", help=ROBOT_HELP)

@@ -10,12 +10,13 @@ import sys
 from skillbus.bus import open_bus
 from skillbus.world.client import WorldModelError, WorldModelInterface
 from skillbus.world.element import Element
+from skillbus import cli_values
 
 
 def add_parser(sub) -> None:
     wm = sub.add_parser("wm", help="the world model: get, query, load, save, tree, repair")
     wm.add_argument("--url", default=None, help="bus URL (default: $SKILLBUS_BUS_URL or the udpm default)")
-    wm.add_argument("--timeout", type=float, default=5.0)
+    wm.add_argument("--timeout", type=cli_values.seconds, default=5.0)
     wsub = wm.add_subparsers(dest="wm_command", required=True)
     g = wsub.add_parser("get", help="show one element")
     g.add_argument("id")

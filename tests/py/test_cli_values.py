@@ -1,0 +1,40 @@
+"""A number an option cannot mean is refused by argparse, naming the option (exit 2), before
+anything opens a bus: before, `--timeout nan` ended in a traceback or meant "never",
+`--timeout -1` was taken, `record --seconds -5` returned at once with an empty log (exit 0),
+`--node-id 0` ended in canopen's TypeError, `lockstep-session --frames -5` never ended."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+CASES = [
+    (["wm", "--timeout", "nan", "get", "x"], "--timeout"),
+    (["sim", "--timeout", "-1", "status"], "--timeout"),
+    (["map", "--timeout", "inf", "info"], "--timeout"),
+    (["camera", "capture", "c", "--timeout", "nan"], "--timeout"),
+    (["run", "Pick", "--timeout", "nan"], "--timeout"),
+    (["watch", "1", "--timeout", "-1"], "--timeout"),
+    (["record", "x.lcmlog", "--seconds", "-5"], "--seconds"),
+    (["can-record", "--channel", "c", "x.log", "--seconds", "nan"], "--seconds"),
+    (["replay", "x.lcmlog", "--speed", "0"], "--speed"),
+    (["can-log", "x.log", "--node-id", "0"], "--node-id"),
+    (["gripper-device", "--node-id", "200"], "--node-id"),
+    (["gripper-device", "--period-ms", "nan"], "--period-ms"),
+    (["lockstep-session", "--frames", "-5"], "--frames"),
+    (["lockstep-session", "--python", "-2"], "--python"),
+    (["skills-process", "--name", "x", "--register-timeout", "nan"], "--register-timeout"),
+    (["plan", "--time-limit", "nan", "x"], "--time-limit"),
+]
+
+
+@pytest.mark.parametrize("args, option", CASES, ids=[" ".join(a[:1] + [o]) for a, o in CASES])
+def test_a_number_an_option_cannot_mean_is_refused_naming_it(tmp_path, args, option):
+    env = {**os.environ, "SKILLBUS_BUS_URL": "nowhere://this-bus-must-not-be-opened", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", *args], capture_output=True, text=True, timeout=60,
+                       env=env, cwd=tmp_path)
+    assert p.returncode == 2, (p.returncode, p.stdout, p.stderr[-2000:])
+    assert f"argument {option}" in p.stderr and "Traceback" not in p.stderr, p.stderr[-2000:]
