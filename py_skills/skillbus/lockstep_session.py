@@ -6,6 +6,7 @@ in a private network namespace and prints its summary."""
 from __future__ import annotations
 
 import json
+import signal
 import sys
 
 from skillbus import paths
@@ -49,9 +50,22 @@ def print_summary(s: dict) -> None:
     print(f"  bad input         {s.get('bad_input')}")
 
 
+class Terminated(Exception):
+    """SIGTERM (a `kill`, a supervisor's stop): raised in the main thread, so that the
+    sandbox's clean-up stops the session's processes. Without it the default action ended
+    this process alone, and its clock and participants ran on, busy, with no one to stop
+    them."""
+
+
+def _terminated(signum, frame):
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # (once: the clean-up is not cut short by another)
+    raise Terminated()
+
+
 def main(args) -> int:
     from skillbus.netns import SandboxError
     as_json = getattr(args, "json", False)
+    old = signal.signal(signal.SIGTERM, _terminated)
     try:
         with Sandbox() as box:
             print(f"running {args.frames} frames with {args.python} Python and {args.cpp} C++ participants "
@@ -60,6 +74,11 @@ def main(args) -> int:
     except SandboxError as e:  # (no private network namespace here, and no safe way without one)
         print(f"error: lockstep-session: {e}", file=sys.stderr)
         return 2
+    except Terminated:
+        print("lockstep-session: terminated (SIGTERM): its processes were stopped", file=sys.stderr)
+        return 143
+    finally:
+        signal.signal(signal.SIGTERM, old)
     if as_json:
         print(json.dumps(s))
     else:
