@@ -83,6 +83,8 @@ class MapSource {
   bool holding_ = false;  // the collision model holds last_ (a line takes it out)
 };
 
+constexpr double kMinSpeedScale = 0.01;  // of the joints' velocity limits: 1 % (slower is no plan's)
+
 skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::CollisionModel& world, MapSource* map,
                                     const skillbus_msgs::motion_request_t& req) {
   skillbus_msgs::motion_plan_t out{};
@@ -110,6 +112,14 @@ skillbus_msgs::motion_plan_t handle(const motion::Kinematics& k, motion::Collisi
   if (std::abs(q.norm() - 1.0) > 1e-3) throw RpcBadRequest("plan: the target quaternion is not a unit quaternion");
   for (double v : req.held)
     if (!std::isfinite(v) || v < 0 || v > 2) throw RpcBadRequest("plan: a held object's sides must be within [0, 2] m");
+  // 0 or less: the defaults (motion_request_t). A tiny positive speed_scale made a segment's
+  // time overflow into a short one: the fastest move, answered ok; one over 1 was taken
+  // as 1 without a word.
+  if (!std::isfinite(req.speed_scale) || (req.speed_scale > 0 && (req.speed_scale < kMinSpeedScale || req.speed_scale > 1)))
+    throw RpcBadRequest("plan: speed_scale " + std::to_string(req.speed_scale) + " must be within [" +
+                        std::to_string(kMinSpeedScale) + ", 1] (0: the default, 0.5)");
+  if (!std::isfinite(req.step_m) || req.step_m > 1.0)
+    throw RpcBadRequest("plan: step_m " + std::to_string(req.step_m) + " must be at most 1 m (0: the default, 0.01)");
   motion::PlanRequest pr;
   pr.start = Eigen::Map<const Eigen::VectorXd>(req.start.data(), static_cast<Eigen::Index>(req.start.size()));
   pr.target.translation() = Eigen::Vector3d(req.target[0], req.target[1], req.target[2]);

@@ -90,3 +90,39 @@ def test_a_straight_line_leaves_the_map_in_the_next_joint_moves_check(sandbox, t
     assert sandbox.wait(p, 120) == 0, p.stderr()
     r = json.loads(p.stdout().strip().splitlines()[-1])
     assert r["low"] == "line" and r["across"]["how"] != "direct", r
+
+
+SPEED_PROBE = r'''
+import json, math
+from skillbus.bus import open_bus
+from skillbus.msgs import motion_plan_t, motion_request_t
+from skillbus.rpc import RpcClient, RpcError
+rpc = RpcClient(open_bus(None), "MOTION", "probe")
+def ask(speed_scale, step_m=0.01):
+    r = motion_request_t()
+    r.joint_names = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"]; r.num_joints = 6
+    r.start = [0.0, 0.2, 1.6, 0.0, 1.3416, 0.0]
+    r.target = [0.45, 0.0, 0.6, 0.0, 1.0, 0.0, 0.0]; r.cartesian = False; r.step_m = step_m
+    r.speed_scale = speed_scale; r.held = [0.0, 0.0, 0.0]; r.as_of_frame = -1
+    try:
+        p = rpc.call("plan", r, motion_plan_t, timeout=10.0)
+        return {"ok": p.ok, "end_s": p.points[-1].time_from_start_ns * 1e-9 if p.points else None}
+    except RpcError as e:
+        return {"refused": str(e)}
+print(json.dumps({"tiny": ask(1e-12), "tinier": ask(1e-11), "over": ask(2.0), "nan": ask(math.nan),
+                  "default": ask(0.0), "slow": ask(0.05), "step_inf": ask(0.5, math.inf)}))
+'''
+
+
+def test_a_speed_scale_out_of_range_is_refused_not_turned_into_another_speed(sandbox):
+    # Before, 1e-12 overflowed a segment's time into the shortest one: the fastest move,
+    # answered ok; 2.0 was taken as 1 without a word.
+    motion = sandbox.start("motion", [str(paths.binary("motion_server")), "--scene", str(paths.demo_scene())])
+    motion.wait_for("serving", 30)
+    p = sandbox.start("probe", [sys.executable, "-c", SPEED_PROBE])
+    assert sandbox.wait(p, 60) == 0, p.stderr()
+    r = json.loads(p.stdout().strip().splitlines()[-1])
+    for case in ("tiny", "tinier", "over", "nan"):
+        assert "speed_scale" in r[case].get("refused", "") and "must be within [0.01" in r[case]["refused"], r
+    assert "step_m" in r["step_inf"].get("refused", ""), r
+    assert r["default"]["ok"] and r["slow"]["ok"] and r["slow"]["end_s"] > 5 * r["default"]["end_s"], r
