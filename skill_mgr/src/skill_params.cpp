@@ -155,7 +155,15 @@ std::string prepare_start(TaskContext& ctx, const Implementation& impl, const Sc
     }
   }
   for (auto& p : params) {
-    if (p.key != "Robot" || p.data_type != "element" || (!p.values.empty() && !p.values[0].element.id.empty())) continue;
+    if (p.key != "Robot" || p.data_type != "element") continue;
+    if (!p.values.empty() && !p.values[0].element.id.empty()) {
+      // A manager drives its own robot: another one given (a start, or a compound that
+      // specifies it) moved this arm while the skill's conditions and writes named the other.
+      if (!ctx.robot.empty() && p.values[0].element.id != ctx.robot)
+        return "parameter Robot: " + p.values[0].element.id + " is not the robot this manager drives (" + ctx.robot +
+               "; each robot has a manager of its own: skillbus run --robot NAME)";
+      continue;
+    }
     if (!ctx.robot.empty()) {
       skillbus_msgs::skill_value_t v{};
       v.type = skillbus_msgs::skill_value_t::ELEMENT;

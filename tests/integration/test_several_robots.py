@@ -59,6 +59,14 @@ def test_the_cli_finds_every_robots_manager_and_addresses_the_one_named(sandbox,
         assert rc == 0, out + err
         assert f"I am {ids[r]}" in out, out
 
+    # A manager drives its own robot: another robot given is refused, naming both (before,
+    # r1's arm moved while the skill's conditions and writes named r2's robot).
+    rc, out, err = cli(sandbox, "run", "--robot", "r1", "WhoAmI", "-p", f"Robot={ids['r2']}", "--timeout", "20")
+    assert rc != 0 and f"parameter Robot: {ids['r2']} is not the robot this manager drives ({ids['r1']};" in out + err, \
+        out + err
+    rc, out, err = cli(sandbox, "run", "--robot", "r1", "WhoAmI", "-p", f"Robot={ids['r1']}", "--timeout", "20")
+    assert rc == 0 and f"I am {ids['r1']}" in out, out + err  # (its own, given: taken)
+
     rc, out, err = cli(sandbox, "run", "WhoAmI", "--timeout", "20")  # no manager without a robot here
     assert rc == 1, out + err
     assert "the skill managers on this bus are those of the robots r1, r2: name one with --robot NAME" in err, err
