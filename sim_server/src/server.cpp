@@ -387,8 +387,13 @@ void SimServer::add_services() {
       throw RpcBadRequest(e.what());
     }
     Scene s = load(path);  // a SceneError becomes the error reply; the old world stays
-    if (!opt_.wall_clock && std::abs(s.physics.frame_ms - physics_->scene().physics.frame_ms) > 1e-9)
-      throw RpcError("the scene's frame_ms differs from the running lockstep frame period");
+    // The frame period is fixed at start in either mode (the lockstep clock's, the wall-clock
+    // loop's): on the wall clock a scene of another frame was taken, and its sim time then
+    // ran at the old period's pace while the physics stepped the new one.
+    if (std::abs(s.physics.frame_ms - physics_->scene().physics.frame_ms) > 1e-9)
+      throw RpcError("the scene's frame (" + std::to_string(s.physics.frame_ms) + " ms) differs from the running one (" +
+                     std::to_string(physics_->scene().physics.frame_ms) + " ms), fixed at start: start the server "
+                     "with that scene instead");
     // The robots' channels are subscribed for the session: a scene with other robots
     // would leave commands unheard.
     std::vector<std::string> now, then;

@@ -218,6 +218,14 @@ def test_control_services_in_wall_clock_mode(sandbox, binary, tmp_path):
     f = tmp_path / "two.scene.json"
     scene_file.save(two, f, paths.demo_scene())
     assert sim_cli(sandbox, "load-scene", "two")[1]["num_objects"] == 2
+    # A scene of another frame is refused on the wall clock too (its period is fixed at
+    # start: the sim time ran at the old period's pace while the physics stepped the new).
+    slow = json.loads(paths.demo_scene().read_text())
+    slow["physics"]["frame_ms"] = 20.0
+    scene_file.save(slow, tmp_path / "slow.scene.json", paths.demo_scene())
+    rc, err = sim_cli(sandbox, "load-scene", "slow")
+    assert rc == 1 and "the scene's frame (20.000000 ms) differs from the running one (10.000000 ms)" in err, err
+    assert sim_cli(sandbox, "status")[1]["num_objects"] == 2  # the world loaded before stays
     sandbox.kill(sim, 15)
     assert sandbox.wait(sim, 15) == 0
     assert last_json(sim.stdout())["ok"]
