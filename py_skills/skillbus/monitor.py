@@ -127,6 +127,21 @@ def main_spy(args) -> int:
     return run_foreground(argv, env=env)
 
 
+def regex_error(pattern: str) -> str:
+    """Why `pattern` is no regular expression, or "" (LCM compiles subscriptions with GLib's
+    regular expressions, PCRE's syntax, as Python's `re` nearly is).
+
+    >>> regex_error("SB_SIM_.*"), regex_error("[")
+    ('', 'unterminated character set at position 0')
+    """
+    import re
+    try:
+        re.compile(pattern)
+    except re.error as e:
+        return str(e)
+    return ""
+
+
 def main_replay(args) -> int:
     log = Path(args.log)
     if not log.is_file():
@@ -140,5 +155,11 @@ def main_replay(args) -> int:
         return 2
     argv = [lcm_tool("lcm-logplayer"), "--lcm-url", resolve_url(args.url), "--speed", str(args.speed)]
     if args.channels:
+        # lcm-logplayer takes a regular expression it cannot compile as matching nothing: it
+        # printed a line, played nothing for the log's length and exited 0.
+        why = regex_error(args.channels)
+        if why:
+            print(f"error: replay --channels {args.channels!r}: not a regular expression ({why})", file=sys.stderr)
+            return 2
         argv += ["--regexp", args.channels]
     return run_foreground(argv + [str(log)])

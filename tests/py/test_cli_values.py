@@ -38,3 +38,19 @@ def test_a_number_an_option_cannot_mean_is_refused_naming_it(tmp_path, args, opt
                        env=env, cwd=tmp_path)
     assert p.returncode == 2, (p.returncode, p.stdout, p.stderr[-2000:])
     assert f"argument {option}" in p.stderr and "Traceback" not in p.stderr, p.stderr[-2000:]
+
+
+@pytest.mark.parametrize("args, why", [(["replay", "LOG", "--channels", "["], "replay --channels '[': not a regular expression"),
+                                       (["map", "clear", "everything"], "map clear takes no arguments"),
+                                       (["map", "info", "foo"], "map info takes no arguments")],
+                         ids=["replay-regex", "map-clear", "map-info"])
+def test_what_a_command_would_misread_is_refused_naming_it(tmp_path, args, why):
+    # Before: replay played nothing for the log's length and exited 0 (lcm-logplayer took
+    # the expression it could not compile as matching nothing); `map clear everything`
+    # cleared the whole map.
+    log = tmp_path / "x.lcmlog"
+    log.write_bytes(b"")
+    env = {**os.environ, "SKILLBUS_BUS_URL": "nowhere://this-bus-must-not-be-opened", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", *[str(log) if a == "LOG" else a for a in args]],
+                       capture_output=True, text=True, timeout=60, env=env, cwd=tmp_path)
+    assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])

@@ -97,6 +97,9 @@ def map_main(args: argparse.Namespace) -> int:
     if args.action in ("save", "load") and len(a) != 1:
         print(f"error: map {args.action}: give one map name", file=sys.stderr)
         return 2
+    if args.action in ("info", "clear") and a:  # (`map clear extra words` cleared the whole map)
+        print(f"error: map {args.action} takes no arguments, not {' '.join(a)}", file=sys.stderr)
+        return 2
     c = MapClient(open_bus(args.url), name="skillbus-map", timeout=args.timeout)
     try:
         if args.action == "state":
