@@ -54,3 +54,14 @@ def test_what_a_command_would_misread_is_refused_naming_it(tmp_path, args, why):
     p = subprocess.run([sys.executable, "-m", "skillbus.cli", *[str(log) if a == "LOG" else a for a in args]],
                        capture_output=True, text=True, timeout=60, env=env, cwd=tmp_path)
     assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])
+
+
+def test_a_skill_process_whose_libraries_all_fail_to_load_ends_naming_them(tmp_path):
+    # Before, it went on serving no skill (RUNNING under supervisord; `run` then said only
+    # "unknown skill").
+    env = {**os.environ, "SKILLBUS_BUS_URL": "memq://", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "x", "--library",
+                        "no.such.module", "--standalone"], capture_output=True, text=True, timeout=60, env=env,
+                       cwd=tmp_path)
+    assert p.returncode == 2, (p.returncode, p.stderr[-2000:])
+    assert "error: skills-process x: no skill loaded:" in p.stderr and "no.such.module" in p.stderr, p.stderr

@@ -522,6 +522,11 @@ def main(args) -> int:
         return 2
     proc = SkillProcess(bus, args.name, args.library, wmi, participant)
     print(json.dumps({"process": args.name, "skills": sorted(proc.classes), "errors": proc.errors}), flush=True)
+    if not proc.loaded and proc.errors:
+        # Nothing to serve: running on, it registered no skill, supervisord showed it RUNNING,
+        # and `skillbus run` later said only "unknown skill".
+        print(f"error: skills-process {args.name}: no skill loaded: {'; '.join(proc.errors)}", file=sys.stderr)
+        return 2
     if getattr(args, "standalone", False):
         log.info("serving %d skill(s) without a skill manager (--standalone)", len(proc.classes))
         startup_heap.set_aside()
