@@ -65,3 +65,16 @@ def test_a_skill_process_whose_libraries_all_fail_to_load_ends_naming_them(tmp_p
                        cwd=tmp_path)
     assert p.returncode == 2, (p.returncode, p.stderr[-2000:])
     assert "error: skills-process x: no skill loaded:" in p.stderr and "no.such.module" in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("args, why", [(["--port", "70000"], "argument --port"), (["--port", "-1"], "argument --port"),
+                                       (["--host", ""], "console --host: empty"),
+                                       (["--token", "x", "--no-token"], "--token and --no-token: one or the other")],
+                         ids=["port-high", "port-negative", "host-empty", "token-and-no-token"])
+def test_the_consoles_address_and_token_are_what_was_asked_or_refused(tmp_path, args, why):
+    # Before: --port 70000 a traceback; --host "" served every network; --token X --no-token
+    # served without a token.
+    env = {**os.environ, "SKILLBUS_BUS_URL": "nowhere://this-bus-must-not-be-opened", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "console", *args], capture_output=True, text=True,
+                       timeout=60, env=env, cwd=tmp_path)
+    assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])

@@ -9,7 +9,7 @@ import sys
 
 def add_parser(sub) -> None:
     c = sub.add_parser("console", help="the web console: skills, tasks, world model (docs/console.md)")
-    c.add_argument("--port", type=int, default=8080, help="HTTP port (default 8080; 0: any free port)")
+    c.add_argument("--port", type=port_number, default=8080, help="HTTP port (default 8080; 0: any free port)")
     c.add_argument("--host", default="127.0.0.1",
                    help="the address to serve on (default: this machine only; 0.0.0.0 serves every network the "
                         "machine is on, to anyone who reaches it: the console starts and stops tasks)")
@@ -32,8 +32,28 @@ def add_parser(sub) -> None:
     c.add_argument("--lose-progress-every", type=int, default=0, help=argparse.SUPPRESS)
 
 
+def port_number(text: str) -> int:
+    """A TCP port, 0 to 65535 (70000 ended in bind's OverflowError traceback)."""
+    try:
+        v = int(text)
+    except ValueError:
+        v = -1
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a TCP port (0 to 65535; 0: any free port)")
+    return v
+
+
 def main(args: argparse.Namespace) -> int:
     import os
+    # An empty --host (an unset $HOST in a script) served every network the machine is on;
+    # and a token given with --no-token was dropped without a word.
+    if not args.host.strip():
+        print("error: console --host: empty (give an address: 127.0.0.1 for this machine only, 0.0.0.0 for every "
+              "network)", file=sys.stderr)
+        return 2
+    if args.no_token and args.token is not None:
+        print("error: console: --token and --no-token: one or the other", file=sys.stderr)
+        return 2
     import socket
 
     import uvicorn
