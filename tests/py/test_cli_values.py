@@ -78,3 +78,15 @@ def test_the_consoles_address_and_token_are_what_was_asked_or_refused(tmp_path, 
     p = subprocess.run([sys.executable, "-m", "skillbus.cli", "console", *args], capture_output=True, text=True,
                        timeout=60, env=env, cwd=tmp_path)
     assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])
+
+
+def test_a_tasks_tree_with_no_manager_says_so_and_refuses_parameters(tmp_path):
+    # Before: "the skill manager does not know task 5" when no manager answered at all, and
+    # `tree 5 -p K=V` ignored -p.
+    env = {**os.environ, "SKILLBUS_BUS_URL": "memq://", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "tree", "5"], capture_output=True, text=True, timeout=60,
+                       env=env, cwd=tmp_path)
+    assert p.returncode == 1 and "no skill manager answered" in p.stderr, (p.returncode, p.stderr[-2000:])
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "tree", "5", "-p", "K=V"], capture_output=True, text=True,
+                       timeout=60, env=env, cwd=tmp_path)
+    assert p.returncode == 2 and "-p is for a skill's expansion" in p.stderr, (p.returncode, p.stderr[-2000:])

@@ -208,13 +208,18 @@ def typed_param(d, text: str) -> skill_param_t:
 
 def main(args) -> int:
     from skillbus.bus import open_bus
-    from skillbus.skill.cli import NoManager, call, latest_progress
-    from skillbus.msgs import skill_list_t
+    from skillbus.skill.cli import NoManager, _task_req, call
+    from skillbus.msgs import skill_list_t, skill_progress_list_t
+    if args.target.isdigit() and args.param:  # (they were ignored without a word)
+        print("error: tree: -p is for a skill's expansion; a task's tree is as it runs", file=sys.stderr)
+        return 2
     bus = open_bus(args.url)
     client = RpcClient(bus, "SKILL", "tree")
     try:
         if args.target.isdigit():
-            p = latest_progress(client, int(args.target))
+            # (a manager that does not answer is said so, below: it was told as "does not know task N")
+            known = call(client, "tasks", _task_req(int(args.target)), skill_progress_list_t)
+            p = next((t for t in known.tasks if t.task == int(args.target)), None)
             if p is None:
                 print(f"error: the skill manager does not know task {args.target}", file=sys.stderr)
                 return 2
