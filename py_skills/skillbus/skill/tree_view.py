@@ -19,7 +19,7 @@ import sys
 from dataclasses import dataclass, field
 
 from skillbus.msgs import skill_param_t, skill_start_t, skill_tick_t, skill_tree_t, skill_value_t
-from skillbus.rpc import RpcClient, RpcError
+from skillbus.rpc import RpcClient, RpcError, RpcRemoteError
 from skillbus.channels import expand_area
 
 MAX_DEPTH = 12
@@ -218,8 +218,11 @@ def main(args) -> int:
     try:
         if args.target.isdigit():
             # (a manager that does not answer is said so, below: it was told as "does not know task N")
-            known = call(client, "tasks", _task_req(int(args.target)), skill_progress_list_t)
-            p = next((t for t in known.tasks if t.task == int(args.target)), None)
+            try:
+                known = call(client, "tasks", _task_req(int(args.target)), skill_progress_list_t)
+                p = next((t for t in known.tasks if t.task == int(args.target)), None)
+            except RpcRemoteError:  # (it answered: it does not know the task)
+                p = None
             if p is None:
                 print(f"error: the skill manager does not know task {args.target}", file=sys.stderr)
                 return 2
