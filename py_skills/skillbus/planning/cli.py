@@ -33,9 +33,6 @@ def main(args: argparse.Namespace) -> int:
     from skillbus.planning.solve import PlanError, make_plan, write_pddl
     from skillbus.rpc import RpcClient, RpcError
     from skillbus.world.client import WorldModelError, WorldModelInterface
-    if args.time_limit <= 0:
-        print("error: --time-limit must be > 0", file=sys.stderr)
-        return 2
     try:
         bus = open_bus(args.url)
         lst = RpcClient(bus, "SKILL", "plan", robot=args.robot).call("list", skill_start_t(), skill_list_t, timeout=5.0)
