@@ -319,3 +319,41 @@ def test_a_scene_with_a_value_a_commit_would_refuse_is_refused_and_changes_nothi
     refused = sandbox.start("wm-bad", [wm_binary(), "--wall-clock", "--data", tmp_path / "other", "--scene", bad])
     assert sandbox.wait(refused, 30) != 0
     assert why in refused.stderr(), refused.stderr()
+
+
+UNKNOWN_RELATION_PROBE = r'''
+import json
+from skillbus.bus import open_bus
+from skillbus.msgs import wm_elements_t, wm_query_t, wm_relation_t, wm_value_t
+from skillbus.rpc import RpcClient, RpcRemoteError
+rpc = RpcClient(open_bus(), "WM", "probe")
+def query(predicate):
+    q = wm_query_t(); q.type = "skiros:Product"
+    r = wm_relation_t(); r.subject, r.predicate, r.object = "*", predicate, ""
+    q.relations, q.num_relations = [r], 1
+    try:
+        return {"ids": sorted(e.id for e in rpc.call("query", q, wm_elements_t, timeout=10).elements)}
+    except RpcRemoteError as e:
+        return {"refused": str(e)}
+def may_relate(predicate):
+    r = wm_relation_t(); r.subject, r.predicate, r.object = "skiros:Table", predicate, "skiros:Cube"
+    try:
+        return {"b": bool(rpc.call("may_relate", r, wm_value_t, timeout=10).b)}
+    except RpcRemoteError as e:
+        return {"refused": str(e)}
+print(json.dumps({"contain": query("skiros:contain"), "misspelt": query("skiros:contian"), "any": query("*"),
+                  "may": may_relate("skiros:contain"), "may_misspelt": may_relate("skiros:contian")}))
+'''
+
+
+def test_a_query_naming_a_relation_type_the_ontology_lacks_is_refused(sandbox, tmp_path):
+    # Before, a misspelt relation type matched nothing: an empty answer (and may_relate
+    # said false), where a commit refuses the same name.
+    server = start_server(sandbox, wm_binary(), tmp_path / "data")
+    probe = sandbox.start("probe", [sys.executable, "-c", UNKNOWN_RELATION_PROBE])
+    assert sandbox.wait(probe, 60) == 0, probe.stderr()[-2000:] + server.stderr()[-2000:]
+    r = last_json(probe.stdout())
+    assert len(r["contain"]["ids"]) == 3 and r["any"] == r["contain"], r  # the three cubes, on the table
+    assert "unknown relation type 'skiros:contian' in query" in r["misspelt"].get("refused", ""), r
+    assert r["may"] == {"b": True}, r
+    assert "unknown relation type 'skiros:contian'" in r["may_misspelt"].get("refused", ""), r

@@ -123,6 +123,7 @@ WorldModelServer::WorldModelServer(Bus& bus, ServerOptions options)
   rpc_.add_method<wm_relation_t, wm_value_t>("may_relate", [this](const wm_relation_t& r) {
     for (const auto* c : {&r.subject, &r.object})
       if (!ontology_.is_class(*c)) throw WmError("unknown concept '" + *c + "'");
+    if (!ontology_.is_relation(r.predicate)) throw WmError("unknown relation type '" + r.predicate + "'");
     wm_value_t v{};
     v.type = wm_value_t::BOOL;
     v.b = ontology_.may_relate(r.subject, r.predicate, r.object);
@@ -363,7 +364,12 @@ wm_elements_t WorldModelServer::on_query(const wm_query_t& m, const char* method
   q.label = m.label;
   if (!q.type.empty() && !ontology_.is_class(q.type)) throw WmError("unknown type '" + q.type + "' in query");
   q.properties = properties_from_msg(m.properties, "the query");
-  for (const auto& r : m.relations) q.relations.push_back(from_msg(r));
+  for (const auto& r : m.relations) {
+    // (a misspelt relation type matched nothing: an empty answer, where a commit refuses it)
+    if (!r.predicate.empty() && r.predicate != "*" && !ontology_.is_relation(r.predicate))
+      throw WmError("unknown relation type '" + r.predicate + "' in query");
+    q.relations.push_back(from_msg(r));
+  }
   Page page;
   page.after = m.after;
   page.offset = m.offset;

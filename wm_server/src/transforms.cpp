@@ -16,12 +16,21 @@ double number(const Element& e, const char* key, double fallback) {
 }
 
 std::string resolve_frame(const WorldStore& store, const std::string& name) {
+  if (name.empty()) throw WmError("a frame is needed: an element id or an element's skiros:FrameId");
   if (store.get(name)) return name;
+  // Every element that carries the name: with two (two cubes given one frame name), the
+  // first in id order was taken without a word, the other's pose never considered.
+  std::vector<std::string> carriers;
   for (const auto& [id, e] : store.elements()) {
     auto it = e.properties.find("skiros:FrameId");
-    if (it != e.properties.end() && !it->second.empty() && it->second.front() == Value(name)) return id;
+    if (it != e.properties.end() && !it->second.empty() && it->second.front() == Value(name)) carriers.push_back(id);
   }
-  throw WmError("unknown frame '" + name + "' (neither an element id nor an element's skiros:FrameId)");
+  if (carriers.size() == 1) return carriers.front();
+  if (carriers.empty())
+    throw WmError("unknown frame '" + name + "' (neither an element id nor an element's skiros:FrameId)");
+  std::string ids;
+  for (const auto& id : carriers) ids += (ids.empty() ? "" : ", ") + id;
+  throw WmError("frame '" + name + "' is ambiguous: " + ids + " all carry it as their skiros:FrameId (give an element id)");
 }
 
 }  // namespace

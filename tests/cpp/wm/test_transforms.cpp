@@ -58,3 +58,24 @@ TEST(Transforms, ACycleIsRefusedByTheStoreSoNoPoseIsEverAsked) {
       WmError);
   EXPECT_EQ(store.version(), 0);
 }
+
+TEST(Transforms, AFrameNameTwoElementsCarryOrAnEmptyOneIsRefusedNamingThem) {
+  // Before, the first carrier in id order was taken without a word (two cubes given one
+  // frame name), and an empty name matched an element whose FrameId was "".
+  WorldStore store(ontology());
+  auto a = pose(0, 0, 0.5), b = pose(1, 0, 0.5), c = pose(0, 2, 0);
+  a["skiros:FrameId"] = {std::string("tcp")};
+  b["skiros:FrameId"] = {std::string("tcp")};
+  c["skiros:FrameId"] = {std::string("")};
+  store.apply({add(element("skiros:Cube-1", "skiros:Cube", "", a)), add(element("skiros:Cube-2", "skiros:Cube", "", b)),
+               add(element("skiros:Table-3", "skiros:Table", "", c))});
+  try {
+    transform(store, "tcp", "skiros:Table-3");
+    FAIL() << "an ambiguous frame was taken";
+  } catch (const WmError& e) {
+    EXPECT_EQ(std::string(e.what()), "frame 'tcp' is ambiguous: skiros:Cube-1, skiros:Cube-2 all carry it as their "
+                                     "skiros:FrameId (give an element id)");
+  }
+  EXPECT_THROW(transform(store, "", "skiros:Cube-1"), WmError);
+  EXPECT_NEAR(transform(store, "skiros:Cube-2", "skiros:Cube-1").translation().x(), 1.0, 1e-12);  // ids still work
+}
