@@ -21,6 +21,7 @@ randomness.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -43,16 +44,64 @@ def load_script(path: str) -> dict[str, Any]:
         script = json.loads(Path(path).read_text())
     except (OSError, json.JSONDecodeError) as e:
         raise ScriptError(f"{path}: {e}") from e
+    # Each step whole before the session: what was checked as it was played (a gripper
+    # step without a width) failed its frame and so the whole lockstep session.
+    if not isinstance(script, dict):
+        raise ScriptError(f"{path}: a script is an object with steps, not a {type(script).__name__}")
+    every = script.get("record_every", 10)
+    if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+        raise ScriptError(f"{path}: record_every must be a whole number of frames, 1 or more, not {every!r}")
     steps = script.get("steps", [])
     if not isinstance(steps, list):
         raise ScriptError(f"{path}: steps must be a list")
     for i, s in enumerate(steps):
-        if not isinstance(s, dict) or not isinstance(s.get("at_s"), (int, float)):
+        if not isinstance(s, dict) or not _number(s.get("at_s")):
             raise ScriptError(f"{path}: steps[{i}] needs a number at_s")
         if not ({"arm", "gripper", "raw", "wrong_type"} & set(s)):
             raise ScriptError(f"{path}: steps[{i}] has no arm, gripper or raw command")
+        why = _step_error(s)
+        if why:
+            raise ScriptError(f"{path}: steps[{i}]: {why}")
     script["steps"] = sorted(steps, key=lambda s: s["at_s"])  # stable: equal times keep file order
     return script
+
+
+def _is_number(v: Any) -> bool:
+    """A number (NaN too: a script may send one to see it refused)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _number(v: Any) -> bool:
+    """A finite number (a step's time: it orders the steps)."""
+    return _is_number(v) and math.isfinite(v)
+
+
+def _step_error(s: dict[str, Any]) -> str:
+    """What a step lacks to be played, or "" (the values themselves are the receivers' to
+    judge: a script may send wrong ones on purpose)."""
+    if "arm" in s:
+        a = s["arm"]
+        if not isinstance(a, dict) or not isinstance(a.get("joints"), list) or not isinstance(a.get("points"), list):
+            return "arm needs joints and points"
+        for j, pt in enumerate(a["points"]):
+            if not isinstance(pt, list) or len(pt) not in (2, 3) or not _is_number(pt[0]) or not isinstance(pt[1], list):
+                return f"arm.points[{j}] is not [t, q] or [t, q, qd]"
+    if "gripper" in s:
+        g = s["gripper"]
+        if not isinstance(g, dict) or not _is_number(g.get("width")):
+            return "gripper needs a number width"
+        for k in ("speed", "force_limit"):
+            if k in g and not _is_number(g[k]):
+                return f"gripper.{k} is not a number"
+    if "raw" in s:
+        r = s["raw"]
+        try:
+            bytes.fromhex(r["hex"])
+        except (TypeError, KeyError, ValueError):
+            return "raw needs hex bytes"
+    if "wrong_type" in s and s["wrong_type"] not in ("arm", "gripper"):
+        return "wrong_type is arm or gripper"
+    return ""
 
 
 class ScriptPlayer:
@@ -121,6 +170,13 @@ def main(args) -> int:
     except ScriptError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    if args.out:  # (found out only after the session, its summary lost, before)
+        try:
+            with open(args.out, "a"):
+                pass
+        except OSError as e:
+            print(f"error: --out {args.out}: {e.strerror or e}", file=sys.stderr)
+            return 2
     bus = open_bus(args.url)
     p = LockstepParticipant(bus, args.name, clock_timeout=args.clock_timeout)
     player = ScriptPlayer(p, script)
