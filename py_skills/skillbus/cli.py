@@ -19,7 +19,8 @@ def _at_least_one(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="skillbus", description="skill-based robot control without ROS")
-    ap.add_argument("--log-level", default=None, help="debug, info, warn or error")
+    ap.add_argument("--log-level", default=None, type=str.lower, choices=("debug", "info", "warn", "warning", "error"),
+                    help="debug, info, warn or error (default: $SKILLBUS_LOG_LEVEL, else info)")
     ap.add_argument("--network", default=None, metavar="IFACE",
                     help="let the bus join its multicast group on this network interface (default: loopback "
                          "only; docs/security.md)")
@@ -53,8 +54,10 @@ def build_parser() -> argparse.ArgumentParser:
     la = sub.add_parser("launch", help="start the system under supervisord")
     la.add_argument("--run-dir", default="runs/launch")
     la.add_argument("--wall-clock", action="store_true", help="as on a robot: no lockstep, processes restart")
-    la.add_argument("--task", default=None, help="a task for the manager's first tick (default: ClearTable)")
-    la.add_argument("--no-task", action="store_true", help="start no task (run them with skillbus run)")
+    la_task = la.add_mutually_exclusive_group()  # (--task X --no-task dropped X without a word)
+    la_task.add_argument("--task", default=None, type=nonempty_task,
+                         help="a task for the manager's first tick (default: ClearTable)")
+    la_task.add_argument("--no-task", action="store_true", help="start no task (run them with skillbus run)")
     sd = sub.add_parser("shutdown", help="stop a launched system")
     sd.add_argument("--run-dir", default="runs/launch")
     sp = sub.add_parser("spy", help="lcm-spy with every skillbus message type decodable")
@@ -183,6 +186,13 @@ def main(argv: list[str] | None = None) -> int:
         # every command's own errors, not a traceback.
         print(f"error: skillbus {args.command}: {os_error_text(e)}", file=sys.stderr)
         return 1
+
+
+def nonempty_task(text: str) -> str:
+    """A task for launch: a skill type, not empty (--task "" started no task, as --no-task)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("empty: give a skill type, or --no-task")
+    return text
 
 
 def os_error_text(e: OSError) -> str:

@@ -42,6 +42,8 @@ class SafeFormatter(logging.Formatter):
 
 def setup_logging(level: str | None = None) -> None:
     level = (level or os.environ.get("SKILLBUS_LOG_LEVEL", "info")).upper()
+    if level == "WARN":
+        level = "WARNING"
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(SafeFormatter())
     logging.basicConfig(level=getattr(logging, level, logging.INFO), handlers=[handler])

@@ -90,3 +90,16 @@ def test_a_tasks_tree_with_no_manager_says_so_and_refuses_parameters(tmp_path):
     p = subprocess.run([sys.executable, "-m", "skillbus.cli", "tree", "5", "-p", "K=V"], capture_output=True, text=True,
                        timeout=60, env=env, cwd=tmp_path)
     assert p.returncode == 2 and "-p is for a skill's expansion" in p.stderr, (p.returncode, p.stderr[-2000:])
+
+
+@pytest.mark.parametrize("args, why", [(["--log-level", "bogus", "skills"], "argument --log-level: invalid choice"),
+                                       (["launch", "--task", "Pick", "--no-task"], "not allowed with argument"),
+                                       (["launch", "--task", ""], "argument --task: empty")],
+                         ids=["log-level", "task-and-no-task", "task-empty"])
+def test_options_that_were_dropped_without_a_word_are_refused(tmp_path, args, why):
+    # Before: --log-level bogus became info; launch --task X --no-task dropped X; --task ""
+    # started no task.
+    env = {**os.environ, "SKILLBUS_BUS_URL": "nowhere://this-bus-must-not-be-opened", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", *args], capture_output=True, text=True, timeout=60,
+                       env=env, cwd=tmp_path)
+    assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])
