@@ -66,11 +66,13 @@ def build_parser() -> argparse.ArgumentParser:
                                        "losing none under load (lcm-logger drops when its queue of 30 fills)")
     rc.add_argument("file", help="the LCM log to write")
     rc.add_argument("--url", default=None, help="the bus (default: $SKILLBUS_BUS_URL)")
-    rc.add_argument("--seconds", type=cli_values.seconds, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
+    rc.add_argument("--seconds", type=cli_values.seconds, default=None,
+                    help="stop after this long (default: at SIGINT or SIGTERM)")
     dr = sub.add_parser("dds-record", help="record every skillbus channel of a DDS domain into an LCM log file")
     dr.add_argument("file", help="the LCM log to write")
     dr.add_argument("--url", default=None, help="the DDS bus (default: $SKILLBUS_BUS_URL)")
-    dr.add_argument("--seconds", type=cli_values.seconds, default=None, help="stop after this long (default: at SIGINT or SIGTERM)")
+    dr.add_argument("--seconds", type=cli_values.seconds, default=None,
+                    help="stop after this long (default: at SIGINT or SIGTERM)")
     rp = sub.add_parser("replay", help="play a recorded LCM log back onto the bus")
     rp.add_argument("log")
     rp.add_argument("--url", default=None)
@@ -106,7 +108,8 @@ def build_parser() -> argparse.ArgumentParser:
     dev.add_argument("--object-width", type=cli_values.non_negative, default=None,
                      help="um: an object between the fingers (standalone only: with the physics, its objects are)")
     dev.add_argument("--period-ms", type=cli_values.positive, default=None,
-                     help="the device's step on the wall clock, ms (default 10; not with --lockstep: the frames step it)")
+                     help="the device's step on the wall clock, ms (default 10; not with --lockstep: the frames "
+                          "step it)")
     dev.add_argument("--lockstep", action="store_true",
                      help="be a lockstep participant driving the physics server's fingers")
     dev.add_argument("--physics", action="store_true",
@@ -119,7 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("file", help="where to write (.log: candump format)")
     rec.add_argument("--channel", default="vcan0")
     rec.add_argument("--interface", default="skillbus_vcan", help="python-can interface (socketcan on real CAN)")
-    rec.add_argument("--seconds", type=cli_values.seconds, default=None, help="stop after this long (default: at SIGINT)")
+    rec.add_argument("--seconds", type=cli_values.seconds, default=None,
+                     help="stop after this long (default: at SIGINT)")
     cl = sub.add_parser("can-log", help="print a candump log decoded as CANopen")
     cl.add_argument("file")
     cl.add_argument("--node-id", type=cli_values.node_id, default=5)

@@ -377,17 +377,24 @@ def step_on_the_wall_clock(dev: GripperDevice, dt: float) -> None:
         dev.bus_down = False
 
 
+def ignored_option(args) -> str:
+    """Why an option the chosen runner would ignore without a word is refused, or ""."""
+    lockstep, physics = getattr(args, "lockstep", False), getattr(args, "physics", False)
+    if lockstep and physics:
+        return ("--lockstep and --physics: one or the other (--lockstep: in frames with the physics server; "
+                "--physics: on the wall clock with it)")
+    if lockstep and getattr(args, "period_ms", None) is not None:
+        return "--period-ms is for the wall clock: under --lockstep the frames step the device"
+    if (lockstep or physics) and getattr(args, "object_width", None) is not None:
+        return "--object-width is for the standalone device: with the physics server its objects are between the fingers"
+    return ""
+
+
 def main(args) -> int:
     """``skillbus gripper-device``: the runner its options ask for."""
     logging.basicConfig(level=logging.INFO)
-    # An option the chosen runner would ignore without a word: refused, naming it.
-    lockstep, physics = getattr(args, "lockstep", False), getattr(args, "physics", False)
-    refused = ("--lockstep and --physics: one or the other (--lockstep: in frames with the physics server; "
-               "--physics: on the wall clock with it)" if lockstep and physics else
-               "--period-ms is for the wall clock: under --lockstep the frames step the device" if lockstep
-               and getattr(args, "period_ms", None) is not None else
-               "--object-width is for the standalone device: with the physics server its objects are between the "
-               "fingers" if (lockstep or physics) and getattr(args, "object_width", None) is not None else "")
+    lockstep = getattr(args, "lockstep", False)
+    refused = ignored_option(args)
     if refused:
         print(f"error: gripper-device: {refused}", file=sys.stderr)
         return 2
