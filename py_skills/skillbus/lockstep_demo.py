@@ -131,6 +131,13 @@ class LatestReader:
 
 
 def main(args) -> int:
+    # Options the chosen mode would ignore without a word: refused, naming them.
+    for given, needs, flag in ((args.frames is not None, args.wall_clock, "--frames needs --wall-clock (under lockstep "
+                                "the master sets the frames)"),
+                               (args.listen, args.bare, "--listen needs --bare")):
+        if given and not needs:
+            print(f"error: lockstep-participant: {flag}", file=sys.stderr)
+            return 2
     bus = open_bus(args.url)
     if args.lose_acks_every:
         bus = DropEveryNthBus(bus, args.lose_acks_every, {ack_channel()})

@@ -103,3 +103,12 @@ def test_options_that_were_dropped_without_a_word_are_refused(tmp_path, args, wh
     p = subprocess.run([sys.executable, "-m", "skillbus.cli", *args], capture_output=True, text=True, timeout=60,
                        env=env, cwd=tmp_path)
     assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])
+
+
+@pytest.mark.parametrize("args, why", [(["--frames", "5"], "--frames needs --wall-clock"),
+                                       (["--listen"], "--listen needs --bare")], ids=["frames", "listen"])
+def test_a_demo_participant_refuses_what_its_mode_would_ignore(tmp_path, args, why):
+    env = {**os.environ, "SKILLBUS_BUS_URL": "nowhere://this-bus-must-not-be-opened", "SKILLBUS_NETNS": "1"}
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", "p", *args],
+                       capture_output=True, text=True, timeout=60, env=env, cwd=tmp_path)
+    assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])
