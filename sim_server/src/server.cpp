@@ -373,6 +373,11 @@ void SimServer::add_services() {
   rpc_->add_method<Req, Rep>("digest", [this](const Req&) { return status(); });
   rpc_->add_method<Req, Rep>("reset", [this](const Req&) {
     physics_->reset();
+    // As a scene loaded anew: the cameras count from 0 again, and so seed their noise (a
+    // capture after a reset differed from the same capture of a fresh start).
+    captures_.clear();
+    last_rate_capture_.clear();
+    pending_captures_.clear();
     SB_INFO(kLog, "reset to the scene " << physics_->scene().path << " at frame " << frame_);
     return status();
   });
