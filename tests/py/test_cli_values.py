@@ -112,3 +112,18 @@ def test_a_demo_participant_refuses_what_its_mode_would_ignore(tmp_path, args, w
     p = subprocess.run([sys.executable, "-m", "skillbus.cli", "lockstep-participant", "--name", "p", *args],
                        capture_output=True, text=True, timeout=60, env=env, cwd=tmp_path)
     assert p.returncode == 2 and why in p.stderr and "Traceback" not in p.stderr, (p.returncode, p.stderr[-2000:])
+
+
+def test_can_log_names_a_log_or_an_eds_it_cannot_read(tmp_path):
+    # Before: a .blf that is not BLF ended in struct.error's traceback, and an EDS that
+    # could not be read was named as the log.
+    env = {**os.environ, "SKILLBUS_NETNS": "1"}
+    blf = tmp_path / "x.blf"
+    blf.write_bytes(b"not a blf")
+    log = tmp_path / "ok.log"
+    log.write_text("(1.0) vcan0 705#05\n")
+    for args, why in (([str(blf)], f"error: {blf}: not a readable CAN log"),
+                      ([str(log), "--eds", str(tmp_path)], f"error: --eds {tmp_path}: not a readable EDS")):
+        p = subprocess.run([sys.executable, "-m", "skillbus.cli", "can-log", *args], capture_output=True, text=True,
+                           timeout=60, env=env)
+        assert p.returncode == 2 and p.stderr.startswith(why) and "Traceback" not in p.stderr, (args, p.stderr[-2000:])

@@ -176,6 +176,13 @@ def main_record(args) -> int:
 
 
 def main_log(args) -> int:
+    eds = args.eds or EDS
+    try:  # the EDS first, named as itself (its error was told as the log's)
+        Decoder(args.node_id, eds)
+    except Exception as e:  # (canopen's import raises what it meets: ValueError, KeyError, ...)
+        print(f"error: --eds {eds}: not a readable EDS ({type(e).__name__}: {e})", file=sys.stderr)
+        return 2
+    from can.io.blf import BLFParseError
     try:
         if getattr(args, "json", False):
             print(json.dumps(list(frames(args.file, args.node_id, args.eds or EDS))))
@@ -184,7 +191,8 @@ def main_log(args) -> int:
             print(line)
     except BrokenPipeError:
         raise  # the reader went away (| head): the CLI ends quietly
-    except (OSError, ValueError) as e:
-        print(f"error: {args.file}: {e}", file=sys.stderr)
+    except (OSError, ValueError, struct.error, EOFError, BLFParseError, can.CanError) as e:
+        # (a file that is no log of its kind: a .blf that is not BLF ended in struct.error)
+        print(f"error: {args.file}: not a readable CAN log ({type(e).__name__}: {e})", file=sys.stderr)
         return 2
     return 0
