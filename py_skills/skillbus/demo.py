@@ -429,7 +429,9 @@ def main(args) -> int:
         # LCM multicast stays inside a private network namespace (docs/transport.md).
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
         from skillbus.monitor import run_foreground
-        return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", "demo", "--run-dir",
+        # (the global options too: --log-level was dropped on the way in)
+        log_level = ["--log-level", args.log_level] if getattr(args, "log_level", None) else []
+        return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", *log_level, "demo", "--run-dir",
                                str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", None) or default_transport(),
                                "--robots", str(getattr(args, "robots", 1))]
                               + (["--json"] if args.json else [])

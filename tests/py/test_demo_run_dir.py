@@ -94,3 +94,18 @@ def test_launch_leaves_an_existing_folders_mode_as_it_was(tmp_path):
     fresh = launch.write_config(tmp_path / "new" / "run", [Program("sim", [sys.executable, "-c", "pass"])],
                                 lockstep=False)
     assert fresh.parent.stat().st_mode & 0o777 == 0o700
+
+
+def test_the_demo_run_in_its_namespace_keeps_the_global_options(tmp_path, monkeypatch):
+    # Before, `skillbus --log-level debug demo` ran the demo in its network namespace
+    # without --log-level.
+    import argparse
+    from skillbus import monitor
+    ran = []
+    monkeypatch.setattr(monitor, "run_foreground", lambda argv, **kw: ran.append(argv) or 0)
+    monkeypatch.delenv("SKILLBUS_NETNS", raising=False)
+    args = argparse.Namespace(run_dir=str(tmp_path / "demo"), json=False, log_level="debug", bus="lcm", robots=1,
+                              perception=False, seed=None, physics_core="auto")
+    assert demo.main(args) == 0
+    (argv,) = ran
+    assert argv[argv.index("skillbus.cli") + 1:argv.index("demo")] == ["--log-level", "debug"], argv
