@@ -430,7 +430,8 @@ def main(args) -> int:
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
         from skillbus.monitor import run_foreground
         # (the global options too: --log-level was dropped on the way in)
-        log_level = ["--log-level", args.log_level] if getattr(args, "log_level", None) else []
+        log_level = (["--log-level", args.log_level] if getattr(args, "log_level", None) else []) + \
+            (["--network", args.network] if getattr(args, "network", None) else [])
         return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", *log_level, "demo", "--run-dir",
                                str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", None) or default_transport(),
                                "--robots", str(getattr(args, "robots", 1))]
