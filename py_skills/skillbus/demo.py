@@ -430,8 +430,11 @@ def main(args) -> int:
         netns = paths.REPO_ROOT / "deploy" / "netns-run"
         from skillbus.monitor import run_foreground
         # (the global options too: --log-level was dropped on the way in)
-        log_level = (["--log-level", args.log_level] if getattr(args, "log_level", None) else []) + \
-            (["--network", args.network] if getattr(args, "network", None) else [])
+        log_level = ["--log-level", args.log_level] if getattr(args, "log_level", None) else []
+        if getattr(args, "network", None):  # (it was dropped without a word)
+            print("error: demo --network: the demo's bus is in a private network namespace of its own, on no "
+                  "network interface", file=sys.stderr)
+            return 2
         return run_foreground([str(netns), sys.executable, "-m", "skillbus.cli", *log_level, "demo", "--run-dir",
                                str(Path(args.run_dir).resolve()), "--bus", getattr(args, "bus", None) or default_transport(),
                                "--robots", str(getattr(args, "robots", 1))]
