@@ -25,6 +25,9 @@ def add_parser(sub) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.path is not None and not args.path.strip():  # (an empty $VAR: it acted on the default key file)
+        print("error: key --path: empty (give the key file, or leave --path out for the default)", file=sys.stderr)
+        return 2
     env = os.environ.get(auth.KEY_ENV)
     path = Path(args.path or (env if env and env != "none" else auth.default_key_path()))
     try:

@@ -127,3 +127,19 @@ def test_can_log_names_a_log_or_an_eds_it_cannot_read(tmp_path):
         p = subprocess.run([sys.executable, "-m", "skillbus.cli", "can-log", *args], capture_output=True, text=True,
                            timeout=60, env=env)
         assert p.returncode == 2 and p.stderr.startswith(why) and "Traceback" not in p.stderr, (args, p.stderr[-2000:])
+
+
+def test_an_empty_key_path_and_turtle_with_json_are_refused(tmp_path):
+    # Before: `key rotate --path "$EMPTY"` rotated the default key file; `scene turtle --json`
+    # ignored --json.
+    home = tmp_path / "home"
+    env = {**os.environ, "SKILLBUS_NETNS": "1", "XDG_CONFIG_HOME": str(home)}
+    env.pop("SKILLBUS_KEY_FILE", None)
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "key", "create", "--path", ""], capture_output=True,
+                       text=True, timeout=60, env=env)
+    assert p.returncode == 2 and "key --path: empty" in p.stderr, p.stderr
+    assert not (home / "skillbus" / "bus.key").exists()  # the default key file, untouched
+    p = subprocess.run([sys.executable, "-m", "skillbus.cli", "scene", "turtle", "deploy/scenes/demo.scene.json",
+                        "--json"], capture_output=True, text=True, timeout=60, env=env,
+                       cwd=os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+    assert p.returncode == 2 and "--json is for check" in p.stderr, p.stderr

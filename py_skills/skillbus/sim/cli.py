@@ -136,6 +136,9 @@ def main(args: argparse.Namespace) -> int:
         return script.main(args)
     if args.command == "scene":
         from skillbus.sim import scene
+        if args.action == "turtle" and args.json:  # (it was ignored without a word)
+            print("error: scene turtle --json: --json is for check (turtle prints Turtle)", file=sys.stderr)
+            return 2
         try:
             if args.action == "turtle":
                 text = scene.to_turtle(scene.load(args.scene))
