@@ -10,13 +10,6 @@ from skillbus.log import setup_logging
 from skillbus import cli_values
 
 
-def _at_least_one(text: str) -> int:
-    n = int(text)
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"{n}: at least 1")
-    return n
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="skillbus", description="skill-based robot control without ROS")
     ap.add_argument("--log-level", default=None, type=str.lower, choices=("debug", "info", "warn", "warning", "error"),
@@ -86,8 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frames", type=cli_values.count, default=None, help="wall-clock mode: stop after this many frames")
     p.add_argument("--bare", action="store_true", help="no demo traffic: only the lockstep protocol")
     p.add_argument("--listen", action="store_true", help="with --bare: hear (and fold) SB_DEMO_CMD, publish nothing")
-    p.add_argument("--every", type=_at_least_one, default=1, help="test: publish SB_DEMO_CMD in every N-th frame only")
-    p.add_argument("--latest-every", type=_at_least_one, default=None,
+    p.add_argument("--every", type=cli_values.at_least_one, default=1, help="test: publish SB_DEMO_CMD in every N-th frame only")
+    p.add_argument("--latest-every", type=cli_values.at_least_one, default=None,
                    help="test: read only the newest SB_DEMO_STATE (latest-only) and act in every N-th frame")
     p.add_argument("--drop-at-frame", type=int, default=-1, help="test: lose this frame's output")
     p.add_argument("--slow-at-frame", type=int, default=-1, help="test: take --slow-s seconds over this frame")

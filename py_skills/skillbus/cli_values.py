@@ -6,8 +6,8 @@ integer``) or meant "never"; ``--timeout -1`` was taken ("no server answered wit
 s"); ``record --seconds -5`` returned at once with an empty log and exit 0; ``--node-id 0``
 ended in canopen's TypeError; ``lockstep-session --frames -5`` never ended.
 
->>> seconds("2.5"), seconds_or_never("0"), node_id("127"), count("0")
-(2.5, 0.0, 127, 0)
+>>> seconds("2.5"), seconds_or_never("0"), node_id("127"), count("0"), port("0")
+(2.5, 0.0, 127, 0, 0)
 >>> seconds("nan")
 Traceback (most recent call last):
     ...
@@ -22,65 +22,35 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import Any, Callable
 
 
-def _number(text: str) -> float | None:
-    try:
-        v = float(text)
-    except ValueError:
-        return None
-    return v if math.isfinite(v) else None
-
-
-def seconds(text: str) -> float:
-    """A duration: finite, greater than 0."""
-    v = _number(text)
-    if v is None or v <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds greater than 0")
+def _finite(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):
+        raise ValueError(text)
     return v
 
 
-def seconds_or_never(text: str) -> float:
-    """A duration, or 0 for none (run's and watch's --timeout)."""
-    v = _number(text)
-    if v is None or v < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds (0: never)")
-    return v
+def _checked(parse: Callable[[str], Any], fits: Callable[[Any], bool], what: str) -> Callable[[str], Any]:
+    """An argparse type: `parse(text)` when it parses and `fits`, else an error naming
+    `what` the option takes (argparse names the option and exits 2)."""
+    def check(text: str) -> Any:
+        try:
+            v = parse(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+        if not fits(v):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}")
+        return v
+    return check
 
 
-def positive(text: str) -> float:
-    """A finite number greater than 0 (a speed, a period)."""
-    v = _number(text)
-    if v is None or v <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number greater than 0")
-    return v
-
-
-def non_negative(text: str) -> float:
-    """A finite number, 0 or more (a width)."""
-    v = _number(text)
-    if v is None or v < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of 0 or more")
-    return v
-
-
-def count(text: str) -> int:
-    """A whole number, 0 or more."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = -1
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of 0 or more")
-    return v
-
-
-def node_id(text: str) -> int:
-    """A CANopen node id: 1 to 127."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = 0
-    if not 1 <= v <= 127:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a CANopen node id (1 to 127)")
-    return v
+seconds = _checked(_finite, lambda v: v > 0, "a number of seconds greater than 0")  # a duration
+seconds_or_never = _checked(_finite, lambda v: v >= 0, "a number of seconds (0: never)")  # run's, watch's --timeout
+positive = _checked(_finite, lambda v: v > 0, "a number greater than 0")  # a speed, a period
+non_negative = _checked(_finite, lambda v: v >= 0, "a number of 0 or more")  # a width
+count = _checked(int, lambda v: v >= 0, "a whole number of 0 or more")
+at_least_one = _checked(int, lambda v: v >= 1, "a whole number of 1 or more")
+node_id = _checked(int, lambda v: 1 <= v <= 127, "a CANopen node id (1 to 127)")
+port = _checked(int, lambda v: 0 <= v <= 65535, "a TCP port (0 to 65535; 0: any free port)")

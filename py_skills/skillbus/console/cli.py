@@ -6,10 +6,12 @@ import argparse
 import logging
 import sys
 
+from skillbus import cli_values
+
 
 def add_parser(sub) -> None:
     c = sub.add_parser("console", help="the web console: skills, tasks, world model (docs/console.md)")
-    c.add_argument("--port", type=port_number, default=8080, help="HTTP port (default 8080; 0: any free port)")
+    c.add_argument("--port", type=cli_values.port, default=8080, help="HTTP port (default 8080; 0: any free port)")
     c.add_argument("--host", default="127.0.0.1",
                    help="the address to serve on (default: this machine only; 0.0.0.0 serves every network the "
                         "machine is on, to anyone who reaches it: the console starts and stops tasks)")
@@ -30,17 +32,6 @@ def add_parser(sub) -> None:
     # test: lose every N-th progress message it hears (the catch-up from SKILL.tasks must
     # still give every task its final tree)
     c.add_argument("--lose-progress-every", type=int, default=0, help=argparse.SUPPRESS)
-
-
-def port_number(text: str) -> int:
-    """A TCP port, 0 to 65535 (70000 ended in bind's OverflowError traceback)."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = -1
-    if not 0 <= v <= 65535:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a TCP port (0 to 65535; 0: any free port)")
-    return v
 
 
 def main(args: argparse.Namespace) -> int:
