@@ -72,20 +72,12 @@ def test_a_straight_line_leaves_the_map_in_the_next_joint_moves_check(sandbox, t
     # as occupied), so the line took the map out of the collision model; the map's cache
     # still held it, so the next joint-space move (the map unchanged) was planned against
     # the fixtures alone: straight through the red cube, which only the map holds.
-    from test_occupancy_map import camera_scene, cli
+    from test_occupancy_map import mapped_overhead
     maps = tmp_path / "maps"
     maps.mkdir()
-    sandbox.start("sim", [str(paths.binary("sim_server")), "--scene", str(camera_scene(tmp_path)), "--wall-clock"])
-    mapper = sandbox.start("map", [str(paths.binary("map_server")), "--maps", str(maps)])
-    mapper.wait_for("serving", 30)
+    mapped_overhead(sandbox, tmp_path, maps)
     motion = sandbox.start("motion", [str(paths.binary("motion_server")), "--scene", str(paths.demo_scene()), "--map"])
     motion.wait_for("serving", 30)
-    assert cli(sandbox, "camera", "capture", "overhead")[0] == 0
-    import time
-    deadline = time.monotonic() + 15
-    while cli(sandbox, "map", "info")[1]["clouds"] < 1:
-        assert time.monotonic() < deadline
-        time.sleep(0.2)
     p = sandbox.start("probe", [sys.executable, "-c", MAP_PROBE])
     assert sandbox.wait(p, 120) == 0, p.stderr()
     r = json.loads(p.stdout().strip().splitlines()[-1])

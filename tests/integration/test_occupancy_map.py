@@ -52,9 +52,9 @@ def cli(box, *args, timeout=30):
     return rc, (json.loads(p.stdout().splitlines()[-1]) if rc == 0 else p.stderr())
 
 
-def test_one_capture_maps_the_table_and_cubes_and_the_map_saves_and_loads(sandbox, tmp_path):
-    maps = tmp_path / "maps"
-    maps.mkdir()
+def mapped_overhead(sandbox, tmp_path, maps):
+    """A wall-clock physics server with the overhead camera and a map server (its maps in
+    `maps`) that has taken one capture: the map server's process and its info."""
     sandbox.start("sim", [str(paths.binary("sim_server")), "--scene", str(camera_scene(tmp_path)), "--wall-clock"])
     mapper = sandbox.start("map", [str(paths.binary("map_server")), "--maps", str(maps)])
     mapper.wait_for("serving", 30)
@@ -63,6 +63,13 @@ def test_one_capture_maps_the_table_and_cubes_and_the_map_saves_and_loads(sandbo
     while (info := cli(sandbox, "map", "info")[1])["clouds"] < 1:
         assert time.monotonic() < deadline, info
         time.sleep(0.2)
+    return mapper, info
+
+
+def test_one_capture_maps_the_table_and_cubes_and_the_map_saves_and_loads(sandbox, tmp_path):
+    maps = tmp_path / "maps"
+    maps.mkdir()
+    mapper, info = mapped_overhead(sandbox, tmp_path, maps)
     assert info["captures"] == {"overhead": 0} and info["resolution"] == 0.01
     flat = [str(v) for p in named_points() for v in p]
     rc, got = cli(sandbox, "map", "state", *flat)

@@ -67,6 +67,23 @@ Param text(const std::string& key, const std::string& value) {
   return p;
 }
 
+// A parameter with one typed value (data_type as given: "" for none).
+Param valued(const std::string& key, const std::string& data_type, const skill_value_t& v) {
+  Param p{};
+  p.key = key;
+  p.data_type = data_type;
+  p.values = {v};
+  p.num_values = 1;
+  return p;
+}
+
+skill_value_t int_value(int64_t i) {
+  skill_value_t v{};
+  v.type = skill_value_t::INT;
+  v.i = i;
+  return v;
+}
+
 }  // namespace
 
 TEST(ParamCheck, AMissingElementIsAnErrorNamingParameterIdAndType) {
@@ -190,13 +207,10 @@ TEST(ParamCheck, ANonFiniteFloatIsRefusedGivenAsTextOrReturned) {
     Param p = text("Gain", t);
     EXPECT_EQ(parse_text(d, p), std::string("parameter Gain: '") + t + "' is not a finite float") << t;
   }
-  Param gain{};
-  gain.key = "Gain";
-  gain.data_type = "float";
   skill_value_t f{};
   f.type = skill_value_t::FLOAT;
   f.f = std::nan("");
-  gain.values = {f};
+  const Param gain = valued("Gain", "float", f);
   EXPECT_EQ(check_given(d, {gain}), "parameter Gain of Echo: nan is not a finite number");
   EXPECT_EQ(check_returned(d, {gain}), "parameter Gain as nan, not a finite number");
 }
@@ -205,12 +219,7 @@ TEST(ParamCheck, AValueWithoutItsDataTypeMustBeOneTextValue) {
   // A forged start whose value has no data type was read as its text: an int sent for a
   // string parameter became "", another value than the one sent.
   const auto d = echo();
-  Param n{};
-  n.key = "N";
-  skill_value_t i{};
-  i.type = skill_value_t::INT;
-  i.i = 5;
-  n.values = {i};
+  Param n = valued("N", "", int_value(5));
   EXPECT_EQ(parse_text(d, n), "parameter N: a value without its data type must be one text value, not 1 value(s) of type int");
   Param two = text("N", "5");
   two.values.push_back(two.values[0]);
