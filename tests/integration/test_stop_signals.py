@@ -21,7 +21,8 @@ from skillbus import paths
 AT_ONCE_S = 2.0  # what "at once" is given on a loaded machine; the waits it cuts are 5-60 s
 
 
-def stopped_within(box, proc, sig: int, limit: float = AT_ONCE_S) -> tuple[int, float]:
+def stopped_within(box, proc, sig: int) -> tuple[int, float]:
+    """Signals `proc`; its exit code and how long it took to end."""
     t0 = time.monotonic()
     box.kill(proc, sig)
     rc = box.wait(proc, 90)

@@ -143,3 +143,28 @@ def test_an_empty_key_path_and_turtle_with_json_are_refused(tmp_path):
                         "--json"], capture_output=True, text=True, timeout=60, env=env,
                        cwd=os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
     assert p.returncode == 2 and "--json is for check" in p.stderr, p.stderr
+
+
+def test_a_skill_process_under_a_policy_without_the_expansion_rules_serves_on_without_them(tmp_path):
+    # A policy file older than SB_SKTREE_* (skillbus tree's expansions): the process starts
+    # and serves its skills, says once that it serves no expansions to operators, and never
+    # answers where every answer would be refused (each was a failure in its log).
+    from skillbus import auth
+    key = tmp_path / "bus.key"
+    auth.create_key_file(key)
+    policy = tmp_path / "old.conf"
+    policy.write_text("SB_SKPROC_*_REP skills\nSB_SKILL_HEARTBEAT skills\nSB_*_REQ *\n")
+    env = {**os.environ, "SKILLBUS_BUS_URL": "memq://", "SKILLBUS_NETNS": "1", "SKILLBUS_KEY_FILE": str(key),
+           "SKILLBUS_POLICY_FILE": str(policy), "SKILLBUS_IDENTITY": "skills",
+           "PYTHONPATH": os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "integration",
+                                      "skill_libs")}
+    p = subprocess.Popen([sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "skills", "--library",
+                          "flow_skills", "--standalone"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=env)
+    try:
+        first = p.stdout.readline()
+        assert '"chain"' in first, first + p.stderr.read()
+    finally:
+        p.terminate()
+        _, err = p.communicate(timeout=30)
+    assert "expansions for operators (skillbus tree) not served: the bus policy" in err and "SB_SKTREE_SKILLS_REP" in err, err

@@ -166,8 +166,15 @@ class SkillProcess:
         # process's own area is the manager's alone under the system's policy (only it
         # ticks skills), so an operator's request there was dropped and waited out its
         # timeout. An expansion acts on nothing; what it reads is the world as it is.
-        self.expansions = RpcServer(bus, expand_area(self.name))  # (SB_SKTREE_<NAME>_REQ)
-        self.expansions.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
+        # (not served where the policy lets it send no answer: an older policy file without the
+        # SB_SKTREE rules; every answer would be refused, each request logged as a failure)
+        refused = bus.refused(reply_channel(expand_area(self.name))) if hasattr(bus, "refused") else ""
+        self.expansions: RpcServer | None = None
+        if refused:
+            log.warning("expansions for operators (skillbus tree) not served: %s", refused)
+        else:
+            self.expansions = RpcServer(bus, expand_area(self.name))  # (SB_SKTREE_<NAME>_REQ)
+            self.expansions.add_method("expand", self.on_expand, skill_tick_t, skill_tree_t)
         if participant is not None:
             # A tick of frame n is answered only after this process has finished its own
             # frame n, so the skill always sees the world-model replica and the devices as
