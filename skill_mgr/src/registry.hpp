@@ -21,7 +21,10 @@ struct Implementation {
 class Registry {
  public:
   // Takes a process's announcement (replacing what it announced before); returns what
-  // was refused, each naming the skill and why.
+  // was refused, each naming the skill and why: a label served by another process, or
+  // parameters other than those the type's registered implementations declare (keys,
+  // data types, concepts, kinds: as in SkiROS2, implementations share their type's
+  // description; the manager checks a start against one of them and may run any).
   std::vector<std::string> add(const skillbus_msgs::skill_register_t& reg);
   // Implementations of a type, in label order; with a label, only that one. Copies, not
   // pointers into the registry: the manager pumps the bus inside a request (an RPC to

@@ -70,6 +70,49 @@ TEST(Registry, AnnouncementsReplaceAProcessesSkillsAndLabelsAreUnique) {
   EXPECT_EQ(r.processes(), (std::vector<std::string>{"a", "b"}));
 }
 
+TEST(Registry, ImplementationsOfATypeDeclareTheSameParameters) {
+  // The manager checked a start's keys and values against the first implementation only
+  // and Alternatives may run another: a key only the other declared was refused, one only
+  // the first declared was taken and then ignored. A type has one set of parameters.
+  auto with = [](skillbus_msgs::skill_description_t d, std::vector<Param> params) {
+    d.params = std::move(params);
+    d.num_params = static_cast<int32_t>(d.params.size());
+    return d;
+  };
+  Registry r;
+  const Param speed = decl("Speed", skill_param_t::OPTIONAL, {1});
+  EXPECT_TRUE(r.add(announcement("a", 1, {with(description("Move", "move"), {speed})})).empty());
+  Param speed_float = speed;
+  speed_float.data_type = "float";
+  Param speed_required = speed;
+  speed_required.param_type = skill_param_t::REQUIRED;
+  Param speed_default = speed;
+  speed_default.defaults[0].i = 2;  // defaults and descriptions may differ
+  speed_default.description = "how fast";
+  const auto refused =
+      r.add(announcement("b", 1,
+                         {with(description("Move", "move_more"), {speed, decl("Force", skill_param_t::OPTIONAL)}),
+                          with(description("Move", "move_less"), {}),
+                          with(description("Move", "move_float"), {speed_float}),
+                          with(description("Move", "move_required"), {speed_required}),
+                          with(description("Move", "move_default"), {speed_default}),
+                          with(description("Grip", "grip"), {speed_float})}));
+  ASSERT_EQ(refused.size(), 4u);
+  EXPECT_EQ(refused[0], "skill move_more of b: not the parameters of its type Move as skill move of a declares them: "
+                        "it has parameter Force, which move has not");
+  EXPECT_EQ(refused[1], "skill move_less of b: not the parameters of its type Move as skill move of a declares them: "
+                        "it lacks parameter Speed of move");
+  EXPECT_EQ(refused[2], "skill move_float of b: not the parameters of its type Move as skill move of a declares them: "
+                        "its parameter Speed is a float, in move an int");
+  EXPECT_EQ(refused[3], "skill move_required of b: not the parameters of its type Move as skill move of a declares "
+                        "them: its parameter Speed is required, in move optional");
+  EXPECT_EQ(r.find("Move").size(), 2u);  // move and move_default
+  EXPECT_EQ(r.find("Grip").size(), 1u);  // another type: its own parameters
+  // The only implementation of a type may change its parameters when its process restarts.
+  EXPECT_TRUE(r.add(announcement("b", 2, {})).empty());
+  EXPECT_TRUE(r.add(announcement("a", 2, {with(description("Move", "move"), {speed_float})})).empty());
+}
+
 TEST(Registry, WhatFindReturnsOutlivesTheNextAnnouncement) {
   // The manager pumps the bus inside a start request (it loads the world copy); an
   // announcement heard meanwhile replaced the entries that a started task still read
