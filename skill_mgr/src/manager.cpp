@@ -70,7 +70,7 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     }
     req.num_params = static_cast<int32_t>(req.params.size());
     start_task_ = next_task_;
-    starts_.emplace_back(next_task_++, req);
+    starts_.push_back({next_task_++, req});
   }
   if (opt_.wall_clock) liveness_ = std::make_unique<Liveness>(bus_, registry_, opt_.name, opt_.liveness_timeout);
   directory_ = std::make_unique<Directory>(bus_, [this] {
@@ -160,38 +160,53 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     out.state = state_code(State::Idle);
     out.message = "queued";
     out.manager_incarnation = liveness_ ? liveness_->incarnation() : 0;
-    starts_.emplace_back(out.task, typed);
+    starts_.push_back({out.task, typed});
     return out;
   });
-  // pause / resume / step: a paused task is not ticked; step ticks it once.
+  // pause / resume / step: a paused task is not ticked; step ticks it once. A queued task
+  // (started, not begun) takes them too, and begins so.
   for (const char* verb : {"pause", "resume", "step"}) {
     const std::string v = verb;
     rpc_.add_method<skill_start_t, skill_task_t>(v, [this, v](const skill_start_t& req) {
-      auto it = tasks_.find(req.task);
-      if (it == tasks_.end()) throw RpcError("no running task " + std::to_string(req.task));
-      Task& t = *it->second;
-      if (v == "pause") t.paused = true;
-      if (v == "resume") t.paused = false;
+      bool* paused = nullptr;
+      bool* step_once = nullptr;
+      bool queued = false;
+      int8_t state = state_code(State::Idle);
+      if (auto it = tasks_.find(req.task); it != tasks_.end()) {
+        paused = &it->second->paused;
+        step_once = &it->second->step_once;
+        state = state_code(it->second->root->state());
+      }
+      for (auto& q : starts_)
+        if (q.id == req.task) {
+          paused = &q.paused;
+          step_once = &q.step_once;
+          queued = true;
+        }
+      if (!paused) throw RpcError("no running or queued task " + std::to_string(req.task));
+      if (v == "pause") *paused = true;
+      if (v == "resume") *paused = *step_once = false;
       if (v == "step") {
-        if (!t.paused) throw RpcError("task " + std::to_string(req.task) + " is not paused");
-        t.step_once = true;
+        if (!*paused) throw RpcError("task " + std::to_string(req.task) + " is not paused");
+        *step_once = true;
       }
       skill_task_t out{};
       out.task = req.task;
-      out.state = state_code(t.root->state());
-      out.message = t.paused ? (t.step_once ? "paused, stepping once" : "paused") : "running";
+      out.state = state;
+      out.message = std::string(queued ? "queued, " : "") +
+                    (*paused ? (*step_once ? "paused, stepping once" : "paused") : "running");
       return out;
     });
   }
   rpc_.add_method<skill_start_t, skill_task_t>("stop", [this](const skill_start_t& req) {
     auto it = tasks_.find(req.task);
     bool queued = false;
-    for (auto& [id, r] : starts_) queued |= id == req.task;
-    if (it == tasks_.end() && !queued) throw RpcError("no running task " + std::to_string(req.task));
+    for (const auto& q : starts_) queued |= q.id == req.task;
+    if (it == tasks_.end() && !queued) throw RpcError("no running or queued task " + std::to_string(req.task));
     if (it != tasks_.end()) it->second->stop_requested = true;
     for (auto q = starts_.begin(); q != starts_.end(); ++q)
-      if (q->first == req.task) {
-        stopped_queued_.emplace_back(q->first, q->second.type);  // its end is published at the next frame
+      if (q->id == req.task) {
+        stopped_queued_.emplace_back(q->id, q->req.type);  // its end is published at the next frame
         starts_.erase(q);
         break;
       }
@@ -354,8 +369,8 @@ skill_progress_list_t Manager::tasks_reply(int64_t task) const {
   };
   for (const auto& [id, t] : tasks_)
     if (wanted(id) && !latest_.count(id)) idle(id, t->type, t->label, "started, not ticked yet");
-  for (const auto& [id, req] : starts_)
-    if (wanted(id)) idle(id, req.type, req.label, "queued");
+  for (const auto& q : starts_)
+    if (wanted(q.id)) idle(q.id, q.req.type, q.req.label, q.paused ? "queued, paused" : "queued");
   std::sort(out.tasks.begin(), out.tasks.end(), [](const auto& a, const auto& b) { return a.task < b.task; });
   if (task > 0 && out.tasks.empty())
     throw RpcError("no task " + std::to_string(task) + " (neither running, queued nor among the last " +
@@ -429,9 +444,13 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     return;
   }
   while (!starts_.empty()) {
-    auto [id, req] = starts_.front();
+    const QueuedStart q = starts_.front();
     starts_.pop_front();
-    begin(req, id);
+    begin(q.req, q.id);
+    if (auto it = tasks_.find(q.id); it != tasks_.end()) {
+      it->second->paused = q.paused;
+      it->second->step_once = q.step_once;
+    }
   }
   for (auto it = tasks_.begin(); it != tasks_.end();) {
     Task& t = *it->second;

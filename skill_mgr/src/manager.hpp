@@ -98,7 +98,14 @@ class Manager {
   std::map<int64_t, std::unique_ptr<Task>> tasks_;
   int64_t frame_ = -1, sim_time_ns_ = 0;  // of the tick in progress
   void check_frame_period(int64_t frame, int64_t sim_time_ns) const;
-  std::deque<std::pair<int64_t, skillbus_msgs::skill_start_t>> starts_;  // applied at the next tick
+  // Started tasks wait here for the next tick time; pause, resume and step apply to them as
+  // to running ones (a task paused before it began begins paused).
+  struct QueuedStart {
+    int64_t id = 0;
+    skillbus_msgs::skill_start_t req;
+    bool paused = false, step_once = false;
+  };
+  std::deque<QueuedStart> starts_;
   std::deque<std::pair<int64_t, std::string>> stopped_queued_;  // stopped before they began: (task, type)
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;

@@ -48,7 +48,7 @@ def assert_preempted(sandbox, mgr, run, code):
     assert re.search(r"task 2: Wait Failure: preempted at tick \d+", mgr.stderr()), mgr.stderr()[-2000:]
     assert re.search(r"task 2: Failure: preempted at tick \d+", out), out + err
     rc, _, err = cli(sandbox, "stop", "2")
-    assert rc == 1 and "no running task 2" in err, err
+    assert rc == 1 and "no running or queued task 2" in err, err
 
 
 def test_sigint_preempts_the_task(sandbox):

@@ -64,7 +64,7 @@ def test_wrong_requests_are_refused_naming_what_is_wrong(sandbox, tmp_path):
         (400, "Nope"),
         (400, "no skill manager of robot r9"),
         (400, "a start needs"),
-        (400, "no running task 999"),
+        (400, "no running or queued task 999"),
         (400, "unknown command 'dance'"),
         (400, "unknown element id 'skiros:Cube-99'"),
         (400, "names no element read by this console"),

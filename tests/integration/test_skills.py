@@ -122,7 +122,65 @@ def test_pause_step_resume_and_stop(sandbox):
     assert sandbox.wait(run, 20) == 1
     assert re.search(r"Wait Failure: preempted at tick \d+", run.stdout())
     rc, _, err = cli(sandbox, "stop", "99")
-    assert rc == 1 and "no running task 99" in err
+    assert rc == 1 and "no running or queued task 99" in err
+
+
+PAUSE_QUEUED = """
+import json, sys, time
+from skillbus.bus import open_bus
+from skillbus.msgs import skill_param_t, skill_progress_list_t, skill_start_t, skill_task_t, skill_value_t
+from skillbus.rpc import RpcClient, RpcError
+from skillbus.waiting import wait_until
+client = RpcClient(open_bus(), "SKILL", "queued")
+ticks = skill_param_t()
+ticks.key, value = "Ticks", skill_value_t()
+value.type, value.s = skill_value_t.STRING, "3"  # text: typed by the manager
+ticks.values, ticks.num_values = [value], 1
+start = skill_start_t()
+start.type, start.params, start.num_params = "Wait", [ticks], 1
+task = wait_until(lambda: client.call("start", start, skill_task_t, timeout=2), 20, "the start",
+                  retry_on=(RpcError,)).task
+req = skill_start_t()
+req.task = task
+def call(verb):
+    try:
+        return client.call(verb, req, skill_task_t, timeout=5).message
+    except RpcError as e:
+        return f"refused: {e}"
+def progress():
+    p = client.call("tasks", req, skill_progress_list_t, timeout=5).tasks[0]
+    return {"tick": p.tick, "state": p.state, "message": p.nodes[0].message}
+out = {"pause": call("pause")}  # at once: the task waits for the next tick time (2 Hz)
+wait_until(lambda: progress()["message"] != "queued, paused", 10, "the task to begin", interval=0.05)
+time.sleep(1.1)  # two tick times
+out["paused"] = progress()
+out["step"] = call("step")
+wait_until(lambda: progress()["tick"] >= 1, 10, "the step's tick", interval=0.05)
+time.sleep(1.1)
+out["stepped"] = progress()
+out["resume"] = call("resume")
+wait_until(lambda: progress()["state"] >= 3, 10, "the end", interval=0.05)  # (Success or Failure)
+out["ended"] = progress()
+print(json.dumps(out), flush=True)
+"""
+
+
+def test_a_task_paused_before_it_begins_begins_paused(sandbox):
+    # A started task waits for the next tick time; pause, step and resume said "no running
+    # task" to it while stop took it, and a client holding a task had to retry.
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock", "--tick-hz", "2"])
+    proc = sandbox.start("proc1", [sys.executable, "-m", "skillbus.cli", "skills-process", "--name", "proc1",
+                                   "--library", "flow_skills"], env={"PYTHONPATH": str(LIBS)})
+    proc.wait_for("registered", 30)
+    probe = sandbox.start("queued", [sys.executable, "-c", PAUSE_QUEUED], env={"PYTHONPATH": str(LIBS)})
+    assert sandbox.wait(probe, 60) == 0, probe.stdout() + probe.stderr()
+    out = last_json(probe.stdout())
+    assert out["pause"] in ("queued, paused", "paused"), out  # ("paused": begun between the two calls)
+    assert out["paused"] == {"tick": 0, "state": 1, "message": "started, not ticked yet"}, out  # begun paused
+    assert out["step"] == "paused, stepping once", out
+    assert out["stepped"]["tick"] == 1, out  # one tick, then paused again
+    assert out["resume"] == "running", out
+    assert out["ended"]["message"] == "waited" and out["ended"]["tick"] == 3, out
 
 
 def test_a_dead_skill_process_fails_its_primitive_with_a_named_error(sandbox):

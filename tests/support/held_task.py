@@ -14,7 +14,7 @@ from skillbus.rpc import RpcClient, RpcError
 from skillbus.waiting import wait_until
 client, req = RpcClient(open_bus(), "SKILL", "hold"), skill_start_t()
 req.task = int(sys.argv[1])
-# (RpcError, retried: no manager yet, no such task yet, or queued: "no running task")
+# (RpcError, retried: no manager yet or no such task yet; a queued task is paused too)
 wait_until(lambda: client.call("pause", req, skill_task_t, timeout=0.5), 120, f"task {req.task} paused",
            interval=0.01, retry_on=(RpcError,))
 print("held", flush=True)
