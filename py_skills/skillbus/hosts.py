@@ -26,7 +26,7 @@ import select
 import subprocess
 from pathlib import Path
 
-from skillbus.netns import Proc, Sandbox, SandboxError
+from skillbus.netns import Proc, Sandbox, SandboxError, dies_with_its_starter
 
 ADDRESS = {"a": "10.77.0.1", "b": "10.77.0.2"}
 VETH = {"a": "sb-a", "b": "sb-b"}
@@ -62,7 +62,8 @@ class TwoHosts(Sandbox):
 
     def _make_host_b(self) -> None:
         # Host B's holder: a network namespace of its own inside A's user namespace.
-        self._b = subprocess.Popen(self.prefix() + ["unshare", "-n", "--", "sh", "-c", "echo ready && exec sleep 2147483647"],
+        self._b = subprocess.Popen(self.prefix() + ["unshare", "-n", "--", *dies_with_its_starter("KILL"),
+                                                    "sh", "-c", "echo ready && exec sleep 2147483647"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
         ready, _, _ = select.select([self._b.stdout], [], [], 10)
         if not ready or self._b.stdout.readline().decode().strip() != "ready":
@@ -97,7 +98,8 @@ class TwoHosts(Sandbox):
         env = {**(env or {}), "SKILLBUS_BUS_URL": self.url_for(host), "SKILLBUS_NETWORK": VETH[host]}
         out, err = self.log_dir / f"{name}.out", self.log_dir / f"{name}.err"
         with open(out, "wb") as fo, open(err, "wb") as fe:
-            popen = subprocess.Popen(self.host_prefix(host) + [str(a) for a in argv], stdout=fo, stderr=fe,
+            popen = subprocess.Popen(self.host_prefix(host) + dies_with_its_starter() + [str(a) for a in argv],
+                                     stdout=fo, stderr=fe,
                                      stdin=subprocess.DEVNULL, env=self.env(env), start_new_session=True)
         proc = Proc(name, popen, out, err)
         self.procs.append(proc)

@@ -41,6 +41,14 @@ from skillbus.waiting import wait_for_text
 SETUP = "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo"
 
 
+def dies_with_its_starter(signal_name: str = "TERM") -> list[str]:
+    """A command prefix (util-linux setpriv, after any namespace change: entering one clears
+    it) that gives the program a parent-death signal: it gets `signal_name` when the thread
+    that started it ends. Without it, an owner killed with SIGKILL (which no handler sees)
+    left its sandbox's processes running, busy, under no one."""
+    return ["setpriv", "--pdeathsig", signal_name, "--"]
+
+
 class SandboxError(RuntimeError):
     pass
 
@@ -139,10 +147,12 @@ class Sandbox:
         return self
 
     def _enter_namespace(self) -> None:
+        # (the guard after unshare: entering a user namespace clears a parent-death signal)
         if not shutil.which("unshare") or not shutil.which("nsenter"):
             raise SandboxError("unshare/nsenter not found")
         self._holder = subprocess.Popen(
-            ["unshare", "-rn", "--", "sh", "-c", f"{SETUP} && echo ready && exec sleep 2147483647"],
+            ["unshare", "-rn", "--", *dies_with_its_starter("KILL"), "sh", "-c",
+             f"{SETUP} && echo ready && exec sleep 2147483647"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
         ready, _, _ = select.select([self._holder.stdout], [], [], 10)
         line = self._holder.stdout.readline().decode().strip() if ready else ""
@@ -196,12 +206,14 @@ class Sandbox:
     # -- processes --------------------------------------------------------
     def start(self, name: str, argv: list[str], env: dict[str, str] | None = None, host_network: bool = False) -> Proc:
         """Starts a process in the namespace (with host_network: in the host's network,
-        for a kernel CAN interface there; it is still stopped with the sandbox)."""
+        for a kernel CAN interface there; it is still stopped with the sandbox). It gets
+        SIGTERM when the thread that started it ends (dies_with_its_starter): start a
+        sandbox's processes from a thread that lives as long as they should."""
         out = self.log_dir / f"{name}.out"
         err = self.log_dir / f"{name}.err"
         prefix = [] if host_network else self.prefix()
         with open(out, "wb") as fo, open(err, "wb") as fe:
-            popen = subprocess.Popen(prefix + [str(a) for a in argv], stdout=fo, stderr=fe,
+            popen = subprocess.Popen(prefix + dies_with_its_starter() + [str(a) for a in argv], stdout=fo, stderr=fe,
                                      stdin=subprocess.DEVNULL, env=self.env(env), start_new_session=True)
         proc = Proc(name, popen, out, err)
         self.procs.append(proc)
