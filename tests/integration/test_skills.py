@@ -78,6 +78,12 @@ def test_start_errors_name_the_problem(sandbox):
     assert rc == 0 and "consumed apple" in out
     rc, _, err = cli(sandbox, "run", "Produce", "-p", "Ticks=many")
     assert rc == 2 and "'many' is not a int" in err
+    # An implementation's label with --label naming another: the label ran, --label ignored.
+    rc, _, err = cli(sandbox, "run", "consume", "--label", "produce", "-p", "Item=apple")
+    assert rc == 2 and "error: 'consume' is the label of an implementation of Consume, and --label 'produce' " \
+                       "names another: give the type (Consume --label produce) or one label" in err, err
+    rc, out, _ = cli(sandbox, "run", "consume", "--label", "consume", "-p", "Item=pear", "--timeout", "20")
+    assert rc == 0 and "consumed pear" in out, out
 
 
 def test_each_run_gets_a_fresh_blackboard(sandbox):

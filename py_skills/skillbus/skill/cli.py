@@ -398,6 +398,11 @@ def _run(args, intr: Interrupts) -> int:
               file=sys.stderr)
         return 2
     by_label = next((d for d in lst.skills if d.label == args.skill and d.type != args.skill), None)
+    if by_label and args.label and args.label != by_label.label:  # (it was ignored: the label ran)
+        print(f"error: {args.skill!r} is the label of an implementation of {by_label.type}, and --label "
+              f"{args.label!r} names another: give the type ({by_label.type} --label {args.label}) or one label",
+              file=sys.stderr)
+        return 2
     req.type, req.label = (by_label.type, by_label.label) if by_label else (args.skill, args.label)
     try:
         req.params = [parse_param(p, lst, args.skill) for p in args.param]
