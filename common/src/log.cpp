@@ -1,6 +1,8 @@
 #include "skillbus/log.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <string>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -11,9 +13,16 @@ namespace {
 LogLevel initial_level() {
   const char* env = std::getenv("SKILLBUS_LOG_LEVEL");
   if (!env) return LogLevel::Info;
-  if (!std::strcmp(env, "debug")) return LogLevel::Debug;
-  if (!std::strcmp(env, "warn")) return LogLevel::Warn;
-  if (!std::strcmp(env, "error")) return LogLevel::Error;
+  std::string v;
+  for (const char* c = env; *c; ++c)
+    if (*c != ' ') v += static_cast<char>(std::tolower(static_cast<unsigned char>(*c)));
+  if (v == "debug") return LogLevel::Debug;
+  if (v == "info") return LogLevel::Info;
+  if (v == "warn" || v == "warning") return LogLevel::Warn;
+  if (v == "error") return LogLevel::Error;
+  // (as the Python programs say it: a typo is not a silent info)
+  std::fprintf(stderr, "warning: $SKILLBUS_LOG_LEVEL '%s' is not debug, info, warn or error: logging at info\n",
+               log_safe(env, 64).c_str());
   return LogLevel::Info;
 }
 

@@ -40,8 +40,17 @@ class SafeFormatter(logging.Formatter):
         return line
 
 
+LEVELS = ("DEBUG", "INFO", "WARN", "WARNING", "ERROR")
+
+
 def setup_logging(level: str | None = None) -> None:
-    level = (level or os.environ.get("SKILLBUS_LOG_LEVEL", "info")).upper()
+    if level is None:
+        level = os.environ.get("SKILLBUS_LOG_LEVEL", "info")
+        if level.strip().upper() not in LEVELS:  # (said, as the C++ programs say it: not a silent info)
+            print(f"warning: $SKILLBUS_LOG_LEVEL {level!r} is not debug, info, warn or error: logging at info",
+                  file=sys.stderr)
+            level = "info"
+    level = level.strip().upper()
     if level == "WARN":
         level = "WARNING"
     handler = logging.StreamHandler(sys.stderr)

@@ -168,3 +168,16 @@ def test_a_skill_process_under_a_policy_without_the_expansion_rules_serves_on_wi
         p.terminate()
         _, err = p.communicate(timeout=30)
     assert "expansions for operators (skillbus tree) not served: the bus policy" in err and "SB_SKTREE_SKILLS_REP" in err, err
+
+
+@pytest.mark.parametrize("value, warned", [("bogus", True), ("Debug", False), ("warning", False)])
+def test_a_log_level_from_the_environment_that_is_none_is_said(tmp_path, value, warned):
+    # Before, a typo in $SKILLBUS_LOG_LEVEL logged at info without a word, in the C++
+    # programs also "DEBUG" and "warning" (lower case only, "warn" only).
+    from skillbus import paths
+    env = {**os.environ, "SKILLBUS_BUS_URL": "nowhere://this-bus-must-not-be-opened", "SKILLBUS_NETNS": "1",
+           "SKILLBUS_LOG_LEVEL": value}
+    warning = f"warning: $SKILLBUS_LOG_LEVEL '{value}' is not debug, info, warn or error: logging at info"
+    for argv in ([sys.executable, "-m", "skillbus.cli", "map", "info", "foo"], [str(paths.binary("wm_server")), "--help"]):
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=60, env=env, cwd=tmp_path)
+        assert (warning in p.stderr) == warned, (argv, p.stderr[-2000:])

@@ -14,7 +14,7 @@ void log_line(LogLevel level, const std::string& component, const std::string& t
 // `text` as one printable line: control characters and backslashes escaped (\xNN, \\),
 // cut after `max_bytes` with a note of how much was left out. log_line applies it.
 std::string log_safe(const std::string& text, size_t max_bytes = 2000);
-void set_log_level(LogLevel level);  // default Info, or $SKILLBUS_LOG_LEVEL (debug|info|warn|error)
+void set_log_level(LogLevel level);  // default Info, or $SKILLBUS_LOG_LEVEL (debug, info, warn, error, any case; another value is said on stderr)
 
 // Counts bad input per channel and logs the first few of each channel, then every
 // 1000th, so that a flood of garbage cannot flood the log.
