@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -242,9 +243,10 @@ std::string SimServer::write_recording() const {
   return "cannot write the recorded script to " + opt_.record_script + (e ? std::string(": ") + std::strerror(e) : "");
 }
 
-// A run's result with the recording's fate: a run whose commands could not be written
-// where --record-script asked is not ok (the caller asked for them).
-static RunResult with_recording(RunResult r, const std::string& failed) {
+// A run's result with what the caller asked for beside it: a run whose commands could not
+// be written where --record-script asked, or that ended before its --script's last step,
+// is not ok.
+static RunResult with_failure(RunResult r, const std::string& failed) {
   if (failed.empty()) return r;
   SB_ERROR("sim_server", failed);
   if (r.ok) {
@@ -286,6 +288,15 @@ void SimServer::apply_pending() {
   const auto cmds = std::move(pending_commands_);
   pending_commands_.clear();
   for (const auto& [ch, data] : cmds) on_command(ch, data.data(), data.size());
+}
+
+std::string SimServer::unplayed_steps() const {
+  if (script_next_ >= script_.size()) return "";
+  std::ostringstream why;
+  why << (script_.size() - script_next_) << " step(s) of " << opt_.script_file
+      << " not played: the session ended at sim time " << sim_time_ns_ * 1e-9 << " s, before the step at "
+      << script_[script_next_].at_ns * 1e-9 << " s";
+  return why.str();
 }
 
 void SimServer::play_script() {
@@ -495,7 +506,7 @@ ServerReport SimServer::run_lockstep(const std::function<bool()>& should_stop) {
   // ack: the participants are told, and finish cleanly.
   master.interrupted = should_stop;
   RunResult run = master.run();  // (then the recording: an argument's order is unspecified)
-  const RunResult r = with_recording(std::move(run), write_recording());
+  const RunResult r = with_failure(with_failure(std::move(run), write_recording()), unplayed_steps());
   ServerReport rep = report(r);
   rep.bad_input += master.bad_input().total();
   rep.frame_start_seconds = start_s;
@@ -541,7 +552,7 @@ ServerReport SimServer::run_wall_clock(const std::function<bool()>& should_stop)
   r.sim_time_ns = frame * period_ns;
   r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
   r.digest = physics_->digest();
-  return report(with_recording(r, write_recording()));
+  return report(with_failure(with_failure(r, write_recording()), unplayed_steps()));
 }
 
 }  // namespace skillbus::sim

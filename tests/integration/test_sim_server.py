@@ -139,6 +139,29 @@ def test_rejections_are_logged(sandbox, tmp_path):
     assert re.search(r"rejected arm command 'bad': joint1 target 9", sim.stderr())
 
 
+def test_a_script_longer_than_its_session_fails_naming_the_steps_not_played(sandbox, tmp_path):
+    # Before, the steps after the session's end were left out with exit 0 ("steps_left"
+    # in its summary only).
+    script = {"steps": [gripper(0.1, "early", 0.02), gripper(2.0, "late", 0.0), gripper(3.0, "later", 0.0)]}
+    r = run_script_session(sandbox, script, 0.5, tmp_path)
+    assert r["sim"]["ok"] and r["script"]["ok"] and r["script"]["steps_left"] == 2, r
+    part = next(p for p in sandbox.procs if p.name == "script")
+    assert part.popen.returncode == 1, part.stderr()[-2000:]
+    assert "error: sim-script: 2 step(s) not played: the session ended at sim time 0.490 s, before the step " \
+           "at 2.0 s" in part.stderr(), part.stderr()[-2000:]
+    # The same script played in-process by the physics server, on either clock.
+    script_file = tmp_path / "script.json"
+    for clock in ([], ["--wall-clock", "--speed", "10", "--frames", "25"]):
+        alone = sandbox.start(f"alone{len(clock)}", [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                                     "--script", str(script_file), "--duration-s", "0.5", *clock]
+                              if not clock else [str(paths.binary("sim_server")), "--scene", str(paths.demo_scene()),
+                                                 "--script", str(script_file), *clock])
+        assert sandbox.wait(alone, 60) == 1, alone.stderr()[-2000:]
+        summary = last_json(alone.stdout())
+        assert not summary["ok"] and f"2 step(s) of {script_file} not played: the session ended at sim time " \
+                                     in summary["error"] and "before the step at 2 s" in summary["error"], summary
+
+
 def test_a_slow_participant_makes_the_master_wait_without_skipping_frames(sandbox, binary):
     sim = sandbox.start("sim", [str(binary("sim_server")), "--scene", str(paths.demo_scene()),
                                 "--participants", "slow,fast", "--frames", "100"])

@@ -189,4 +189,8 @@ def main(args) -> int:
                       "digest": r.digest_hex, "replies": len(player.replies),
                       "rejected": sum(1 for x in player.replies if not x["accepted"]), "bad_input": player.bad,
                       "steps_left": len(player.steps)}), flush=True)
+    if r.ok and player.steps:  # (the session was shorter than the script: it did not do what it says)
+        print(f"error: sim-script: {len(player.steps)} step(s) not played: the session ended at sim time "
+              f"{r.sim_time_ns * 1e-9:.3f} s, before the step at {player.steps[0]['at_s']} s", file=sys.stderr)
+        return 1
     return 0 if r.ok else 1

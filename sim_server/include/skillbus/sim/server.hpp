@@ -104,6 +104,7 @@ class SimServer {
   void reply(size_t robot, const std::string& id, const std::string& command, const std::string& error);
   std::vector<std::string> command_channels() const;  // every robot's arm, finger and attach command channels
   size_t robot_of_script_step(const ScriptStep& s) const;
+  std::string unplayed_steps() const;  // "" or how many --script steps the run left out
   template <class Publish>
   void publish_frame(Publish&& publish);
   ServerReport run_lockstep(const std::function<bool()>& should_stop);
