@@ -213,11 +213,92 @@ def test_what_the_robot_refuses_and_missing_interfaces_fail_naming_them():
     assert out.state == "failure" and "gripper fault: EMCY 0x5000" in out.message
 
 
-def test_a_command_that_never_finishes_times_out_naming_it():
-    arm = FakeArm(ticks=10_000)
-    out, _, _ = run({"command_timeout_s": 1.0}, arm=arm, gripper=FakeGripper(), attacher=FakeAttacher())
+class HoldingArm(FakeArm):
+    """Says when its trajectories end (as the real arm does once the robot took one) and
+    stops when asked."""
+
+    def __init__(self, ticks: int, duration_s: float = 0.0, hold_error: str = "") -> None:
+        super().__init__(ticks=ticks)
+        self.duration_s, self.hold_error = duration_s, hold_error
+        self.held: list[str] = []
+        self.clock: Clock | None = None
+        self.ends: dict[str, float] = {}
+
+    def execute(self, plan, cid):
+        super().execute(plan, cid)
+        self.ends[cid] = self.clock.t + self.duration_s
+
+    def not_done_before(self, cid):
+        return self.ends.get(cid)
+
+    def hold(self, cid):
+        if self.hold_error:
+            raise RuntimeError(self.hold_error)
+        self.held.append(cid)
+        return [0.0]
+
+
+def run_holding(arm: HoldingArm, cfg: dict, max_ticks: int = 2000):
+    """`run` with the arm told the executor's clock."""
+    controller = Controller(arm, IDENTITY)
+    skill = UnitPickLike(None, controller, None, {**UnitPickLike.defaults, **cfg})
+    skill.simple_generate_manip_cmds()
+    arm.clock = Clock()
+    ids = iter(range(10_000))
+    ex = ManipExecutor(skill, controller, arm.clock, lambda label: f"{label}@{next(ids)}", FakeGripper(),
+                       FakeAttacher())
+    for n in range(max_ticks):
+        out = ex.tick()
+        if out.state != "running":
+            return out, ex, n
+    raise AssertionError(f"still running after {max_ticks} ticks: {out.message}")
+
+
+def test_a_command_that_never_finishes_times_out_naming_it_and_the_arm_is_stopped():
+    # Before, the skill failed and the trajectory played on: no one stopped the arm.
+    arm = HoldingArm(ticks=10_000)
+    out, _, _ = run_holding(arm, {"command_timeout_s": 1.0})
     assert out.state == "failure" and out.code == -2
-    assert "command 1 (open_gripper at (0.400 0.000 0.600) [free]) did not finish within 1 s (motion)" in out.message
+    assert "command 1 (open_gripper at (0.400 0.000 0.600) [free]) did not finish within 1 s (motion); " \
+           "the arm was stopped where it was" in out.message
+    assert list(arm.sent) == ["unit_pick_like1@0"] and arm.held == ["unit_pick_like-hold@1"]
+
+
+def test_a_slow_trajectory_is_not_a_stuck_one():
+    # A 3 s move with a 1 s timeout: late only 1 s after its planned end (it failed at 1 s).
+    arm = HoldingArm(ticks=10_000, duration_s=3.0)
+    out, _, ticks = run_holding(arm, {"command_timeout_s": 1.0})
+    assert out.code == -2 and arm.held, out.message
+    assert 195 <= ticks <= 205, ticks  # 4 s of 20 ms ticks
+    arm = HoldingArm(ticks=150, duration_s=3.0)  # done after 3 s: every command finishes
+    out, _, _ = run_holding(arm, {"command_timeout_s": 1.0})
+    assert out.state == "success" and not arm.held, out.message
+
+
+def test_a_failure_while_nothing_moves_holds_nothing_and_a_hold_that_fails_is_said():
+    arm = HoldingArm(ticks=2)
+    arm.refuse_next = ""
+    out, _, _ = run_holding(arm, {"x": 5.0, "command_timeout_s": 1.0})  # no plan: never sent
+    assert out.state == "failure" and arm.held == [] and "stopped" not in out.message, out.message
+    arm = HoldingArm(ticks=10_000, hold_error="the robot does not answer")
+    out, _, _ = run_holding(arm, {"command_timeout_s": 1.0})
+    assert out.message.endswith("; the arm could not be stopped (unit_pick_like1@0): the robot does not answer")
+
+
+def test_a_bug_in_the_skill_while_moving_fails_it_and_stops_the_arm():
+    arm = HoldingArm(ticks=10_000)
+    controller = Controller(arm, IDENTITY)
+    skill = UnitPickLike(None, controller, None, dict(UnitPickLike.defaults))
+    skill.simple_generate_manip_cmds()
+    arm.clock = Clock()
+    ids = iter(range(100))
+    ex = ManipExecutor(skill, controller, arm.clock, lambda label: f"{label}@{next(ids)}", FakeGripper(),
+                       FakeAttacher())
+    assert ex.tick().state == "running" and list(arm.sent)
+    arm.finished = lambda cid, tolerance=0.01: 1 / 0  # (an interface's bug)
+    out = ex.tick()
+    assert out.state == "failure" and "raised ZeroDivisionError" in out.message and len(arm.held) == 1, out.message
+    assert ex.stop_motion() == "" and len(arm.held) == 1  # once
 
 
 def test_is_success_decides_and_its_reason_is_the_message():

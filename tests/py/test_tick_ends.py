@@ -54,6 +54,12 @@ class counter(PrimitiveBase):
         return True
 
 
+class raising_execute(counter):
+    def execute(self):
+        CALLS.append("execute")
+        raise RuntimeError("a bug")
+
+
 class raising_end(counter):
     def onEnd(self):
         CALLS.append("onEnd")
@@ -128,3 +134,21 @@ def test_an_onend_that_raises_is_logged_and_the_result_stays(process, caplog):
 def test_a_tick_for_an_unknown_primitive_says_there_is_nothing_left_to_end(process):
     r = on_the_wire(process.on_tick(tick("nobody", skill_tick_t.START)))
     assert (r.state, r.ended) == (skill_state_t.FAILURE, True)
+
+
+def test_an_execute_that_raises_still_ends_the_instance_with_its_onend(process):
+    # Before, the instance was dropped without its onEnd: a skill's clean-up (a manipulation
+    # skill stopping its arm) never ran after a bug in execute().
+    r = on_the_wire(process.on_tick(tick("raising_execute", skill_tick_t.START, Steps=3)))
+    assert (r.state, r.ended) == (skill_state_t.FAILURE, True)
+    assert "raising_execute.execute() raised RuntimeError: a bug" in r.message
+    assert CALLS == ["onStart", "execute", "onEnd"] and 7 not in process.instances
+    process.on_tick(tick("counter", skill_tick_t.START, Steps=3))
+    CALLS.clear()
+    process.classes["counter"].execute = raising_execute.execute  # (this instance's next execute raises)
+    try:
+        r = on_the_wire(process.on_tick(tick("counter", skill_tick_t.EXECUTE, Steps=3)))
+    finally:
+        process.classes["counter"].execute = counter.__dict__["execute"]
+    assert (r.state, r.ended) == (skill_state_t.FAILURE, True)
+    assert CALLS == ["execute", "onEnd"] and 7 not in process.instances

@@ -18,7 +18,12 @@ For the head command of ``skill.manip_list``:
 
 When the list is empty the skill's ``is_success()`` decides between success and a
 failure that names ``skill.failure_reason``. Each command must finish within
-``cfg["command_timeout_s"]`` of sim time (20 s by default).
+``cfg["command_timeout_s"]`` of sim time (20 s by default), counted from the end of its
+trajectory as planned once the robot has taken it (a slow move is not a stuck one).
+
+A failure (a timeout, a refusal, a skill's method raising) while a trajectory is being
+played stops the arm where it is (``arm.hold``), as a stop does: a failed skill never
+leaves the arm moving on a command nobody watches any more.
 """
 
 from __future__ import annotations
@@ -62,7 +67,7 @@ class ManipExecutor:
         self.action_ref: Any = None
         self.waited = 0
         self.refused = 0  # plans of the head command refused
-        self.head_started = self.now()
+        self.head_started = self.late_from = self.now()
         self.controller.head_finished = False
         self.controller.num_last_cmd = 0
 
@@ -71,6 +76,40 @@ class ManipExecutor:
         return min(1.0, self.done_count / self.total)
 
     def tick(self) -> Outcome:
+        try:
+            out = self._tick()
+        except Exception as e:  # (a skill's or an interface's bug fails the skill, the arm stopped)
+            out = Outcome("failure", f"{self.skill.key}: command {self.done_count + 1} raised "
+                                     f"{type(e).__name__}: {e}", -1)
+        if out.state == "failure":
+            held = self.stop_motion()
+            if held:
+                out = Outcome(out.state, f"{out.message}; {held}", out.code)
+        return out
+
+    def stop_motion(self) -> str:
+        """Stops a trajectory of the head command the robot may still be playing (once):
+        what it did, for the failure's message ("" when nothing was moving)."""
+        if self.phase != "motion" or self.cmd_id is None:
+            return ""
+        cid, self.cmd_id, self.phase = self.cmd_id, None, "stopped"
+        try:
+            self.controller.arm.hold(self.command_id(f"{self.skill.key}-hold"))
+        except Exception as e:
+            return f"the arm could not be stopped ({cid}): {e}"
+        return "the arm was stopped where it was"
+
+    def _deadline(self) -> float:
+        """When the head command is late: `timeout_s` after it began, or after its
+        trajectory's planned end once the robot has taken it."""
+        if self.phase == "motion" and self.cmd_id is not None:
+            not_done_before = getattr(self.controller.arm, "not_done_before", None)
+            end = not_done_before(self.cmd_id) if not_done_before is not None else None
+            if end is not None:
+                self.late_from = max(self.late_from, end)
+        return self.late_from + self.timeout_s
+
+    def _tick(self) -> Outcome:
         skill = self.skill
         try:
             skill.update()
@@ -83,7 +122,7 @@ class ManipExecutor:
         except ValueError as e:
             return Outcome("failure", f"{skill.key}: command {self.done_count + 1}: {e}", -1)
         self.controller.num_last_cmd += 1
-        if self.now() - self.head_started > self.timeout_s:
+        if self.now() > self._deadline():
             return Outcome("failure", f"{skill.key}: command {self.done_count + 1} ({cmd.describe()}) did not finish "
                                       f"within {self.timeout_s:.0f} s ({self.phase})", -2)
         where = f"command {self.done_count + 1}/{self.total}: {cmd.describe()}"

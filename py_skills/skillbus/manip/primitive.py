@@ -20,7 +20,7 @@ from skillbus.manip import config as manip_config
 from skillbus.manip.executor import ManipExecutor
 from skillbus.manip.registry import SKILLS
 from skillbus.manip.views import Controller, RobotInfo, TaskView, ViewError
-from skillbus.skill import Element, ParamTypes, PrimitiveBase, SkillDescription
+from skillbus.skill import Element, ParamTypes, PrimitiveBase, SkillDescription, State
 
 
 def camel(key: str) -> str:
@@ -121,9 +121,19 @@ class _ManipPrimitive(PrimitiveBase):
             return self.step(f"{self.skill.key}: writing what it did into the world model")
         return self.success(out.message)
 
+    def onEnd(self):
+        """Ended another way than by the executor's own outcome (the skill process ends a
+        primitive whose execute() raised): a trajectory still played is stopped."""
+        executor = getattr(self, "executor", None)
+        if executor is not None and self.state != State.Success:
+            executor.stop_motion()
+        return True
+
     def onPreempt(self):
         """Stopped: the arm holds where it is (a command in flight is replaced)."""
         try:
+            if getattr(self, "executor", None) is not None:
+                self.executor.phase = "stopped"  # (held here: onEnd does not hold again)
             self.controller.arm.hold(self._command_id(f"{self.skill.key}-stop"))
         except Exception as e:
             return self.fail(f"preempted: {self.skill.key}: the arm could not be stopped: {e}", -1)

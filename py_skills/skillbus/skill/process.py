@@ -362,8 +362,9 @@ class SkillProcess:
             return self._reply(skill, state, skill.message, skill.code)
         except Exception as e:  # a skill's bug fails the skill, never the process
             log.error("%s.%s failed:\n%s", t.label, hook, traceback.format_exc())
-            if skill is not None and t.action != skill_tick_t.START:
+            if t.action == skill_tick_t.END:
                 self.instances.pop(t.instance, None)
+            # (otherwise _tick ends it: its onEnd runs, as after any failure, to clean up)
             return self._reply(skill, State.Failure, f"{t.label}.{hook}() raised {type(e).__name__}: {e}", -1)
 
     @staticmethod
