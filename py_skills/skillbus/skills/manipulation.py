@@ -24,7 +24,7 @@ from skillbus.perception.depth_camera import CameraError
 from skillbus.perception.segment import SegmentError, detect
 from skillbus.skills.perceived import Known, match
 from skillbus.skill import (ConditionRelation, Element, ParamTypes, PrimitiveBase, RetryOnFail, SelectorStar,
-                            SerialStar, SkillBase, SkillDescription)
+                            SerialStar, SkillBase, SkillDescription, State)
 from skillbus.msgs import wm_op_t
 from skillbus.rpc import RpcError
 from skillbus.world.convert import op
@@ -343,14 +343,14 @@ class _ArmMotion(PrimitiveBase):
             return self.step(f"moving to {what}")
         gone = self.arm.silence()
         if gone:  # name the fault now, not as a move that never arrives
-            return self.fail(f"{self.label}: {gone}", -4)
+            return self.fail(f"{self.label}: {gone}; {self._stop()}", -4)
         done, error = self.arm.finished(self.cmd)
         if error:
             return self.fail(f"{self.label}: the robot rejected the trajectory: {error}", -2)
         if done:
             return self.success(f"at {self.what}")
         if tick_context.now_s() - self.started_at > MOVE_TIMEOUT_S:
-            return self.fail(f"{self.label}: not at {self.what} after {MOVE_TIMEOUT_S:.0f} s", -3)
+            return self.fail(f"{self.label}: not at {self.what} after {MOVE_TIMEOUT_S:.0f} s; {self._stop()}", -3)
         # Nothing to do before the trajectory's end: no tick until then (the manager still
         # stops or preempts this skill at once).
         until = self.arm.not_done_before(self.cmd)
@@ -358,12 +358,31 @@ class _ArmMotion(PrimitiveBase):
             self.idle_until(min(until, self.started_at + MOVE_TIMEOUT_S))
         return self.step(f"moving to {self.what}")
 
+    def _stop(self) -> str:
+        """Holds the arm where it is (once): a failed move must not go on playing its
+        trajectory with no skill watching it. What it did, for the failure's message."""
+        if self.cmd is None or getattr(self, "stopped", False):
+            return ""
+        self.stopped = True
+        try:
+            self.arm.hold(command_id(f"{self.label}-hold"))
+        except Exception as e:
+            return f"the arm could not be stopped: {e}"
+        return "the arm was stopped where it was"
+
+    def onEnd(self):
+        """Ended by an exception in execute() (the skill process then fails it): the arm is
+        stopped as on any failure on the way."""
+        if self.state != State.Success and getattr(self, "cmd", None) is not None:
+            self._stop()
+        return True
+
     def onPreempt(self):
         """Stopped (`skillbus stop`, a broken hold-condition, a parent preempted): the arm
         holds where it is instead of going on with the trajectory."""
         if self.cmd is None:
             return self.fail(f"preempted: {self.label} had not moved yet", -1)
-        self.arm.hold(command_id(f"{self.label}-hold"))
+        self._stop()
         return self.fail(f"preempted: {self.label} stopped on the way to {self.what}, holding", -1)
 
 
