@@ -185,6 +185,45 @@ def test_conditions_become_preconditions_and_effects(tmp_path):
     assert prob.read_text().count("(:init") == 1
 
 
+def test_what_the_ontology_allows_is_not_what_the_world_has():
+    # An AbstractRelation condition (may a Location contain a Product?) and a Relation
+    # (does it?) were one fluent: with the abstract one's skill first, every allowed pair
+    # began true, so "Cube-2 in Bin-5" was reached by an empty plan (the task succeeded and
+    # the robot did nothing); with it last, the abstract check read the real containment.
+    stow = SkillSpec("Stow", "a_stow", [("Location", "skiros:Location"), ("Object", "skiros:Product")],
+                     pre=[Condition("AbstractRelation", "Location", "Object", "skiros:contain")],
+                     post=[Condition("HasProperty", "Object", "", "skiros:Stowed")])
+    w = demo_world()
+    w.may_relate = lambda s, r, o: True
+    goal = "(skiros:contain skiros:Bin-5 skiros:Cube-2)"
+    want = [str(x) for x in make_plan([PICK, PLACE], w, goal).steps]
+    assert len(want) == 2
+    for skills in ([stow, PICK, PLACE], [PICK, PLACE, stow]):
+        assert [str(x) for x in make_plan(skills, w, goal).steps] == want, [sk.label for sk in skills]
+    plan = make_plan([stow], w, "(has:skiros:Stowed skiros:Cube-2)")  # the abstract check itself holds
+    assert [x.skill.label for x in plan.steps] == ["a_stow"]
+
+
+def test_comparisons_of_one_property_with_one_value_are_facts_of_their_own():
+    # Weight<1.0 and Weight>1.0 were both the fluent skiros_Weight_1.0: building the
+    # problem failed ("already defined"), and every plan of that manager with it.
+    prop = lambda owl, value, op="=": Condition("Property", "Object", "", owl, op, value, True)  # noqa: E731
+    light = SkillSpec("LiftLight", "lift_light", [("Object", "skiros:Product")],
+                      pre=[prop("skiros:Weight", 1.0, "<")], post=[prop("skiros:Lifted", True)])
+    heavy = SkillSpec("Push", "push", [("Object", "skiros:Product")],
+                      pre=[prop("skiros:Weight", 1.0, ">")], post=[prop("skiros:Pushed", True)])
+    same = SkillSpec("Weigh", "weigh", [("Object", "skiros:Product")],
+                     pre=[prop("skiros:Weight", 1.0, "=")], post=[prop("skiros:Weighed", True)])
+    w = demo_world()
+    w.properties = {"skiros:Cube-2": {"skiros:Weight": [0.2]}, "skiros:Cube-4": {"skiros:Weight": [5.0]}}
+    assert [x.skill.label for x in make_plan([light, heavy, same], w, "(skiros:Lifted=true skiros:Cube-2)").steps] == \
+        ["lift_light"]
+    assert [x.skill.label for x in make_plan([light, heavy, same], w, "(skiros:Pushed=true skiros:Cube-4)").steps] == \
+        ["push"]
+    with pytest.raises(PlanError):  # Cube-4 is not light
+        make_plan([light, heavy, same], w, "(skiros:Lifted=true skiros:Cube-4)")
+
+
 def test_the_time_limit_ends_the_search_naming_it():
     # A warehouse of 30 shelves and 60 cubes, 15 cubes to bring home: more than 50 ms of work.
     types = {"skiros:Robot-1": "skiros:Robot", **{f"skiros:Table-{i}": "skiros:Table" for i in range(2, 32)}}

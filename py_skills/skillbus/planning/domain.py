@@ -4,7 +4,9 @@ Each skill the planner may use becomes an action named by its label; its element
 parameters become typed parameters (the ontology's classes, with their hierarchy); its
 pre- and hold-conditions become preconditions, its post-conditions effects:
 
-    Relation, AbstractRelation (pre)   (relation ?subject ?object), negated when not desired
+    Relation                           (relation ?subject ?object), negated when not desired
+    AbstractRelation (pre)             (may:relation ?subject ?object): what the ontology allows
+                                       between their classes, a fact of its own (never the relation)
     HasProperty                        (has:Property ?subject)
     Property =                         (Property=value ?subject): setting one value clears the others
     Property <, <=, >, >=, != (pre)    (Property>value ?subject), true where the world has it so
@@ -40,8 +42,10 @@ class DomainError(ValueError):
 
 def predicate_name(c: Condition) -> str:
     """The predicate a condition is about (also what a goal names)."""
-    if c.kind in ("Relation", "AbstractRelation"):
+    if c.kind == "Relation":
         return c.owl
+    if c.kind == "AbstractRelation":  # (not the relation itself: a bin may contain a cube it does not)
+        return f"may:{c.owl}"
     if c.kind == "HasProperty":
         return f"has:{c.owl}"
     if c.kind == "OnType":
@@ -125,9 +129,23 @@ class _Builder:
         arity = 2 if c.kind in ("Relation", "AbstractRelation") else 1
         if name not in self.fluents:
             params = {"a": self.types[ROOT], "b": self.types[ROOT]} if arity == 2 else {"a": self.types[ROOT]}
-            self.fluents[name] = Fluent(safe(name), self.BoolType(), **params)
+            self.fluents[name] = Fluent(self.fluent_name(name), self.BoolType(), **params)
             self.predicates[name] = (c, arity)
         return self.fluents[name]
+
+    def fluent_name(self, predicate: str) -> str:
+        """The predicate's name as Unified Planning takes it, one of its own: comparisons
+        other than = spelled out (Weight<1.0 and Weight>1.0 both became Weight_1.0, and
+        building the problem failed), and a name that still collides numbered."""
+        words = re.sub(r"<=|>=|!=|<|>|=", lambda m: _OPERATOR_WORDS[m.group(0)], predicate, count=1) \
+            if not predicate.startswith(("has:", "is:", "may:")) else predicate
+        base = name = safe(words)
+        taken = {f.name for f in self.fluents.values()}
+        n = 1
+        while name in taken:
+            n += 1
+            name = f"{base}_{n}"
+        return name
 
     def check_skill(self, s: SkillSpec) -> str:
         """Why the skill cannot be an action ("" when it can)."""
@@ -263,15 +281,16 @@ class _Builder:
         w = self.world
         for name, (c, arity) in sorted(self.predicates.items()):
             f = self.fluents[name]
+            if arity == 2 and c.kind == "AbstractRelation":  # what the ontology allows between their classes
+                for s in objects:
+                    for o in objects:
+                        if s != o and self.onto_may_relate(w.types[s], c.owl, w.types[o]):
+                            problem.set_initial_value(f(objects[s], objects[o]), True)
+                continue
             if arity == 2:
                 for s, rel, o in sorted(w.relations):
                     if s in objects and o in objects and self.onto.is_below("relations", rel, c.owl):
                         problem.set_initial_value(f(objects[s], objects[o]), True)
-                if c.kind == "AbstractRelation":  # what the ontology allows between the elements' classes
-                    for s in objects:
-                        for o in objects:
-                            if s != o and self.onto_may_relate(w.types[s], c.owl, w.types[o]):
-                                problem.set_initial_value(f(objects[s], objects[o]), True)
                 continue
             for eid, obj in objects.items():
                 props = w.properties.get(eid, {})
@@ -326,6 +345,7 @@ def _not(x: Any) -> Any:
 
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9_\-:.]")
+_OPERATOR_WORDS = {"=": "_", "!=": "_ne_", "<": "_lt_", "<=": "_le_", ">": "_gt_", ">=": "_ge_"}
 
 
 def safe(name: str) -> str:
