@@ -254,6 +254,43 @@ def run_holding(arm: HoldingArm, cfg: dict, max_ticks: int = 2000):
     raise AssertionError(f"still running after {max_ticks} ticks: {out.message}")
 
 
+@register_skill
+class UnitNanLift(ManipSkill):
+    """Its third command's lift comes from the configuration."""
+
+    def simple_generate_manip_cmds(self):
+        q, grip = top_down(0.0), np.array([0.4, 0.0, 0.45])
+        self.manip_list = [(grip + [0, 0, 0.1], q, "open_gripper", {"motion": "free"}),
+                           (grip, q, "close_gripper", {"motion": "linear"}),
+                           (grip + [0, 0, 0.1], q, self.cfg.get("action", "dummy_forward"),
+                            {"motion": "linear", **self.cfg.get("params", {})})]
+
+
+@pytest.mark.parametrize("params, why", [
+    ({"width": float("nan")}, "params['width'] must be a finite number >= 0, not nan"),
+    ({"settle_rad": float("nan")}, "params['settle_rad'] must be a finite number > 0, not nan"),
+    ({"frames": -3}, "params['frames'] must be a whole number >= 0, not -3"),
+    ({"frames": 2.5}, "params['frames'] must be a whole number >= 0, not 2.5"),
+    ({"fallback": "teleport"}, "params['fallback'] can only be 'free', not 'teleport'"),
+    ({"motion": "joints", "joints": {"joint1": float("inf")}}, "params['joints']['joint1'] must be a finite number"),
+], ids=["width", "settle", "frames-negative", "frames-fraction", "fallback", "joints"])
+def test_a_bad_command_anywhere_in_the_list_fails_the_skill_before_anything_moves(params, why):
+    # Before, a bad third command was found when it came, after the first two had moved
+    # the arm and closed the gripper; a NaN width raised from int(), a NaN settle_rad
+    # never settled (a 20 s timeout "(motion)").
+    arm, gripper = FakeArm(), FakeGripper()
+    controller = Controller(arm, IDENTITY)
+    skill = UnitNanLift(None, controller, None, {"action": "open_gripper" if "width" in params else "wait",
+                                                 "params": params})
+    skill.simple_generate_manip_cmds()
+    ex = ManipExecutor(skill, controller, Clock(), lambda label: label, gripper, FakeAttacher())
+    out = ex.tick()
+    assert out.state == "failure" and out.message.startswith("unit_nan_lift: command 3 of 3: manip command: "), \
+        out.message
+    assert why in out.message and out.message.endswith("(nothing was run)"), out.message
+    assert arm.sent == {} and gripper.commands == []
+
+
 def test_a_command_that_never_finishes_times_out_naming_it_and_the_arm_is_stopped():
     # Before, the skill failed and the trajectory played on: no one stopped the arm.
     arm = HoldingArm(ticks=10_000)

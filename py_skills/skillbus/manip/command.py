@@ -32,6 +32,7 @@ ValueError: manip command: the quaternion (w x y z) is zero
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -49,6 +50,33 @@ def _vector(value: Any, n: int, what: str) -> tuple[float, ...]:
     if not all(math.isfinite(x) for x in out):
         raise ValueError(f"manip command: {what} has a value that is not finite: {out}")
     return out
+
+
+def _number(params: dict, key: str, low: float, low_ok: bool) -> None:
+    """params[key], when given, is a finite number above `low` (or at it, `low_ok`)."""
+    if key not in params or params[key] is None:
+        return
+    v = params[key]
+    ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and (v > low or (low_ok and v == low))
+    if not ok:
+        raise ValueError(f"manip command: params[{key!r}] must be a finite number {'>=' if low_ok else '>'} {low:g}, "
+                         f"not {v!r}")
+
+
+def _check_params(params: dict) -> None:
+    """The parameters a command understands, checked when the list is built: a NaN width or
+    a negative wait is named before the arm moves, not found when its command comes."""
+    _number(params, "width", 0.0, True)
+    _number(params, "settle_rad", 0.0, False)
+    frames = params.get("frames")
+    if frames is not None and (not isinstance(frames, numbers.Integral) or isinstance(frames, bool) or frames < 0):
+        raise ValueError(f"manip command: params['frames'] must be a whole number >= 0, not {frames!r}")
+    if params.get("fallback") not in (None, "free"):
+        raise ValueError(f"manip command: params['fallback'] can only be 'free', not {params['fallback']!r}")
+    if params.get("motion") == "joints":
+        for name, q in params["joints"].items():
+            if not isinstance(q, numbers.Real) or isinstance(q, bool) or not math.isfinite(q):
+                raise ValueError(f"manip command: params['joints'][{name!r}] must be a finite number, not {q!r}")
 
 
 @dataclass(frozen=True)
@@ -84,6 +112,7 @@ class ManipCommand:
             raise ValueError("manip command: motion 'joints' needs params['joints'], a mapping joint -> position")
         if action in ("attach_obj", "detach_obj") and action == "attach_obj" and not params.get("object"):
             raise ValueError("manip command: attach_obj needs params['object'], the object's name")
+        _check_params(params)
         speed = entry[4] if len(entry) > 4 else None
         if speed is not None:
             speed = float(speed)

@@ -57,6 +57,7 @@ class ManipExecutor:
         self.total = max(1, len(skill.manip_list))
         self.done_count = 0
         self.timeout_s = float(skill.cfg.get("command_timeout_s", 20.0))
+        self.checked = False  # the whole list, before its first command moves anything
         self._reset_head()
         self.log: list[str] = []   # one line per finished command (the episode recorder reads it)
 
@@ -115,6 +116,14 @@ class ManipExecutor:
             skill.update()
         except Exception as e:
             return Outcome("failure", f"{skill.key}: update() raised {type(e).__name__}: {e}", -1)
+        if not self.checked:
+            self.checked = True
+            for i, entry in enumerate(skill.manip_list):
+                try:
+                    ManipCommand.from_entry(entry)
+                except ValueError as e:  # (before, found when it came: after the commands before it had run)
+                    return Outcome("failure", f"{skill.key}: command {i + 1} of {len(skill.manip_list)}: {e} "
+                                              "(nothing was run)", -1)
         if not skill.manip_list:
             return self._finish()
         try:
