@@ -172,6 +172,33 @@ def test_configuration_merges_defaults_yaml_and_parameters(tmp_path):
         manip_config.load_task(str(task))
 
 
+def test_a_key_the_skill_does_not_read_is_refused_naming_it(tmp_path):
+    # Before, `distnce: 0.3` (or an entry's own Arm) went into the Config unread: the drawer
+    # opened the default 0.15 m with the task's arm and the task succeeded.
+    import importlib
+    importlib.import_module("skillbus.manip.library")  # (the family registered)
+    from skillbus.manip.registry import get_skill
+    from skillbus.manip.task import manip_task
+    open_ = get_skill("open")
+    assert open_.unknown_keys({"Object": "x", "distance": 0.3, "speed": 0.2, "command_timeout_s": 5}) == []
+    assert open_.unknown_keys({"distnce": 0.3, "Arm": "skiros:Arm-9"}) == ["Arm", "distnce"]
+    assert get_skill("goto_pose").unknown_keys({"pose": [0] * 7}) == []  # (an option without a default)
+    assert UnitPickLike.unknown_keys({"anything": 1}) == []  # a class that declares no options takes every key
+
+    for entry, why in (("distnce: 0.3", "skills[0] (open): unknown key(s) distnce (it takes: Object, angle, approach, "
+                                        "command_timeout_s, distance, max_plan_failures, speed, step_m, step_rad, "
+                                        "success_fraction)"),
+                       ("Arm: skiros:Arm-9", "skills[0] (open): Arm is the task's for every entry (give it to "
+                                             "ManipTask), not an entry's")):
+        task = tmp_path / "task.yaml"
+        task.write_text(f"skills:\n  - name: open\n    Object: cabinet/drawer_joint\n    {entry}\n")
+        skill = manip_task()
+        skill.params["Task"].value = str(task)
+        with pytest.raises(ValueError) as e:
+            skill.expand(lambda *a, **k: None)
+        assert str(e.value) == f"{task}: {why}", str(e.value)
+
+
 def test_the_executor_plays_each_command_then_its_action_in_order():
     g, a = FakeGripper(), FakeAttacher()
     out, ex, arm = run({}, gripper=g, attacher=a)

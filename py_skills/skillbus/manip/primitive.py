@@ -63,7 +63,12 @@ class _ManipPrimitive(PrimitiveBase):
             e = self.params[key].value if key in self.params else None
             if e is not None and getattr(e, "id", ""):
                 params[key] = e.id
-        return manip_config.merge(cls.defaults, self.params["Config"].value or "", params)
+        cfg = manip_config.merge(cls.defaults, self.params["Config"].value or "", params)
+        unknown = cls.unknown_keys(cfg)
+        if unknown:  # (a typo would be ignored and the default act: refused, named)
+            raise manip_config.ConfigError(f"unknown configuration key(s) {', '.join(unknown)} (it takes: "
+                                           f"{', '.join(cls.known_keys())})")
+        return cfg
 
     def onStart(self):
         from skillbus.robot import arm as arm_service

@@ -31,12 +31,33 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 
+# Keys every manipulation skill reads (the executor's and is_feasible's).
+COMMON_KEYS = ("command_timeout_s", "speed", "max_plan_failures")
+
+
 class ManipSkill:
     key: ClassVar[str] = ""          # set by register_skill
     defaults: ClassVar[dict] = {}    # configuration values a YAML file or a parameter may override
     # Element parameters beyond Arm and Gripper: name -> concept (e.g. {"Object": "skiros:Product"})
     elements: ClassVar[dict[str, str]] = {}
     optional_elements: ClassVar[dict[str, str]] = {}
+    # Configuration keys it reads beyond `defaults` and its elements (e.g. ("pose",)). A
+    # class that declares them (even as ()) is strict: any other key its configuration
+    # gives (a typo, `distnce: 0.3`) is refused, naming it, instead of being ignored while
+    # the default acts. None (a skill ported as it was): every key is taken.
+    options: ClassVar[tuple[str, ...] | None] = None
+
+    @classmethod
+    def unknown_keys(cls, cfg: dict) -> list[str]:
+        """The keys of `cfg` a strict class does not read (sorted; [] when not strict)."""
+        if cls.options is None:
+            return []
+        known = {*cls.defaults, *cls.elements, *cls.optional_elements, *cls.options, *COMMON_KEYS}
+        return sorted(str(k) for k in cfg if k not in known)
+
+    @classmethod
+    def known_keys(cls) -> list[str]:
+        return sorted({*cls.defaults, *cls.elements, *cls.optional_elements, *(cls.options or ()), *COMMON_KEYS})
 
     def __init__(self, robot: Any, controller: Any, task: Any, cfg: dict) -> None:
         self.robot = robot

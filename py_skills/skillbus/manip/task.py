@@ -57,6 +57,14 @@ class manip_task(SkillBase):
                 cls = get_skill(key)
             except KeyError as e:
                 raise ValueError(f"{path}: skills[{i}]: {e.args[0]}") from None
+            for own in ("Arm", "Gripper"):
+                if own in entry:  # (it went into the Config, unread: the task's arm moved)
+                    raise ValueError(f"{path}: skills[{i}] ({key}): {own} is the task's for every entry (give it to "
+                                     f"ManipTask), not an entry's")
+            unknown = cls.unknown_keys(entry)
+            if unknown:
+                raise ValueError(f"{path}: skills[{i}] ({key}): unknown key(s) {', '.join(unknown)} (it takes: "
+                                 f"{', '.join(cls.known_keys())})")
             specify = {}
             for pname in list(cls.elements) + list(cls.optional_elements):
                 if pname in entry:

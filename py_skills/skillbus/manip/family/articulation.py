@@ -30,6 +30,7 @@ DRAG = {"motion": "linear", "settle_rad": 0.05, "fallback": "free"}
 class _Articulate(ManipSkill):
     elements = {"Object": "skiros:ArticulatedPart"}
     defaults = {"approach": 0.08, "step_m": 0.03, "step_rad": 0.15, "success_fraction": 0.8, "speed": 0.3}
+    options = ()
 
     def delta(self, j) -> float:
         raise NotImplementedError

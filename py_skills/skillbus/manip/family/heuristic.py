@@ -16,6 +16,7 @@ class GotoPose(ManipSkill):
     """Moves the tool to ``pose`` [x, y, z, qw, qx, qy, qz] in the base frame (``motion``:
     free or linear)."""
     defaults = {"motion": "free", "tolerance_m": 0.005, "tolerance_rad": 0.02}
+    options = ("pose",)
 
     def simple_generate_manip_cmds(self):
         if "pose" not in self.cfg:
@@ -36,6 +37,7 @@ class GotoPose(ManipSkill):
 class GripperAction(ManipSkill):
     """Opens (``gripper_state: 1``) or closes (``-1``) the gripper where the tool is."""
     defaults = {"gripper_state": 1}
+    options = ()
 
     def simple_generate_manip_cmds(self):
         state = int(self.cfg["gripper_state"])
@@ -49,6 +51,7 @@ class GripperAction(ManipSkill):
 class JointCtrl(ManipSkill):
     """Moves the arm's joints to ``joints`` ({name: position}, rad); joints not named stay."""
     defaults = {"tolerance_rad": 0.01}
+    options = ("joints",)
 
     def simple_generate_manip_cmds(self):
         joints = self.cfg.get("joints")
@@ -72,6 +75,7 @@ class JointCtrl(ManipSkill):
 class Wait(ManipSkill):
     """Waits ``frames`` ticks where the robot is."""
     defaults = {"frames": 10}
+    options = ()
 
     def simple_generate_manip_cmds(self):
         p, q = self.controller.get_ee_pose()

@@ -31,6 +31,7 @@ class _PathSkill(ManipSkill):
     """Checks that the tool passed within ``tolerance_m`` of each waypoint when its
     command finished."""
     defaults = {"tolerance_m": 0.005}
+    options = ()
 
     def is_subtask_done(self):
         if not self.controller.head_finished:
@@ -63,6 +64,7 @@ class Track(_PathSkill):
     """Follows ``waypoints`` (offsets [dx, dy, dz] from where the tool starts, base frame)
     with straight segments."""
     defaults = {**_PathSkill.defaults}
+    options = ("waypoints",)
 
     def simple_generate_manip_cmds(self):
         wps = self.cfg.get("waypoints")
@@ -79,6 +81,7 @@ class ApproachRotate(ManipSkill):
     the wrist in place to the object's yaw (folded to the nearest square grasp)."""
     elements = {"Object": "skiros:Product"}
     defaults = {"height": 0.12, "tolerance_rad": 0.035}
+    options = ()
 
     def simple_generate_manip_cmds(self):
         p, q = self.task.object_pose(self.cfg["Object"])
@@ -106,6 +109,7 @@ class Flip(ManipSkill):
     turned at least ``min_tilt`` rad from the vertical."""
     elements = {"Object": "skiros:Product"}
     defaults = {"approach": 0.10, "lift": 0.15, "angle": 1.5708, "drop": 0.04, "min_tilt": 1.0, "attach": True}
+    options = ()
 
     def simple_generate_manip_cmds(self):
         obj = self.cfg["Object"]

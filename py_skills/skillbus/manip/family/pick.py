@@ -25,6 +25,7 @@ LINEAR = {"motion": "linear"}
 class _PickBase(ManipSkill):
     elements = {"Object": "skiros:Product"}
     defaults = {"approach": 0.10, "grasp_height": 0.005, "lift": 0.10, "attach": False}
+    options = ()
 
     @classmethod
     def describe(cls, d):
@@ -80,6 +81,7 @@ class Pick(_PickBase):
 class Manualpick(_PickBase):
     """Picks an object with a grasp pose given in its configuration: ``grasp_pose``
     [x, y, z, qw, qx, qy, qz], the tool centre point relative to the object's frame."""
+    options = ("grasp_pose",)
 
     def grasp_pose(self):
         if "grasp_pose" not in self.cfg:
@@ -99,6 +101,7 @@ class Dynamicpick(_PickBase):
     """Picks an object with the first of its grasp candidates (``candidates``: poses
     relative to the object, [x, y, z, qw, qx, qy, qz]) whose pre-grasp the motion service
     can reach; the chosen index is in ``self.chosen`` and in the skill's message."""
+    options = ("candidates",)
 
     def grasp_pose(self):
         frame = self.task.object_pose(self.cfg["Object"])
@@ -141,6 +144,7 @@ class Place(ManipSkill):
     ``release_height`` above the handle."""
     elements = {"Object": "skiros:Product", "Location": "skiros:Location"}
     defaults = {"above": 0.10, "release_height": 0.30, "inside": 0.13, "offset": [0.0, 0.0], "attach": False}
+    options = ()
 
     @classmethod
     def describe(cls, d):
