@@ -450,6 +450,9 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     if (auto it = tasks_.find(q.id); it != tasks_.end()) {
       it->second->paused = q.paused;
       it->second->step_once = q.step_once;
+      // Paused before its first tick: watchers (the console, `skillbus watch`) hear of it
+      // now, not at a tick that may be long in coming.
+      if (q.paused && !q.step_once) publish_progress(*it->second);
     }
   }
   for (auto it = tasks_.begin(); it != tasks_.end();) {

@@ -91,7 +91,8 @@ def control_cli_task(page: Page, shots: Path, args) -> dict:
     page.click("[data-testid=tab-tasks]")
     print("READY", flush=True)
     page.click(f'[data-testid=task-list] .item[data-task="{args.task}"]', timeout=60_000)
-    wait_until("the task's tree", lambda: root_state(page) == "Running", 30)
+    # (Idle when the hold came before its first tick: a queued task paused begins paused)
+    wait_until("the task's tree", lambda: root_state(page) in ("Idle", "Running"), 30)
     out: dict = {}
     # The test holds the task with `skillbus pause` as soon as it starts (under lockstep a
     # ClearTable can be over before a browser on a busy machine has clicked): resumed
