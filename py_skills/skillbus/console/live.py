@@ -35,6 +35,7 @@ PROBE_PERIOD_S = 3.0    # managers are looked for again this often
 MANAGER_CATCH_UP_S = 5.0  # a manager's tasks are read when it is met; an unanswered read is tried again after this
 MAX_MANAGERS = 64       # robots followed at once (announcements are bounded, forged or not)
 MANAGER_TIMEOUT_S = 2.0
+MANAGER_GONE_S = 3 * PROBE_PERIOD_S  # a manager that has not answered this long is dropped, its running tasks lost
 VERBS = ("pause", "step", "resume", "stop")
 
 
@@ -59,7 +60,12 @@ def task_of(data: bytes) -> int | None:
 
 
 class ConsoleError(RuntimeError):
-    """A request the console cannot do; the message is for the user."""
+    """A request the console cannot do; the message is for the user (HTTP 400)."""
+
+
+class ConsoleTimeout(ConsoleError):
+    """A server did not answer in time: what was asked may have been done or not (HTTP
+    504); the message says to look before asking again."""
 
 
 class Manager:
@@ -75,8 +81,9 @@ class Manager:
         try:
             return self.rpc.call(method, req, reply_type, timeout=timeout)
         except RpcTimeout:
-            raise ConsoleError(f"the skill manager of robot {self.robot or '(none)'} did not answer "
-                               f"SKILL.{method} within {timeout:g} s") from None
+            raise ConsoleTimeout(f"the skill manager of robot {self.robot or '(none)'} did not answer "
+                                 f"SKILL.{method} within {timeout:g} s: whether it did it is unknown (look at its "
+                                 f"tasks before asking again)") from None
 
 
 class LiveSkills:
@@ -86,9 +93,12 @@ class LiveSkills:
         self.managers: dict[str, Manager] = {}
         self.trees = TaskTrees()
         self._heard: dict[tuple[str, int], float] = {}
-        self._pending: dict[tuple[str, int], bytes] = {}
+        self._pending: dict[tuple[str, int], tuple[bytes, int]] = {}
         self._flushed = 0.0
         self.refused = 0  # manager announcements not followed (a bad robot name, too many)
+        # The incarnation each robot's manager was last heard as (kept after it is dropped):
+        # task ids start again at 1 in a restarted manager, so its trees are forgotten then.
+        self._incarnations: dict[str, int] = {}
         bus.subscribe(robot_channel("SB_MANAGERS", ""), self._on_manager)
 
     # -- managers -----------------------------------------------------------
@@ -114,14 +124,47 @@ class LiveSkills:
             known.agent = info.agent or known.agent
             return
         if known is not None:
-            self.bus.unsubscribe(known.sub)
+            self._drop(known)
+        before = self._incarnations.get(info.robot)
+        log.info("skill manager %s of robot %s: incarnation %d%s", info.name, info.robot or "(none)", info.incarnation,
+                 "" if before is None else f" (before: {before})")
+        if before is not None and before != info.incarnation:  # (its tasks are gone with it)
+            self._lose_running(info.robot, f"its skill manager started again (incarnation {before} -> "
+                                           f"{info.incarnation}) and no longer knows it")
+        self._incarnations[info.robot] = info.incarnation
         self.managers[info.robot] = Manager(self.bus, info, lambda c, d, r=info.robot: self._on_progress(r, d))
         self.emit({"kind": "managers", "managers": self.manager_list()})
         # Its running tasks and recent history are read by the next chore, not here: a call
         # waits, and announcements (true or forged) must not hold the bus thread each time.
 
+    def _drop(self, m: Manager) -> None:
+        """Stops following a manager (replaced or gone): its subscriptions end."""
+        self.bus.unsubscribe(m.sub)
+        m.rpc.close()
+
+    def drop_silent_managers(self) -> None:
+        """Chore: a manager not heard for MANAGER_GONE_S (killed, its machine gone) is no
+        longer listed and its running tasks end as lost; its finished ones stay shown."""
+        now = time.monotonic()
+        for robot, m in list(self.managers.items()):
+            if now - m.heard > MANAGER_GONE_S:
+                del self.managers[robot]
+                self._drop(m)
+                lost = self._lose_running(robot, f"its skill manager has not answered for {MANAGER_GONE_S:g} s")
+                for tree in lost:  # (should it answer again, as the same incarnation: their trees are taken anew)
+                    tree.incarnation = -1
+                self.emit({"kind": "managers", "managers": self.manager_list()})
+
+    def _lose_running(self, robot: str, why: str) -> list:
+        """Every running task of the robot ends as lost (`why`); their trees now."""
+        tasks = [t.task for t in self.trees.running() if t.robot == robot]
+        for task in tasks:
+            self._lost(robot, task, why)
+        return [self.trees.get(robot, task) for task in tasks if self.trees.get(robot, task) is not None]
+
     def manager_list(self) -> list[dict[str, Any]]:
-        return [{"robot": m.robot, "name": m.name, "agent": m.agent} for _, m in sorted(self.managers.items())]
+        return [{"robot": m.robot, "name": m.name, "agent": m.agent, "incarnation": m.incarnation}
+                for _, m in sorted(self.managers.items())]
 
     def manager(self, robot: str) -> Manager:
         m = self.managers.get(robot)
@@ -138,7 +181,9 @@ class LiveSkills:
         if task is None:
             return
         self._heard[(robot, task)] = time.monotonic()
-        self._pending[(robot, task)] = data
+        # (with the manager's incarnation as of now: one that restarts before the flush must
+        # not have its predecessor's last trees taken for its own)
+        self._pending[(robot, task)] = (data, self._incarnations.get(robot, 0))
 
     def flush(self, idle_period_s: float | None = None) -> None:
         """Chore (every FLUSH_PERIOD_S, and before a snapshot): the latest progress heard
@@ -149,14 +194,15 @@ class LiveSkills:
             return
         self._flushed = now
         pending, self._pending = self._pending, {}
-        for (robot, _task), data in sorted(pending.items()):
+        for (robot, _task), (data, incarnation) in sorted(pending.items()):
             p = decode(skill_progress_t, data)
             if p is not None:
-                self._take(robot, p)
+                self._take(robot, p, incarnation)
 
-    def _take(self, robot: str, p: skill_progress_t) -> None:
+    def _take(self, robot: str, p: skill_progress_t, incarnation: int | None = None) -> None:
         self._heard[(robot, p.task)] = time.monotonic()
-        change = self.trees.apply(robot, progress_json(p))
+        change = self.trees.apply(robot, progress_json(p), self._incarnations.get(robot, 0) if incarnation is None
+                                  else incarnation)
         if change is not None:
             self.emit(change.as_json())
 
@@ -186,7 +232,7 @@ class LiveSkills:
             return
         nodes = [dict(tree.nodes[0], state="Failure", message=why)] if tree.nodes else []
         change = self.trees.apply(robot, {"task": task, "tick": tree.tick, "state": "Failure", "nodes": nodes,
-                                          "sim_time_s": tree.sim_time_s})
+                                          "sim_time_s": tree.sim_time_s}, tree.incarnation)
         if change is not None:
             self.emit(dict(change.as_json(), lost=True))
 
@@ -221,9 +267,15 @@ class LiveSkills:
 
     # -- skills and commands ------------------------------------------------
     def skills(self) -> list[dict[str, Any]]:
+        """Every manager's skills; a manager that does not answer is one entry with its
+        `error` (the others' skills are still listed)."""
         out = []
         for robot, m in sorted(self.managers.items()):
-            lst = m.call("list", skill_start_t(), skill_list_t)
+            try:
+                lst = m.call("list", skill_start_t(), skill_list_t)
+            except (ConsoleError, RpcError) as e:
+                out.append({"robot": robot, "manager": m.name, "error": str(e)})
+                continue
             out += [dict(s, robot=robot, manager=m.name) for s in skills_json(lst)]
         return out
 

@@ -237,7 +237,8 @@ class ReplayLog:
         return {"file": str(self.path), "frames": len(self.frames), "first": self.frames[0], "last": self.frames[-1],
                 "sim_time_s": self.sim_time_ns[self.frames[-1]] * 1e-9, "digest": self.digest,
                 "missing": self.missing, "robots": sorted(self.sim), "tasks": len(self.progress),
-                "world_from_version": self.world0_version}
+                "world_from_version": self.world0_version,
+                "scene_note": getattr(self, "scene_note", "")}  # (set where the run's own scene cannot be drawn)
 
     def nearest_frame(self, frame: int) -> int:
         i = bisect.bisect_right(self.frames, frame) - 1

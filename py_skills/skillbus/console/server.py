@@ -16,11 +16,12 @@ from pathlib import Path
 from typing import Any, Callable
 
 from fastapi import FastAPI, HTTPException, Request, WebSocket, WebSocketDisconnect
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from skillbus.console.bus_worker import BusWorker
-from skillbus.console.live import CATCH_UP_S, FLUSH_PERIOD_S, PROBE_PERIOD_S, ConsoleError, LiveSkills
+from skillbus.console.live import CATCH_UP_S, FLUSH_PERIOD_S, PROBE_PERIOD_S, ConsoleError, ConsoleTimeout, LiveSkills
 from skillbus.console.world import LiveWorld
 
 log = logging.getLogger("skillbus.console")
@@ -66,6 +67,31 @@ class Broadcaster:
                     break
 
 
+def error_status(e: BaseException) -> int:
+    """The HTTP status of what went wrong on the bus thread: 400 a request the console
+    cannot do (ConsoleError) or a value no message can carry (a text that is no UTF-8, an
+    integer beyond 64 bits); 504 a server that did not answer, where what was asked may or
+    may not have been done (ConsoleTimeout, RpcTimeout); 502 a server that answered with an
+    error the console did not expect (RpcError, WorldModelError); 500 anything else.
+
+    >>> error_status(ConsoleTimeout("x")), error_status(ConsoleError("x")), error_status(ValueError("x"))
+    (504, 400, 500)
+    """
+    import struct
+
+    from skillbus.rpc import RpcError, RpcTimeout
+    from skillbus.world.client import WorldModelError
+    if isinstance(e, (ConsoleTimeout, RpcTimeout)):
+        return 504
+    if isinstance(e, ConsoleError):
+        return 400
+    if isinstance(e, (UnicodeError, struct.error, OverflowError)):
+        return 400
+    if isinstance(e, (RpcError, WorldModelError)):
+        return 502
+    return 500
+
+
 THREE_JS = Path("/usr/share/javascript/three")  # Debian's libjs-three (deploy/setup.sh installs it)
 
 
@@ -94,6 +120,7 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         worker.every(0.5, state["world"].say_version)
         worker.every(PROBE_PERIOD_S, state["skills"].probe)
         worker.every(CATCH_UP_S / 2, state["skills"].catch_up_quiet_tasks)
+        worker.every(PROBE_PERIOD_S, state["skills"].drop_silent_managers)
         # What only a page needs is done only while one is open: the physics state is not
         # even heard without one (it comes every frame), trees are updated every 2 s.
         worker.every(SEND_PERIOD_S, lambda: state["sim"].send(hub.watched))
@@ -109,7 +136,14 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         except ReplayError as e:
             raise ConsoleError(str(e)) from None
         scenes = sorted((path.parent / "scene").glob("*.scene.json"))  # a `skillbus demo` run folder's
-        r.scene = Scene3D(scenes[0]) if scenes else state["scene"]
+        r.scene = state["scene"]
+        if scenes:
+            try:
+                r.scene = Scene3D(scenes[0])
+            except (OSError, ValueError, KeyError) as e:  # (a run folder moved: its scene names models not here)
+                r.scene_note = f"the run's scene {scenes[0]} cannot be drawn ({type(e).__name__}: {e}): " \
+                               f"the console's scene is drawn instead"
+                logging.getLogger("skillbus.console").warning("%s", r.scene_note)
         state["replay"] = r
         return r.summary()
 
@@ -127,13 +161,18 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         worker.stop()
 
     async def on_bus(fn: Callable[[], Any]) -> Any:
-        """Runs fn on the bus thread; a ConsoleError is a 400 with its message."""
+        """Runs fn on the bus thread; what goes wrong is an HTTP error naming it (error_status)."""
         try:
             return await asyncio.wait_for(asyncio.wrap_future(worker.submit(fn)), JOB_TIMEOUT_S)
-        except ConsoleError as e:
-            raise HTTPException(status_code=400, detail=str(e)) from None
         except asyncio.TimeoutError:
             raise HTTPException(status_code=504, detail=f"the bus did not answer within {JOB_TIMEOUT_S:g} s") from None
+        except Exception as e:
+            status = error_status(e)
+            if status == 500:
+                raise
+            unsendable = status == 400 and not isinstance(e, ConsoleError)
+            raise HTTPException(status_code=status,
+                                detail=f"a value no message can carry: {e}" if unsendable else str(e)) from None
 
     @app.middleware("http")
     async def _token(request: Request, call_next):
@@ -145,6 +184,19 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
     @app.exception_handler(HTTPException)
     async def _http_error(request: Request, exc: HTTPException) -> JSONResponse:
         return JSONResponse({"error": exc.detail}, status_code=exc.status_code)
+
+    @app.exception_handler(RequestValidationError)
+    async def _bad_request(request: Request, exc: RequestValidationError) -> JSONResponse:
+        # (FastAPI's 422 {"detail": [...]}: the page shows {"error": ...}, as for every refusal)
+        first = exc.errors()[0] if exc.errors() else {}
+        where = ".".join(str(x) for x in first.get("loc", ()) if x != "body") or "the request"
+        return JSONResponse({"error": f"{where}: {first.get('msg', 'not a valid request')}"}, status_code=400)
+
+    @app.exception_handler(Exception)
+    async def _internal(request: Request, exc: Exception) -> JSONResponse:
+        logging.getLogger("skillbus.console").error("%s %s failed", request.method, request.url.path, exc_info=exc)
+        return JSONResponse({"error": f"the console failed: {type(exc).__name__}: {exc} (its log has the details)"},
+                            status_code=500)
 
     @app.get("/")
     async def index(request: Request):

@@ -19,7 +19,7 @@ from skillbus.channels import channel
 from skillbus.msgs import (decode, wm_change_t, wm_element_t, wm_elements_t, wm_op_t, wm_property_t, wm_query_t,
                            wm_relation_t, wm_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout
-from skillbus.console.live import ConsoleError
+from skillbus.console.live import ConsoleError, ConsoleTimeout
 
 VALUE_TYPES = {"string": wm_value_t.STRING, "int": wm_value_t.INT, "float": wm_value_t.FLOAT, "bool": wm_value_t.BOOL}
 TYPE_NAMES = {v: k for k, v in VALUE_TYPES.items()}
@@ -108,13 +108,15 @@ class LiveWorld:
         try:
             return self.rpc.call(method, req, reply_type, timeout=WM_TIMEOUT_S)
         except RpcTimeout:
-            raise ConsoleError(f"the world model server did not answer WM.{method} within {WM_TIMEOUT_S:g} s") from None
+            raise ConsoleTimeout(f"the world model server did not answer WM.{method} within {WM_TIMEOUT_S:g} s") \
+                from None
         except RpcRemoteError as e:
             raise ConsoleError(str(e)) from None
 
     def tree(self) -> dict[str, Any]:
         from skillbus.world.cli import containment_tree
-        return {"version": self.wmi.version, "roots": containment_tree(self.wmi)}
+        roots = containment_tree(self.wmi)  # (first: reading it may resync the replica to a later version)
+        return {"version": self.wmi.version, "roots": roots}
 
     def search(self, type_: str, label: str) -> list[dict[str, Any]]:
         """Elements of a type (with its subclasses; "" any) whose label contains `label`
@@ -229,6 +231,9 @@ class LiveWorld:
             result = self.wmi.commit(ops)
         except WorldModelError as e:
             raise ConsoleError(f"refused: {e}") from None
+        except RpcTimeout as e:
+            raise ConsoleTimeout(f"{e}: whether the edit was made is unknown (read the element before editing "
+                                 f"again)") from None
         except RpcError as e:
             raise ConsoleError(str(e)) from None
         return {"version": result.version, "ids": list(result.ids)}

@@ -8,7 +8,9 @@ changed: the nodes whose fields differ, by node id. The console sends those chan
 browsers, ``skillbus run --watch`` prints them; neither reprints a whole tree.
 
 A tree never goes back: an older tick than the one kept, or a running tree after a
-final one, changes nothing (a catch-up answer may cross a newer message).
+final one, changes nothing (a catch-up answer may cross a newer message). A tree of
+another incarnation of the manager (a restarted manager numbers its tasks from 1 again)
+replaces the one kept, whatever its tick: it is another task.
 
 >>> trees = TaskTrees()
 >>> n = lambda i, parent, state, msg="": {"id": i, "parent": parent, "type": f"S{i}", "label": "",
@@ -40,6 +42,7 @@ class TaskTree:
     state: str
     nodes: list[dict[str, Any]]
     sim_time_s: float = 0.0
+    incarnation: int = 0  # of the manager that reported it (0: not known)
 
     @property
     def skill(self) -> str:
@@ -68,7 +71,7 @@ class TreeChange:
     state: str
     count: int
     nodes: dict[int, dict[str, Any]] = field(default_factory=dict)
-    new: bool = False      # the first tree seen of this task
+    new: bool = False      # the first tree seen of this task (a page replaces what it shows of that id)
     ended: bool = False    # this change made it Success or Failure
 
     def as_json(self) -> dict[str, Any]:
@@ -92,16 +95,20 @@ class TaskTrees:
     def running(self) -> list[TaskTree]:
         return [t for t in self.trees.values() if not t.ended]
 
-    def apply(self, robot: str, progress: dict[str, Any]) -> TreeChange | None:
-        """Takes one progress (skillbus.skill.cli.progress_json); the change it makes, or
-        None when it changes nothing (the same tree at the same tick, or one older than
-        that kept)."""
+    def apply(self, robot: str, progress: dict[str, Any], incarnation: int = 0) -> TreeChange | None:
+        """Takes one progress (skillbus.skill.cli.progress_json) of the manager's
+        `incarnation`; the change it makes, or None when it changes nothing (the same tree
+        at the same tick, or one older than that kept)."""
         key = (robot, int(progress["task"]))
         tick, state, nodes = int(progress["tick"]), progress["state"], progress["nodes"]
         old = self.trees.get(key)
+        if old is not None and old.incarnation != incarnation:
+            old = None  # (another task of the same number: the one kept is replaced)
+            if key in self._finished:
+                self._finished.remove(key)
         if old is not None and (old.ended or tick < old.tick):
             return None
-        tree = TaskTree(robot, key[1], tick, state, nodes, float(progress.get("sim_time_s", 0.0)))
+        tree = TaskTree(robot, key[1], tick, state, nodes, float(progress.get("sim_time_s", 0.0)), incarnation)
         self.trees[key] = tree
         if old is None:
             changed = dict(enumerate(nodes))

@@ -53,10 +53,11 @@ async function loadSkills() {
       robot = s.robot;
       list.append(el("div", {class: "robot"}, `robot ${robot || "(none)"} · ${s.manager}`));
     }
+    if (s.error) { list.append(el("p", {class: "hint bad", "data-error": s.robot}, s.error)); continue; }
     list.append(el("div", {class: "item", "data-skill": s.type, "data-robot": s.robot, onclick: () => skillForm(s)},
                    s.type, el("small", {}, `${s.compound ? "compound" : "primitive"} · ${s.label}`)));
   }
-  if (!skills.length) list.append(el("p", {class: "hint"}, "No skill manager answered (yet)."));
+  if (!skills.some(s => !s.error)) list.append(el("p", {class: "hint"}, "No skill manager answered (yet)."));
 }
 
 function defaultText(p) {
@@ -122,7 +123,8 @@ const key = (robot, task) => `${robot}#${task}`;
 function applyChange(c) {
   const k = key(c.robot, c.task);
   let t = tasks.get(k);
-  if (!t) { t = {robot: c.robot, task: c.task, nodes: [], tick: -1}; tasks.set(k, t); }
+  // (new: the first tree of this task, or another task of the same number: a restarted manager's)
+  if (!t || c.new) { t = {robot: c.robot, task: c.task, nodes: [], tick: -1}; tasks.set(k, t); }
   if (c.tick < t.tick || t.ended) return false;   // older than what is shown
   for (const n of c.nodes) t.nodes[n.id] = n;
   t.nodes.length = c.count;
@@ -357,7 +359,8 @@ function showReplaySummary(s) {
     el("div", {}, `${s.file}: ${s.frames} frames, ${s.sim_time_s.toFixed(2)} s of sim time, ${s.tasks} task(s)`),
     el("div", {class: "digest", "data-testid": "replay-digest"}, `session digest ${s.digest}`),
     missing ? el("div", {class: "muted"}, `the log lacks messages the clocks announced (${missing}): ` +
-                                           "this digest cannot equal the run's") : null);
+                                           "this digest cannot equal the run's") : null,
+    s.scene_note ? el("div", {class: "muted"}, s.scene_note) : null);
   const t = $("#timeline");
   t.min = s.first; t.max = s.last; t.disabled = false;
   if (!replay3d) replay3d = new View3D($("#replay-3d"), true);
