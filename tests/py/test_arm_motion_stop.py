@@ -107,3 +107,11 @@ def test_a_move_that_arrives_holds_nothing(move):
     skill.state = State.Success
     skill.onEnd()
     assert arm.held == []
+
+
+def test_a_move_the_robot_refuses_holds_nothing(move):
+    skill, arm = move
+    arm.finished = lambda cmd: (True, "joint1 target 9 is outside +-1.0 rad")
+    assert at(1.0, skill.execute) == State.Failure and "rejected" in skill.message
+    skill.onEnd()  # (failed: but nothing moves)
+    assert arm.held == []

@@ -349,6 +349,13 @@ def test_a_failure_while_nothing_moves_holds_nothing_and_a_hold_that_fails_is_sa
     assert out.message.endswith("; the arm could not be stopped (unit_pick_like1@0): the robot does not answer")
 
 
+def test_a_motion_the_robot_refuses_holds_nothing():
+    arm = HoldingArm(ticks=2)
+    arm.refuse_next = "joint1 target 9 is outside its limits"
+    out, _, _ = run_holding(arm, {"command_timeout_s": 1.0})
+    assert out.state == "failure" and "refused the motion" in out.message and arm.held == [], out.message
+
+
 def test_a_bug_in_the_skill_while_moving_fails_it_and_stops_the_arm():
     arm = HoldingArm(ticks=10_000)
     controller = Controller(arm, IDENTITY)

@@ -214,6 +214,7 @@ class ManipExecutor:
             return Outcome("running", "moving")
         done, error = arm.finished(self.cmd_id, float(cmd.params.get("settle_rad", SETTLE_RAD)))
         if error:
+            self.cmd_id = None  # (refused: nothing moves, nothing to stop)
             return Outcome("failure", f"{self.skill.key}: the robot refused the motion: {error}", -1)
         return None if done else Outcome("running", "moving")
 

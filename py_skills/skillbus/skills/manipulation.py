@@ -346,6 +346,7 @@ class _ArmMotion(PrimitiveBase):
             return self.fail(f"{self.label}: {gone}; {self._stop()}", -4)
         done, error = self.arm.finished(self.cmd)
         if error:
+            self.stopped = True  # (refused: nothing moves, nothing to stop)
             return self.fail(f"{self.label}: the robot rejected the trajectory: {error}", -2)
         if done:
             return self.success(f"at {self.what}")
