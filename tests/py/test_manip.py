@@ -394,3 +394,73 @@ def test_a_door_handle_turns_with_the_door():
     p, q = rotate_about([0.5, 0.3, 0.3], axis, hinge, np.pi / 2, top_down(0.0))
     assert np.allclose(p, [0.2, 0.0, 0.3])
     assert np.allclose(np.abs(q), np.abs(top_down(np.pi / 2)))
+
+
+class WritingSkill(UnitPickLike):
+    """Says what it did into the world model when its commands are done."""
+
+    def world_ops(self):
+        from skillbus.msgs import wm_op_t
+        return [wm_op_t()]
+
+    def world_shows(self):
+        return self.cfg.get("shows", False)
+
+
+class Committing:
+    """A lockstep world model client: commit_async returns request ids; results are what
+    the test says the server answered."""
+
+    def __init__(self) -> None:
+        self.participant, self.results, self.sent = object(), {}, []
+
+    def commit_async(self, ops):
+        self.sent.append(ops)
+        return len(self.sent)
+
+
+def writing_primitive(cfg: dict):
+    from skillbus.manip.executor import Outcome
+    from skillbus.manip.primitive import make_classes
+    _, prim = make_classes("writing_skill", WritingSkill, __name__)
+    p = prim()
+    p.skill = WritingSkill(None, None, None, {**WritingSkill.defaults, **cfg})
+    p.executor = SimpleNamespace(tick=lambda: Outcome("success", "done"), progress=1.0, timeout_s=1.0)
+    p.writing, p.wmi = False, Committing()
+    return p
+
+
+def test_the_world_model_refusing_what_a_skill_did_fails_it_naming_why():
+    # Before, under lockstep the write's result was never looked at: a refused write left
+    # the skill "writing what it did into the world model" for ever.
+    from skillbus import tick_context
+    from skillbus.msgs import wm_commit_t
+    from skillbus.skill import State
+    p = writing_primitive({})
+    with tick_context.ticking(0, 0):
+        assert p.execute() == State.Running and len(p.wmi.sent) == 1
+    refused = wm_commit_t()
+    refused.error = "skiros:Cube-2 changed meanwhile"
+    p.wmi.results[1] = refused
+    with tick_context.ticking(1, 20_000_000):
+        assert p.execute() == State.Failure
+    assert p.message == "unit_pick_like: the world model refused what it did: skiros:Cube-2 changed meanwhile"
+
+
+def test_a_write_the_world_model_never_shows_fails_after_the_command_timeout():
+    from skillbus import tick_context
+    from skillbus.skill import State
+    p = writing_primitive({})
+    with tick_context.ticking(0, 0):
+        assert p.execute() == State.Running
+    p.wmi.results[1] = SimpleNamespace(error="")  # accepted, but the replica never shows it
+    with tick_context.ticking(25, 500_000_000):
+        assert p.execute() == State.Running
+    with tick_context.ticking(60, 1_200_000_000):
+        assert p.execute() == State.Failure
+    assert "does not show what it did after 1 s" in p.message, p.message
+    p = writing_primitive({"shows": True})
+    with tick_context.ticking(0, 0):
+        assert p.execute() == State.Running
+    with tick_context.ticking(1, 20_000_000):
+        assert p.execute() == State.Success and p.message == "done"

@@ -110,8 +110,14 @@ class _ManipPrimitive(PrimitiveBase):
 
     def execute(self):
         if self.writing:
+            result = self.wmi.results.get(self.write_request) if self.write_request is not None else None
+            if result is not None and result.error:  # (before, never looked at: it waited for ever)
+                return self.fail(f"{self.skill.key}: the world model refused what it did: {result.error}", -1)
             if self.skill.world_shows():
                 return self.success(self.done_message)
+            if tick_context.now_s() - self.writing_since > self.executor.timeout_s:
+                return self.fail(f"{self.skill.key}: the world model does not show what it did after "
+                                 f"{self.executor.timeout_s:.0f} s (another writer changed it?)", -2)
             return self.step(f"{self.skill.key}: writing what it did into the world model")
         out = self.executor.tick()
         self.progress = self.executor.progress
@@ -121,8 +127,16 @@ class _ManipPrimitive(PrimitiveBase):
             return self.fail(out.message, out.code or -1)
         ops = self.skill.world_ops() if self.wmi is not None else []
         if ops:
-            self.wmi.write(ops)
+            from skillbus.rpc import RpcError
+            from skillbus.world.client import WorldModelError
+            try:  # (under lockstep with this frame, its result heard later; else at once)
+                self.write_request = self.wmi.commit_async(ops) if self.wmi.participant is not None else None
+                if self.write_request is None:
+                    self.wmi.commit(ops)
+            except (WorldModelError, RpcError) as e:
+                return self.fail(f"{self.skill.key}: the world model refused what it did: {e}", -1)
             self.writing, self.done_message = True, out.message
+            self.writing_since = tick_context.now_s()
             return self.step(f"{self.skill.key}: writing what it did into the world model")
         return self.success(out.message)
 
