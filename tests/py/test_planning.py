@@ -237,3 +237,73 @@ def test_the_time_limit_ends_the_search_naming_it():
     with pytest.raises(PlanError, match=r"no plan within the planner's time limit of 0.05 s \(fast-downward\) "
                                         r"for 15 goal\(s\)"):
         make_plan([DRIVE, FETCH, DROP], w, goal, time_limit=0.05)
+
+
+def test_a_failed_plan_still_writes_its_pddl_and_a_failing_planner_is_one_line(tmp_path, monkeypatch):
+    # Before, --pddl wrote nothing when there was no plan (when it is needed most), and a
+    # planner that could not run (UPNoRequestedEngineAvailableException, no message) or
+    # ended out of memory was a traceback or "no sequence of the skills reaches ...".
+    from types import SimpleNamespace
+
+    from unified_planning.engines import PlanGenerationResultStatus as S
+
+    from skillbus.planning import solve
+    w = demo_world()
+    with pytest.raises(PlanError, match="no plan"):
+        make_plan([PICK], w, "(skiros:contain skiros:Bin-5 skiros:Cube-2)", pddl_dir=tmp_path / "pddl")
+    assert "(:action pick" in (tmp_path / "pddl" / "domain.pddl").read_text().lower()
+    assert (tmp_path / "pddl" / "problem.pddl").read_text()
+
+    class NoEngine(Exception):
+        pass
+
+    def no_engine(problem, optimal, time_limit):
+        raise NoEngine()
+
+    monkeypatch.setattr(solve, "_solve_with_engine", no_engine)
+    with pytest.raises(PlanError) as e:
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5 skiros:Cube-2)")
+    assert str(e.value) == "the planner fast-downward failed: NoEngine"
+    monkeypatch.setattr(solve, "_solve_with_engine", lambda problem, optimal, time_limit: SimpleNamespace(
+        status=S.MEMOUT, log_messages=[SimpleNamespace(message="search ran out of memory")]))
+    with pytest.raises(PlanError) as e:
+        make_plan([PICK, PLACE], w, "(skiros:contain skiros:Bin-5 skiros:Cube-2)")
+    assert str(e.value) == "the planner fast-downward ended with MEMOUT for 1 goal(s): search ran out of memory"
+
+
+def test_the_explanation_of_no_plan_keeps_within_the_time_limit(monkeypatch):
+    # Before, each goal was tried again with the whole time limit: (goals + 1) x the limit,
+    # and a goal that timed out on its own was said to be unreachable. The engine is a
+    # stand-in that uses up what it is given (a clock of its own: no sleeping here).
+    from types import SimpleNamespace
+
+    from unified_planning.engines import PlanGenerationResultStatus as S
+
+    from skillbus.planning import solve
+    clock = [100.0]
+    asked: list[float] = []
+
+    def engine(uses: float, status_of):
+        def run(problem, optimal, time_limit):
+            asked.append(round(time_limit, 3))
+            clock[0] += min(uses, time_limit)
+            return SimpleNamespace(status=status_of(len(asked)), log_messages=[])
+        return run
+
+    monkeypatch.setattr(solve.time, "monotonic", lambda: clock[0])
+    goals = "(skiros:contain skiros:Bin-5 skiros:Cube-2), (skiros:contain skiros:Bin-5 skiros:Cube-4)"
+    # the search proves there is no plan after 0.5 s; the goals alone each time out
+    monkeypatch.setattr(solve, "_solve_with_engine",
+                        engine(0.5, lambda n: S.UNSOLVABLE_INCOMPLETELY if n == 1 else S.TIMEOUT))
+    with pytest.raises(PlanError) as e:
+        make_plan([PICK, PLACE], demo_world(), goals, time_limit=2.0)
+    assert asked == [2.0, 1.5, 1.0], asked  # 2 s in all
+    assert "not decided within the time limit, on its own: (skiros:contain skiros:Bin-5 skiros:Cube-2), " \
+           "(skiros:contain skiros:Bin-5 skiros:Cube-4)" in str(e.value), str(e.value)
+    assert "no sequence" not in str(e.value)
+    # the search itself used the whole limit: nothing is left to explain with
+    asked.clear()
+    monkeypatch.setattr(solve, "_solve_with_engine", engine(2.0, lambda n: S.UNSOLVABLE_INCOMPLETELY))
+    with pytest.raises(PlanError) as e:
+        make_plan([PICK, PLACE], demo_world(), goals, time_limit=2.0)
+    assert asked == [2.0] and "not decided within the time limit" in str(e.value), (asked, str(e.value))

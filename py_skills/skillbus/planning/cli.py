@@ -30,7 +30,7 @@ def main(args: argparse.Namespace) -> int:
     from skillbus.msgs import skill_list_t, skill_start_t
     from skillbus.planning.goals import GoalError
     from skillbus.planning.model import skill_from_msg, world_from_client
-    from skillbus.planning.solve import PlanError, make_plan, write_pddl
+    from skillbus.planning.solve import PlanError, make_plan
     from skillbus.rpc import RpcClient, RpcError
     from skillbus.world.client import WorldModelError, WorldModelInterface
     try:
@@ -38,17 +38,20 @@ def main(args: argparse.Namespace) -> int:
         lst = RpcClient(bus, "SKILL", "plan", robot=args.robot).call("list", skill_start_t(), skill_list_t, timeout=5.0)
         wmi = WorldModelInterface(bus, "plan")
         skills = [skill_from_msg(d) for d in lst.skills]
-        plan = make_plan(skills, world_from_client(wmi), args.goal, optimal=args.optimal, time_limit=args.time_limit)
+        plan = make_plan(skills, world_from_client(wmi), args.goal, optimal=args.optimal, time_limit=args.time_limit,
+                         pddl_dir=args.pddl)
     except GoalError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     except PlanError as e:
         print(f"error: {e}", file=sys.stderr)
+        if args.pddl and (args.pddl / "problem.pddl").exists():  # (written before the search: a failed plan's need)
+            print(f"PDDL: {args.pddl / 'domain.pddl'} {args.pddl / 'problem.pddl'}", file=sys.stderr)
         return 1
     except (RpcError, WorldModelError, OSError) as e:
         print(f"error: {e} (are the skill manager and the world model running, on this bus?)", file=sys.stderr)
         return 1
-    files = write_pddl(plan.domain, args.pddl) if args.pddl else None
+    files = (args.pddl / "domain.pddl", args.pddl / "problem.pddl") if args.pddl else None
     if args.json:
         print(json.dumps({"goals": [str(g) for g in plan.goals], "engine": plan.engine, "seconds": round(plan.seconds, 3),
                           "steps": [{"type": s.skill.type, "label": s.skill.label, "params": s.params} for s in plan.steps],

@@ -50,6 +50,19 @@ def _engine():
 
 
 def _solve(problem: Any, optimal: bool, time_limit: float) -> Any:
+    """The engine's result; PlanError naming the engine when it cannot run at all (not
+    installed, failing): one line, not the library's traceback."""
+    try:
+        return _solve_with_engine(problem, optimal, time_limit)
+    except ImportError as e:
+        raise PlanError(f"the planner cannot run: {e} (deploy/setup.sh installs unified-planning and "
+                        f"up-fast-downward)") from None
+    except Exception as e:  # (UPNoRequestedEngineAvailableException has no message: its type says it)
+        raise PlanError(f"the planner {ENGINES[optimal]} failed: {type(e).__name__}"
+                        f"{': ' + str(e) if str(e) else ''}") from None
+
+
+def _solve_with_engine(problem: Any, optimal: bool, time_limit: float) -> Any:
     from unified_planning.shortcuts import OneshotPlanner
     _engine()
     with warnings.catch_warnings():
@@ -68,22 +81,37 @@ def _solved(status: Any) -> bool:
     return status in (S.SOLVED_SATISFICING, S.SOLVED_OPTIMALLY)
 
 
+def _unsolvable(status: Any) -> bool:
+    from unified_planning.engines import PlanGenerationResultStatus as S
+    return status in (S.UNSOLVABLE_PROVEN, S.UNSOLVABLE_INCOMPLETELY)
+
+
 def make_plan(skills: list[SkillSpec], world: World, goal_text: str, optimal: bool = False,
-              time_limit: float = DEFAULT_TIME_LIMIT_S) -> Plan:
-    """The skills that reach the goals from the world as it is. GoalError for a malformed
+              time_limit: float = DEFAULT_TIME_LIMIT_S, pddl_dir: Path | None = None) -> Plan:
+    """The skills that reach the goals from the world as it is, within `time_limit` in all
+    (the search and, when there is no plan, the explanation). GoalError for a malformed
     goal or one naming what the domain lacks; PlanError when there is no plan (naming the
-    goals that cannot be reached) or none within the time limit."""
+    goals that cannot be reached), none within the time limit, or the planner failed.
+    With `pddl_dir` the domain and problem are written there first (plan or not)."""
     from unified_planning.engines import PlanGenerationResultStatus as S
     goals = parse_goals(goal_text)
     d = domains.build(skills, world, goals)
+    if pddl_dir is not None:
+        try:
+            write_pddl(d, pddl_dir)
+        except OSError as e:
+            raise PlanError(f"cannot write the PDDL into {pddl_dir}: {e.strerror or e}") from None
     t0 = time.monotonic()
     result = _solve(d.problem, optimal, time_limit)
     seconds = time.monotonic() - t0
     if result.status == S.TIMEOUT:
         raise PlanError(f"no plan within the planner's time limit of {time_limit:g} s ({ENGINES[optimal]}) for "
                         f"{len(goals)} goal(s)")
-    if not _solved(result.status):
-        raise PlanError(explain(skills, world, goals, d, optimal, time_limit))
+    if _unsolvable(result.status):
+        raise PlanError(explain(skills, world, goals, d, optimal, max(0.0, time_limit - seconds)))
+    if not _solved(result.status):  # (out of memory, an internal error, a problem it does not take)
+        raise PlanError(f"the planner {ENGINES[optimal]} ended with {result.status.name} for {len(goals)} goal(s)"
+                        + _engine_log(result))
     by_object = {obj.name: eid for eid, obj in d.objects.items()}
     steps = []
     for ai in result.plan.actions:
@@ -96,19 +124,38 @@ def make_plan(skills: list[SkillSpec], world: World, goal_text: str, optimal: bo
 def explain(skills: list[SkillSpec], world: World, goals: list[Goal], d: domains.Domain, optimal: bool,
             time_limit: float) -> str:
     """Why there is no plan: the goals that cannot be reached even on their own, else that
-    they cannot be reached together."""
-    alone = []
+    they cannot be reached together; within `time_limit` in all (what is left of the
+    caller's), a goal not decided within it said as such."""
+    alone, undecided = [], []
+    deadline = time.monotonic() + time_limit
     for g in goals:
-        r = _solve(domains.build(skills, world, [g]).problem, optimal, time_limit)
-        if not _solved(r.status):
+        left = deadline - time.monotonic()
+        if left <= 0.05:
+            undecided.append(str(g))
+            continue
+        r = _solve(domains.build(skills, world, [g]).problem, optimal, left)
+        if _unsolvable(r.status):
             alone.append(str(g))
+        elif not _solved(r.status):
+            undecided.append(str(g))
     skills_note = f"; skills left out: {', '.join(f'{k} ({v})' for k, v in sorted(d.left_out.items()))}" \
         if d.left_out else ""
+    unknown = (f"; not decided within the time limit, on its own: {', '.join(undecided)}" if undecided else "")
     if alone:
         return (f"no plan: no sequence of the skills ({', '.join(sorted(d.actions)) or 'none'}) reaches "
-                f"{', '.join(alone)} from the world as it is{skills_note}")
+                f"{', '.join(alone)} from the world as it is{unknown}{skills_note}")
+    if undecided:
+        return (f"no plan for all {len(goals)} goal(s) together ({', '.join(map(str, goals))}){unknown}"
+                f"{skills_note}")
     return (f"no plan: each goal can be reached on its own, but not all {len(goals)} together "
             f"({', '.join(map(str, goals))}){skills_note}")
+
+
+def _engine_log(result: Any) -> str:
+    """The engine's own last words, when it said any."""
+    lines = [str(getattr(m, "message", m)).strip() for m in getattr(result, "log_messages", None) or []]
+    lines = [x for x in lines if x]
+    return f": {lines[-1][:500]}" if lines else ""
 
 
 def write_pddl(d: domains.Domain, folder: Path) -> tuple[Path, Path]:
