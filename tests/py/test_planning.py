@@ -307,3 +307,34 @@ def test_the_explanation_of_no_plan_keeps_within_the_time_limit(monkeypatch):
     with pytest.raises(PlanError) as e:
         make_plan([PICK, PLACE], demo_world(), goals, time_limit=2.0)
     assert asked == [2.0] and "not decided within the time limit" in str(e.value), (asked, str(e.value))
+
+
+def test_an_optional_element_no_condition_names_is_not_bound_by_the_planner():
+    # Before, every optional element parameter was bound like a required one: without an
+    # element of its concept the skill was unusable (and not listed as left out); with
+    # some, one was picked at random (Dock=skiros:Bin-3).
+    from skillbus.msgs import skill_condition_t, skill_description_t, skill_param_t
+    from skillbus.planning.model import skill_from_msg
+
+    def param(key, concept, kind):
+        p = skill_param_t()
+        p.key, p.data_type, p.concept, p.param_type = key, "element", concept, kind
+        return p
+
+    d = skill_description_t()
+    d.type, d.label = "Charge", "charge"
+    d.params = [param("Robot", "skiros:Robot", skill_param_t.REQUIRED), param("Dock", "skiros:Location",
+                skill_param_t.OPTIONAL), param("Via", "skiros:Location", skill_param_t.OPTIONAL)]
+    d.num_params = 3
+    c = skill_condition_t()
+    c.kind, c.subject, c.owl, c.desired_state = "HasProperty", "Robot", "skiros:Charged", True
+    pre = skill_condition_t()
+    pre.kind, pre.subject, pre.owl, pre.desired_state = "HasProperty", "Via", "skiros:Open", True
+    d.post, d.num_post, d.pre, d.num_pre = [c], 1, [pre], 1
+    spec = skill_from_msg(d)
+    assert spec.params == [("Robot", "skiros:Robot"), ("Via", "skiros:Location")]  # Dock: the manager's to fill
+    spec.pre = []  # (Via named by no condition now: as Dock)
+    spec.params = [x for x in spec.params if x[0] == "Robot"]
+    w = World({"skiros:Robot-1": "skiros:Robot"}, {}, set(), ONTOLOGY)  # no Location at all
+    assert [str(x) for x in make_plan([spec], w, "(has:skiros:Charged skiros:Robot-1)").steps] == \
+        ["Charge (charge) Robot=skiros:Robot-1"]

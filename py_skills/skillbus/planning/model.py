@@ -56,19 +56,22 @@ class World:
 
 
 def skill_from_msg(d: Any) -> SkillSpec:
-    """A skill_description_t (the manager's list) as the planner sees it: its required and
-    optional element parameters (the inferred Robot is the manager's to fill), its
-    conditions."""
+    """A skill_description_t (the manager's list) as the planner sees it: its required
+    element parameters and the optional ones a condition names (the inferred Robot, and an
+    optional one no condition names, are the manager's to fill), its conditions."""
     from skillbus.msgs import skill_param_t
     from skillbus.skill.convert import value_from_msg
-    params = [(p.key, p.concept) for p in d.params
-              if p.data_type == "element" and p.param_type in (skill_param_t.REQUIRED, skill_param_t.OPTIONAL)]
-
     def conds(cs: Iterable[Any]) -> list[Condition]:
         return [Condition(c.kind, c.subject, c.object, c.owl, c.op or "=", value_from_msg(c.value), bool(c.desired_state),
                           c.or_label) for c in cs]
-    return SkillSpec(d.type, d.label, params, conds(d.pre), conds(d.post), conds(d.hold),
-                     not bool(getattr(d, "not_for_planning", False)))
+    pre, post, hold = conds(d.pre), conds(d.post), conds(d.hold)
+    # An optional element parameter no condition names is not the planner's to bind: bound,
+    # it made the skill need such an element in the world and picked one at random.
+    named = {k for c in pre + post + hold for k in (c.subject, c.object) if k}
+    params = [(p.key, p.concept) for p in d.params
+              if p.data_type == "element" and (p.param_type == skill_param_t.REQUIRED or
+                                                (p.param_type == skill_param_t.OPTIONAL and p.key in named))]
+    return SkillSpec(d.type, d.label, params, pre, post, hold, not bool(getattr(d, "not_for_planning", False)))
 
 
 def world_from_client(wmi: Any) -> World:
