@@ -98,6 +98,18 @@ def test_values_no_message_can_carry_are_400_naming_that(console):
     assert r.status_code == 400 and error(r).startswith("a value no message can carry: "), r.text
 
 
+def test_an_edits_text_field_that_is_missing_or_no_string_is_refused(console):
+    # Before, a set_label without a label erased the label, and a null became "None".
+    client, read = console
+    for body, why in (({"op": "set_label", "read": read}, "this edit needs 'label' (a string)"),
+                      ({"op": "set_label", "read": read, "label": None}, "'label' must be a string, not null"),
+                      ({"op": "add", "type": 7}, "'type' must be a string, not a number"),
+                      ({"op": "relate", "read": read, "subject": ["x"], "predicate": "p"},
+                       "'subject' must be a string, not a list")):
+        r = client.post("/api/world/edit", headers=TOKEN, json=body)
+        assert r.status_code == 400 and error(r) == why, (body, r.text)
+
+
 def test_a_server_that_does_not_answer_is_504_and_says_the_outcome_is_unknown(console):
     client, _ = console
     r = client.post("/api/tasks", headers=TOKEN, json={"skill": "Wait", "params": {}})

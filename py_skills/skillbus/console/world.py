@@ -157,14 +157,14 @@ class LiveWorld:
         kind = req.get("op")
         ops: list[wm_op_t] = []
         if kind == "add":
-            typ, label, parent = str(req.get("type", "")), str(req.get("label", "")), str(req.get("parent", ""))
+            typ, label, parent = _text(req, "type"), _text(req, "label", ""), _text(req, "parent", "")
             if not typ:
                 raise ConsoleError("a new element needs a type")
             return self._add(typ, label, parent)
         read = self._read(str(req.get("read", "")))
         ops.append(_op(wm_op_t.EXPECT_ELEMENT, element=read))
         if kind == "set_property":
-            key = str(req.get("key", ""))
+            key = _text(req, "key", "")
             if not key:
                 raise ConsoleError("set_property needs a key")
             old = next((p for p in read.properties if p.key == key), None)
@@ -186,11 +186,11 @@ class LiveWorld:
             ops.append(_op(wm_op_t.UPDATE_ELEMENT, element=new))
         elif kind == "set_label":
             new = _copy(read)
-            new.label = str(req.get("label", ""))
+            new.label = _text(req, "label")  # (missing or null: refused, not an erased label)
             ops.append(_op(wm_op_t.UPDATE_ELEMENT, element=new))
         elif kind in ("relate", "unrelate"):
             r = wm_relation_t()
-            r.subject, r.predicate, r.object = (str(req.get(k, "")) for k in ("subject", "predicate", "object"))
+            r.subject, r.predicate, r.object = (_text(req, k, "") for k in ("subject", "predicate", "object"))
             if read.id not in (r.subject, r.object) or not r.predicate:
                 raise ConsoleError(f"a relation of {read.id} needs a predicate and {read.id} at one end")
             ops.append(_op(wm_op_t.ADD_RELATION if kind == "relate" else wm_op_t.REMOVE_RELATION, relation=r))
@@ -237,6 +237,24 @@ class LiveWorld:
         except RpcError as e:
             raise ConsoleError(str(e)) from None
         return {"version": result.version, "ids": list(result.ids)}
+
+
+def _text(req: dict[str, Any], key: str, default: str | None = None) -> str:
+    """A text field of an edit: a string; missing, the default (none: it is needed). Any
+    other value is refused (str() made a null "None" and a missing label an erased one)."""
+    if key not in req:
+        if default is None:
+            raise ConsoleError(f"this edit needs {key!r} (a string)")
+        return default
+    value = req[key]
+    if not isinstance(value, str):
+        raise ConsoleError(f"{key!r} must be a string, not {json_type(value)}")
+    return value
+
+
+def json_type(value: Any) -> str:
+    return "null" if value is None else {bool: "a boolean", int: "a number", float: "a number", list: "a list",
+                                         dict: "an object"}.get(type(value), type(value).__name__)
 
 
 def _op(kind: int, element: wm_element_t | None = None, relation: wm_relation_t | None = None) -> wm_op_t:
