@@ -108,6 +108,8 @@ def test_an_edits_text_field_that_is_missing_or_no_string_is_refused(console):
                        "'subject' must be a string, not a list")):
         r = client.post("/api/world/edit", headers=TOKEN, json=body)
         assert r.status_code == 400 and error(r) == why, (body, r.text)
+    r = client.post("/api/tasks", headers=TOKEN, json={"skill": "Wait", "robot": None})
+    assert r.status_code == 400 and error(r) == "'robot' must be a string, not null", r.text
 
 
 def test_a_server_that_does_not_answer_is_504_and_says_the_outcome_is_unknown(console):

@@ -68,6 +68,24 @@ class ConsoleTimeout(ConsoleError):
     504); the message says to look before asking again."""
 
 
+def text_field(req: dict[str, Any], key: str, default: str | None = None) -> str:
+    """A text field of an edit: a string; missing, the default (none: it is needed). Any
+    other value is refused (str() made a null "None" and a missing label an erased one)."""
+    if key not in req:
+        if default is None:
+            raise ConsoleError(f"this edit needs {key!r} (a string)")
+        return default
+    value = req[key]
+    if not isinstance(value, str):
+        raise ConsoleError(f"{key!r} must be a string, not {json_type(value)}")
+    return value
+
+
+def json_type(value: Any) -> str:
+    return "null" if value is None else {bool: "a boolean", int: "a number", float: "a number", list: "a list",
+                                         dict: "an object"}.get(type(value), type(value).__name__)
+
+
 class Manager:
     def __init__(self, bus, info: skill_manager_info_t, on_progress: Callable[[str, bytes], None]) -> None:
         self.robot, self.name, self.agent = info.robot, info.name, info.agent

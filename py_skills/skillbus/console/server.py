@@ -21,7 +21,8 @@ from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from skillbus.console.bus_worker import BusWorker
-from skillbus.console.live import CATCH_UP_S, FLUSH_PERIOD_S, PROBE_PERIOD_S, ConsoleError, ConsoleTimeout, LiveSkills
+from skillbus.console.live import (CATCH_UP_S, FLUSH_PERIOD_S, PROBE_PERIOD_S, ConsoleError, ConsoleTimeout, LiveSkills,
+                                   text_field)
 from skillbus.console.world import LiveWorld
 
 log = logging.getLogger("skillbus.console")
@@ -273,7 +274,10 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         params = body.get("params") or {}
         if not isinstance(params, dict) or not isinstance(body.get("skill"), str):
             raise HTTPException(400, "a start needs {\"skill\": NAME, \"robot\": NAME, \"params\": {KEY: VALUE}}")
-        robot, skill, label = str(body.get("robot", "")), body["skill"], str(body.get("label", ""))
+        try:  # (a null robot became "None")
+            robot, skill, label = text_field(body, "robot", ""), body["skill"], text_field(body, "label", "")
+        except ConsoleError as e:
+            raise HTTPException(400, str(e)) from None
         text = {str(k): v if isinstance(v, str) else json.dumps(v) for k, v in params.items()}
         task = await on_bus(lambda: state["skills"].start(robot, skill, label, text))
         return {"robot": robot, "task": task}

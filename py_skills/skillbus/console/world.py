@@ -19,7 +19,7 @@ from skillbus.channels import channel
 from skillbus.msgs import (decode, wm_change_t, wm_element_t, wm_elements_t, wm_op_t, wm_property_t, wm_query_t,
                            wm_relation_t, wm_value_t)
 from skillbus.rpc import RpcClient, RpcError, RpcRemoteError, RpcTimeout
-from skillbus.console.live import ConsoleError, ConsoleTimeout
+from skillbus.console.live import ConsoleError, ConsoleTimeout, text_field
 
 VALUE_TYPES = {"string": wm_value_t.STRING, "int": wm_value_t.INT, "float": wm_value_t.FLOAT, "bool": wm_value_t.BOOL}
 TYPE_NAMES = {v: k for k, v in VALUE_TYPES.items()}
@@ -157,14 +157,14 @@ class LiveWorld:
         kind = req.get("op")
         ops: list[wm_op_t] = []
         if kind == "add":
-            typ, label, parent = _text(req, "type"), _text(req, "label", ""), _text(req, "parent", "")
+            typ, label, parent = text_field(req, "type"), text_field(req, "label", ""), text_field(req, "parent", "")
             if not typ:
                 raise ConsoleError("a new element needs a type")
             return self._add(typ, label, parent)
         read = self._read(str(req.get("read", "")))
         ops.append(_op(wm_op_t.EXPECT_ELEMENT, element=read))
         if kind == "set_property":
-            key = _text(req, "key", "")
+            key = text_field(req, "key", "")
             if not key:
                 raise ConsoleError("set_property needs a key")
             old = next((p for p in read.properties if p.key == key), None)
@@ -186,11 +186,11 @@ class LiveWorld:
             ops.append(_op(wm_op_t.UPDATE_ELEMENT, element=new))
         elif kind == "set_label":
             new = _copy(read)
-            new.label = _text(req, "label")  # (missing or null: refused, not an erased label)
+            new.label = text_field(req, "label")  # (missing or null: refused, not an erased label)
             ops.append(_op(wm_op_t.UPDATE_ELEMENT, element=new))
         elif kind in ("relate", "unrelate"):
             r = wm_relation_t()
-            r.subject, r.predicate, r.object = (_text(req, k, "") for k in ("subject", "predicate", "object"))
+            r.subject, r.predicate, r.object = (text_field(req, k, "") for k in ("subject", "predicate", "object"))
             if read.id not in (r.subject, r.object) or not r.predicate:
                 raise ConsoleError(f"a relation of {read.id} needs a predicate and {read.id} at one end")
             ops.append(_op(wm_op_t.ADD_RELATION if kind == "relate" else wm_op_t.REMOVE_RELATION, relation=r))
@@ -237,24 +237,6 @@ class LiveWorld:
         except RpcError as e:
             raise ConsoleError(str(e)) from None
         return {"version": result.version, "ids": list(result.ids)}
-
-
-def _text(req: dict[str, Any], key: str, default: str | None = None) -> str:
-    """A text field of an edit: a string; missing, the default (none: it is needed). Any
-    other value is refused (str() made a null "None" and a missing label an erased one)."""
-    if key not in req:
-        if default is None:
-            raise ConsoleError(f"this edit needs {key!r} (a string)")
-        return default
-    value = req[key]
-    if not isinstance(value, str):
-        raise ConsoleError(f"{key!r} must be a string, not {json_type(value)}")
-    return value
-
-
-def json_type(value: Any) -> str:
-    return "null" if value is None else {bool: "a boolean", int: "a number", float: "a number", list: "a list",
-                                         dict: "an object"}.get(type(value), type(value).__name__)
 
 
 def _op(kind: int, element: wm_element_t | None = None, relation: wm_relation_t | None = None) -> wm_op_t:
