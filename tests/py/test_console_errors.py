@@ -153,3 +153,17 @@ def test_the_error_status_of_each_kind():
     assert [error_status(e) for e in (ConsoleError("x"), ConsoleTimeout("x"), RpcTimeout("x"), RpcRemoteError(1, "x"),
                                       struct.error("x"), UnicodeEncodeError("utf-8", "\ud800", 0, 1, "x"),
                                       KeyError("x"))] == [400, 504, 504, 502, 400, 400, 500]
+
+
+def test_two_consoles_on_one_machine_keep_their_own_cookies():
+    # Cookies belong to the host, not the port: both consoles' cookies had one name, and
+    # opening the second console's URL made the first one's page answer 401.
+    from skillbus.console import access
+    from skillbus.console.server import create_app
+    first = create_app(SilentBus, token="first-token")
+    with TestClient(first, raise_server_exceptions=False) as client:
+        r = client.get("/?token=first-token", follow_redirects=False)
+        assert r.status_code == 303 and access.cookie_name("first-token") in r.cookies, r.headers
+        client.cookies.set(access.cookie_name("second-token"), "second-token")  # (what the other console set)
+        assert client.get("/api/managers").status_code == 200
+        assert access.cookie_name("first-token") != access.cookie_name("second-token")

@@ -17,7 +17,7 @@ from __future__ import annotations
 import hmac
 import secrets
 
-COOKIE = "skillbus_console"
+COOKIE = "skillbus_console"  # the name's stem: each console's cookie is named after its token (cookie_name)
 TOKEN_ENV = "SKILLBUS_CONSOLE_TOKEN"  # a token of one's own, kept out of the process list
 HEADER = "x-skillbus-token"
 
@@ -26,8 +26,23 @@ def new_token() -> str:
     return secrets.token_urlsafe(24)
 
 
-def presented(headers, query: dict[str, str], cookies: dict[str, str]) -> str:
-    return query.get("token") or headers.get(HEADER, "") or cookies.get(COOKIE, "")
+def cookie_name(token: str | None) -> str:
+    """The cookie of the console with `token`. Cookies belong to a host, not to a port: two
+    consoles on one machine (``--port 8090``) each set theirs without overwriting the
+    other's (one name for all made the first console's page answer 401 once the second's
+    was opened). A digest of the token, not the token.
+
+    >>> cookie_name("abc"), cookie_name(None)
+    ('skillbus_console_ba7816bf', 'skillbus_console')
+    """
+    if token is None:
+        return COOKIE
+    import hashlib
+    return f"{COOKIE}_{hashlib.sha256(token.encode()).hexdigest()[:8]}"
+
+
+def presented(headers, query: dict[str, str], cookies: dict[str, str], token: str | None = None) -> str:
+    return query.get("token") or headers.get(HEADER, "") or cookies.get(cookie_name(token), "")
 
 
 def allowed(token: str | None, given: str) -> bool:

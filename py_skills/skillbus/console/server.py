@@ -178,7 +178,7 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
     @app.middleware("http")
     async def _token(request: Request, call_next):
         if request.url.path.startswith("/api/") and not access.allowed(
-                token, access.presented(request.headers, dict(request.query_params), request.cookies)):
+                token, access.presented(request.headers, dict(request.query_params), request.cookies, token)):
             return JSONResponse({"error": access.NEEDS_TOKEN}, status_code=401)
         return await call_next(request)
 
@@ -205,7 +205,7 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         if given and token is not None and access.allowed(token, given):
             # the token into a cookie, out of the address bar (and of the history)
             r = RedirectResponse("/", status_code=303)
-            r.set_cookie(access.COOKIE, given, httponly=True, samesite="strict")
+            r.set_cookie(access.cookie_name(token), given, httponly=True, samesite="strict")
             return r
         return FileResponse(STATIC / "index.html")
 
@@ -305,7 +305,7 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
 
     @app.websocket("/api/live")
     async def live(ws: WebSocket) -> None:
-        if not access.allowed(token, access.presented(ws.headers, dict(ws.query_params), ws.cookies)):
+        if not access.allowed(token, access.presented(ws.headers, dict(ws.query_params), ws.cookies, token)):
             await ws.close(code=4401, reason="token needed")
             return
         await ws.accept()
