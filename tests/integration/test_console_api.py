@@ -339,3 +339,17 @@ for _ in range(240):
     bus.publish("SB_SKILL_PROGRESS", p.encode())
     bus.handle(0.25)
 """
+
+
+def test_a_search_over_more_elements_than_one_reply_holds_is_read_in_pages(sandbox, tmp_path):
+    # Before, searching a type of 3,000 elements (the start form's element picker) was
+    # refused by the server ("ask for it in pages") and the console answered 400.
+    from test_wm_scale import scene
+    ttl = tmp_path / "big.ttl"
+    ttl.write_text(scene(3000))
+    start_wm(sandbox, tmp_path / "wm", scene=ttl)
+    proc, url = console(sandbox)
+    (found,) = ask(sandbox, url, ["GET", "/api/world/search?type=skiros:Cube&label=c3002", None])
+    assert found[0] == 200 and [e["id"] for e in found[1]] == ["skiros:Cube-3002"], found
+    (every,) = ask(sandbox, url, ["GET", "/api/world/search?type=skiros:Cube", None])
+    assert every[0] == 200 and len(every[1]) == 3000, (every[0], len(every[1]))

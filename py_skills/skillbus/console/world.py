@@ -121,11 +121,14 @@ class LiveWorld:
     def search(self, type_: str, label: str) -> list[dict[str, Any]]:
         """Elements of a type (with its subclasses; "" any) whose label contains `label`
         (ignoring case; "" any)."""
+        from skillbus.world.wire import query_all
         q = wm_query_t()
         q.type, q.ids_only = type_, True
-        reply = self._call("query", q, wm_elements_t)
+        # In pages: a type of thousands of elements is more than the server sends in one
+        # reply (it refused it, naming paging, and the start form's picker failed).
+        found = query_all(lambda req, timeout: self._call("query", req, wm_elements_t), q, timeout=WM_TIMEOUT_S)
         want = label.lower()
-        return [{"id": e.id, "type": e.type, "label": e.label} for e in reply.elements if want in e.label.lower()]
+        return [{"id": e.id, "type": e.type, "label": e.label} for e in found if want in e.label.lower()]
 
     def element(self, eid: str) -> dict[str, Any]:
         q = wm_query_t()
