@@ -338,3 +338,21 @@ def test_an_optional_element_no_condition_names_is_not_bound_by_the_planner():
     w = World({"skiros:Robot-1": "skiros:Robot"}, {}, set(), ONTOLOGY)  # no Location at all
     assert [str(x) for x in make_plan([spec], w, "(has:skiros:Charged skiros:Robot-1)").steps] == \
         ["Charge (charge) Robot=skiros:Robot-1"]
+
+
+def test_a_class_with_two_parents_is_still_a_parameter_of_either():
+    # A planning type has one parent. skiros:Robot is below sumo:Agent and (through
+    # skiros:Agent) skiros:PhysicalObject; with a skill on PhysicalObjects added, the Robot
+    # kept the other parent, and Charge (a sumo:Agent) could no longer take it: "no plan".
+    hp = lambda key, owl: Condition("HasProperty", key, "", owl)  # noqa: E731
+    charge = SkillSpec("Charge", "charge", [("Robot", "sumo:Agent")], post=[hp("Robot", "skiros:Charged")])
+    inspect = SkillSpec("Inspect", "inspect", [("Target", "skiros:PhysicalObject")],
+                        post=[hp("Target", "skiros:Inspected")])
+    w = World({"skiros:Robot-1": "skiros:Robot", "skiros:Cube-2": "skiros:Cube"}, {}, set(), ONTOLOGY)
+    for skills in ([charge], [charge, inspect], [inspect, charge]):
+        assert [str(x) for x in make_plan(skills, w, "(has:skiros:Charged skiros:Robot-1)").steps] == \
+            ["Charge (charge) Robot=skiros:Robot-1"], [sk.label for sk in skills]
+    assert [str(x) for x in make_plan([charge, inspect], w, "(has:skiros:Inspected skiros:Cube-2)").steps] == \
+        ["Inspect (inspect) Target=skiros:Cube-2"]
+    with pytest.raises(PlanError):  # a cube is no agent: the ontology's check holds
+        make_plan([charge, inspect], w, "(has:skiros:Charged skiros:Cube-2)")

@@ -177,10 +177,24 @@ class _Builder:
         return ""
 
     # -- actions ----------------------------------------------------------------------
+    def param_type(self, concept: str) -> tuple[Any, bool]:
+        """A parameter's planning type, and whether it needs an (is:Concept ?p) precondition:
+        when an element of the concept reaches it only through a parent the one-parent
+        hierarchy did not keep (a Robot below sumo:Agent and skiros:PhysicalObject, the
+        latter kept for another skill), the concept's type would not take it, and the
+        parameter is typed by the root and checked by the ontology instead."""
+        lost = any(self.world.is_a(eid, concept) and not self.reaches(t, concept)
+                   for eid, t in sorted(self.world.types.items()))
+        return (self.types[ROOT], True) if lost else (self.type_of(concept), False)
+
     def action(self, s: SkillSpec) -> Any:
         from unified_planning.shortcuts import Equals, InstantaneousAction, Not, Or, Variable
-        act = InstantaneousAction(safe(s.name), **{safe(k): self.type_of(concept) for k, concept in s.params})
+        typed = {k: self.param_type(concept) for k, concept in s.params}
+        act = InstantaneousAction(safe(s.name), **{safe(k): typed[k][0] for k, _ in s.params})
         p = {k: act.parameter(safe(k)) for k, _ in s.params}
+        for k, concept in s.params:
+            if typed[k][1]:
+                act.add_precondition(self.fluent(Condition("OnType", k, "", concept))(p[k]))
 
         def atom(c: Condition) -> Any:
             f = self.fluent(c)
