@@ -1,6 +1,6 @@
 """A manipulation skill's configuration: its class defaults, then a YAML file (or inline
 YAML text) given by the skill's ``Config`` parameter, then the skill's own parameters,
-each overriding the one before. A task file for ``skillbus manip run`` and
+each overriding the one before. A task file for ``ManipTask`` (``skillbus run ManipTask -p Task=...``) and
 ``skillbus generate`` lists skills the same way::
 
     skills:
