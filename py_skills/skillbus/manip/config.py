@@ -1,7 +1,7 @@
 """A manipulation skill's configuration: its class defaults, then a YAML file (or inline
 YAML text) given by the skill's ``Config`` parameter, then the skill's own parameters,
-each overriding the one before. A task file for ``ManipTask`` (``skillbus run ManipTask -p Task=...``) and
-``skillbus generate`` lists skills the same way::
+each overriding the one before. A task file for ``ManipTask`` (``skillbus run ManipTask
+-p Task=...``) and ``skillbus generate`` lists skills the same way::
 
     skills:
       - name: open          # a registered key (skillbus.manip.registry)
