@@ -333,8 +333,8 @@ def test_an_optional_element_no_condition_names_is_not_bound_by_the_planner():
     d.post, d.num_post, d.pre, d.num_pre = [c], 1, [pre], 1
     spec = skill_from_msg(d)
     assert spec.params == [("Robot", "skiros:Robot"), ("Via", "skiros:Location")]  # Dock: the manager's to fill
-    spec.pre = []  # (Via named by no condition now: as Dock)
-    spec.params = [x for x in spec.params if x[0] == "Robot"]
+    d.pre, d.num_pre = [], 0  # no condition names Via now either
+    spec = skill_from_msg(d)
     w = World({"skiros:Robot-1": "skiros:Robot"}, {}, set(), ONTOLOGY)  # no Location at all
     assert [str(x) for x in make_plan([spec], w, "(has:skiros:Charged skiros:Robot-1)").steps] == \
         ["Charge (charge) Robot=skiros:Robot-1"]
@@ -356,3 +356,24 @@ def test_a_class_with_two_parents_is_still_a_parameter_of_either():
         ["Inspect (inspect) Target=skiros:Cube-2"]
     with pytest.raises(PlanError):  # a cube is no agent: the ontology's check holds
         make_plan([charge, inspect], w, "(has:skiros:Charged skiros:Cube-2)")
+
+
+def test_plans_made_at_once_from_one_folder_are_each_their_own(tmp_path, monkeypatch):
+    # Fast Downward wrote its translated task to output.sas in the current folder: two
+    # plans at once from one folder (two skill processes under supervisord, two test
+    # workers) read each other's task: another problem's plan, or an engine error.
+    import concurrent.futures
+    import os
+    monkeypatch.chdir(tmp_path)
+    w = demo_world()
+    goals = {"(skiros:contain skiros:Bin-5 skiros:Cube-2)": "skiros:Cube-2",
+             "(skiros:contain skiros:Bin-5 skiros:Cube-4)": "skiros:Cube-4"}
+
+    def plan(goal: str) -> str:
+        return make_plan([PICK, PLACE], w, goal).steps[0].params["Object"]
+
+    with concurrent.futures.ThreadPoolExecutor(4) as pool:
+        for _ in range(3):
+            order = list(goals) * 2
+            assert list(pool.map(plan, order)) == [goals[g] for g in order]
+    assert not os.listdir(tmp_path), os.listdir(tmp_path)  # nothing written here

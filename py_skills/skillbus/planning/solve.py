@@ -73,7 +73,24 @@ def _solve_with_engine(problem: Any, optimal: bool, time_limit: float) -> Any:
         # know that and warns.
         warnings.filterwarnings("ignore", message="We cannot establish whether")
         with OneshotPlanner(name=ENGINES[optimal]) as planner:
+            _private_sas_file(planner)
             return planner.solve(problem, timeout=time_limit)
+
+
+def _private_sas_file(planner: Any) -> None:
+    """Fast Downward's driver writes its translated task to output.sas in the current
+    folder: two plans made at once from one folder (two robots' skill processes under
+    supervisord, which start them in the repository) read each other's task and answered
+    another problem's plan, or none. The file goes beside the plan file, in the engine's
+    own temporary folder."""
+    import os
+    base = getattr(planner, "_base_cmd", None)
+    if base is None:
+        raise PlanError(f"the planner {type(planner).__name__} is not the Fast Downward engine this was made for")
+
+    def cmd(plan_filename: str) -> list:
+        return base(plan_filename) + ["--sas-file", os.path.join(os.path.dirname(plan_filename), "output.sas")]
+    planner._base_cmd = cmd
 
 
 def _solved(status: Any) -> bool:
