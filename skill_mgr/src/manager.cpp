@@ -80,7 +80,10 @@ Manager::Manager(Bus& bus, ManagerOptions options)
     info.agent = opt_.robot;
     if (info.agent.empty() && !opt_.robot_label.empty() && world_.ready())
       find_robot(world_.store(), opt_.robot_label, &info.agent);  // (stays "" when it is not there)
-    info.incarnation = liveness_ ? liveness_->incarnation() : 0;
+    // Which run of the manager this is, on both clocks: under lockstep too, so that a
+    // watcher (the console) tells a new session's task 1 from the last one's. Identity
+    // only, never behaviour: this announcement is outside the lockstep session.
+    info.incarnation = liveness_ ? liveness_->incarnation() : run_id_;
     info.num_skills = static_cast<int32_t>(registry_.all().size());
     return info;
   });
@@ -444,15 +447,31 @@ void Manager::on_frame(int64_t frame, int64_t sim_time_ns) {
     return;
   }
   while (!starts_.empty()) {
-    const QueuedStart q = starts_.front();
-    starts_.pop_front();
-    begin(q.req, q.id);
-    if (auto it = tasks_.find(q.id); it != tasks_.end()) {
-      it->second->paused = q.paused;
-      it->second->step_once = q.step_once;
+    // Queued until begun: begin() may pump the bus (the world copy, on the wall clock),
+    // and a pause, step or stop heard meanwhile must still find the task.
+    const int64_t id = starts_.front().id;
+    const skill_start_t req = starts_.front().req;  // (a copy: a stop meanwhile erases the entry)
+    begin(req, id);
+    auto q = std::find_if(starts_.begin(), starts_.end(), [id](const QueuedStart& x) { return x.id == id; });
+    auto it = tasks_.find(id);
+    if (q == starts_.end()) {  // stopped while it began
+      if (it != tasks_.end()) {
+        tasks_.erase(it);  // (its end is published from stopped_queued_ at the next frame)
+      } else {             // it could not begin: its end is published already, once is enough
+        stopped_queued_.erase(std::remove_if(stopped_queued_.begin(), stopped_queued_.end(),
+                                             [id](const auto& s) { return s.first == id; }),
+                              stopped_queued_.end());
+      }
+      continue;
+    }
+    const QueuedStart flags = *q;
+    starts_.erase(q);
+    if (it != tasks_.end()) {
+      it->second->paused = flags.paused;
+      it->second->step_once = flags.step_once;
       // Paused before its first tick: watchers (the console, `skillbus watch`) hear of it
       // now, not at a tick that may be long in coming.
-      if (q.paused && !q.step_once) publish_progress(*it->second);
+      if (flags.paused && !flags.step_once) publish_progress(*it->second);
     }
   }
   for (auto it = tasks_.begin(); it != tasks_.end();) {

@@ -106,6 +106,10 @@ class Manager {
     bool paused = false, step_once = false;
   };
   std::deque<QueuedStart> starts_;
+  // This run's identity in the managers' directory under lockstep (the wall clock's is
+  // Liveness's incarnation): the system clock at start, never read for behaviour.
+  const int64_t run_id_ = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                              std::chrono::system_clock::now().time_since_epoch()).count();
   std::deque<std::pair<int64_t, std::string>> stopped_queued_;  // stopped before they began: (task, type)
   int64_t next_task_ = 1;
   std::map<int64_t, std::string> results_;

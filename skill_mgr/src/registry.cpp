@@ -13,7 +13,7 @@ const char* kind_name(int8_t k) {
   return k == skill_param_t::REQUIRED ? "required" : k == skill_param_t::OPTIONAL ? "optional" : "inferred";
 }
 
-std::string a(const std::string& noun) {
+std::string with_article(const std::string& noun) {
   return (!noun.empty() && std::string("aeiou").find(noun[0]) != std::string::npos ? "an " : "a ") + noun;
 }
 
@@ -32,7 +32,8 @@ std::string params_differ(const skill_description_t& d, const skill_description_
     const skill_param_t* k = param_of(known, p.key);
     if (!k) return "it has parameter " + p.key + ", which " + known.label + " has not";
     if (p.data_type != k->data_type)
-      return "its parameter " + p.key + " is " + a(p.data_type) + ", in " + known.label + " " + a(k->data_type);
+      return "its parameter " + p.key + " is " + with_article(p.data_type) + ", in " + known.label + " " +
+             with_article(k->data_type);
     if (p.concept != k->concept)
       return "its parameter " + p.key + " is of concept " + p.concept + ", in " + known.label + " of " + k->concept;
     if (p.param_type != k->param_type)

@@ -144,7 +144,8 @@ def test_a_script_longer_than_its_session_fails_naming_the_steps_not_played(sand
     # in its summary only).
     script = {"steps": [gripper(0.1, "early", 0.02), gripper(2.0, "late", 0.0), gripper(3.0, "later", 0.0)]}
     r = run_script_session(sandbox, script, 0.5, tmp_path)
-    assert r["sim"]["ok"] and r["script"]["ok"] and r["script"]["steps_left"] == 2, r
+    assert r["sim"]["ok"] and not r["script"]["ok"] and r["script"]["steps_left"] == 2, r
+    assert r["script"]["error"].startswith("2 step(s) not played"), r["script"]
     part = next(p for p in sandbox.procs if p.name == "script")
     assert part.popen.returncode == 1, part.stderr()[-2000:]
     assert "error: sim-script: 2 step(s) not played: the session ended at sim time 0.490 s, before the step " \

@@ -35,7 +35,10 @@ PROBE_PERIOD_S = 3.0    # managers are looked for again this often
 MANAGER_CATCH_UP_S = 5.0  # a manager's tasks are read when it is met; an unanswered read is tried again after this
 MAX_MANAGERS = 64       # robots followed at once (announcements are bounded, forged or not)
 MANAGER_TIMEOUT_S = 2.0
-MANAGER_GONE_S = 3 * PROBE_PERIOD_S  # a manager that has not answered this long is dropped, its running tasks lost
+# A manager that has answered none of this many probes in a row is dropped, its running
+# tasks lost (counted, not timed: a bus thread held by a long job must not drop them all).
+PROBES_UNANSWERED = 3
+MANAGER_GONE_S = PROBES_UNANSWERED * PROBE_PERIOD_S  # (what that is, at least, in seconds)
 VERBS = ("pause", "step", "resume", "stop")
 
 
@@ -92,7 +95,7 @@ class Manager:
         self.incarnation = info.incarnation
         self.rpc = RpcClient(bus, "SKILL", "console", robot=info.robot)
         self.sub = bus.subscribe(robot_channel("SB_SKILL_PROGRESS", info.robot), on_progress)
-        self.heard = time.monotonic()
+        self.unanswered = 0  # probes sent since it was last heard
         self.caught_up, self.catch_up_tried = False, 0.0  # its tasks read (SKILL.tasks)
 
     def call(self, method: str, req, reply_type, timeout: float = MANAGER_TIMEOUT_S):
@@ -124,6 +127,9 @@ class LiveSkills:
         """Asks every manager to say itself (answers arrive in _on_manager)."""
         m = skill_manager_info_t()
         m.header.frame, m.header.sender = -1, "console"
+        self.drop_silent_managers()  # (those that answered none of the probes before this one)
+        for known in self.managers.values():
+            known.unanswered += 1
         self.bus.publish(robot_channel("SB_MANAGERS_PROBE", ""), m.encode())
 
     def _on_manager(self, ch: str, data: bytes) -> None:
@@ -138,7 +144,7 @@ class LiveSkills:
             self.refused += 1
             return
         if known is not None and known.incarnation == info.incarnation and known.name == info.name:
-            known.heard = time.monotonic()
+            known.unanswered = 0
             known.agent = info.agent or known.agent
             return
         if known is not None:
@@ -161,14 +167,15 @@ class LiveSkills:
         m.rpc.close()
 
     def drop_silent_managers(self) -> None:
-        """Chore: a manager not heard for MANAGER_GONE_S (killed, its machine gone) is no
-        longer listed and its running tasks end as lost; its finished ones stay shown."""
-        now = time.monotonic()
+        """A manager that answered none of the last PROBES_UNANSWERED probes and sent no
+        progress meanwhile (killed, its machine gone) is no longer listed and its running
+        tasks end as lost; its finished ones stay shown. (Called by probe().)"""
         for robot, m in list(self.managers.items()):
-            if now - m.heard > MANAGER_GONE_S:
+            if m.unanswered >= PROBES_UNANSWERED:
                 del self.managers[robot]
                 self._drop(m)
-                lost = self._lose_running(robot, f"its skill manager has not answered for {MANAGER_GONE_S:g} s")
+                lost = self._lose_running(robot, f"its skill manager has not answered for {MANAGER_GONE_S:g} s "
+                                                 f"({PROBES_UNANSWERED} probes)")
                 for tree in lost:  # (should it answer again, as the same incarnation: their trees are taken anew)
                     tree.incarnation = -1
                 self.emit({"kind": "managers", "managers": self.manager_list()})
@@ -199,6 +206,8 @@ class LiveSkills:
         if task is None:
             return
         self._heard[(robot, task)] = time.monotonic()
+        if (m := self.managers.get(robot)) is not None:
+            m.unanswered = 0  # (its progress says it is there, whatever became of the probes' answers)
         # (with the manager's incarnation as of now: one that restarts before the flush must
         # not have its predecessor's last trees taken for its own)
         self._pending[(robot, task)] = (data, self._incarnations.get(robot, 0))

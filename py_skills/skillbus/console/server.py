@@ -121,7 +121,6 @@ def create_app(open_bus: Callable[[], Any], scene: Path | None = None, log: Path
         worker.every(0.5, state["world"].say_version)
         worker.every(PROBE_PERIOD_S, state["skills"].probe)
         worker.every(CATCH_UP_S / 2, state["skills"].catch_up_quiet_tasks)
-        worker.every(PROBE_PERIOD_S, state["skills"].drop_silent_managers)
         # What only a page needs is done only while one is open: the physics state is not
         # even heard without one (it comes every frame), trees are updated every 2 s.
         worker.every(SEND_PERIOD_S, lambda: state["sim"].send(hub.watched))

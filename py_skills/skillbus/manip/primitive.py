@@ -12,6 +12,7 @@ skillbus.manip.library is such a module.
 
 from __future__ import annotations
 
+import logging
 import time
 from typing import Any
 
@@ -21,6 +22,9 @@ from skillbus.manip.executor import ManipExecutor
 from skillbus.manip.registry import SKILLS
 from skillbus.manip.views import Controller, RobotInfo, TaskView, ViewError
 from skillbus.skill import Element, ParamTypes, PrimitiveBase, SkillDescription, State
+
+
+log = logging.getLogger("skillbus.manip")
 
 
 def camel(key: str) -> str:
@@ -64,10 +68,9 @@ class _ManipPrimitive(PrimitiveBase):
             if e is not None and getattr(e, "id", ""):
                 params[key] = e.id
         cfg = manip_config.merge(cls.defaults, self.params["Config"].value or "", params)
-        unknown = cls.unknown_keys(cfg)
-        if unknown:  # (a typo would be ignored and the default act: refused, named)
-            raise manip_config.ConfigError(f"unknown configuration key(s) {', '.join(unknown)} (it takes: "
-                                           f"{', '.join(cls.known_keys())})")
+        refused = cls.keys_refused(cfg)
+        if refused:  # (a typo would be ignored and the default act: refused, named)
+            raise manip_config.ConfigError(f"configuration: {refused}")
         return cfg
 
     def onStart(self):
@@ -127,12 +130,14 @@ class _ManipPrimitive(PrimitiveBase):
             return self.fail(out.message, out.code or -1)
         ops = self.skill.world_ops() if self.wmi is not None else []
         if ops:
-            from skillbus.rpc import RpcError
+            from skillbus.rpc import RpcError, RpcTimeout
             from skillbus.world.client import WorldModelError
             try:  # (under lockstep with this frame, its result heard later; else at once)
                 self.write_request = self.wmi.commit_async(ops) if self.wmi.participant is not None else None
                 if self.write_request is None:
                     self.wmi.commit(ops)
+            except RpcTimeout:
+                pass  # (applied or not, unknown: the replica showing it, or the deadline, decides)
             except (WorldModelError, RpcError) as e:
                 return self.fail(f"{self.skill.key}: the world model refused what it did: {e}", -1)
             self.writing, self.done_message = True, out.message
@@ -142,10 +147,13 @@ class _ManipPrimitive(PrimitiveBase):
 
     def onEnd(self):
         """Ended another way than by the executor's own outcome (the skill process ends a
-        primitive whose execute() raised): a trajectory still played is stopped."""
+        primitive whose execute() raised): a trajectory still played is stopped, and the
+        log says so (the failure's message is the exception's)."""
         executor = getattr(self, "executor", None)
         if executor is not None and self.state != State.Success:
-            executor.stop_motion()
+            said = executor.stop_motion()
+            if said:
+                log.warning("%s ended by a failure: %s", self.skill.key, said)
         return True
 
     def onPreempt(self):

@@ -48,16 +48,22 @@ class ManipSkill:
     options: ClassVar[tuple[str, ...] | None] = None
 
     @classmethod
+    def known_keys(cls) -> list[str]:
+        return sorted({*cls.defaults, *cls.elements, *cls.optional_elements, *(cls.options or ()), *COMMON_KEYS})
+
+    @classmethod
     def unknown_keys(cls, cfg: dict) -> list[str]:
         """The keys of `cfg` a strict class does not read (sorted; [] when not strict)."""
         if cls.options is None:
             return []
-        known = {*cls.defaults, *cls.elements, *cls.optional_elements, *cls.options, *COMMON_KEYS}
+        known = set(cls.known_keys())
         return sorted(str(k) for k in cfg if k not in known)
 
     @classmethod
-    def known_keys(cls) -> list[str]:
-        return sorted({*cls.defaults, *cls.elements, *cls.optional_elements, *(cls.options or ()), *COMMON_KEYS})
+    def keys_refused(cls, cfg: dict) -> str:
+        """"" or why `cfg` is refused: the keys a strict class does not read, and the ones it takes."""
+        unknown = cls.unknown_keys(cfg)
+        return f"unknown key(s) {', '.join(unknown)} (it takes: {', '.join(cls.known_keys())})" if unknown else ""
 
     def __init__(self, robot: Any, controller: Any, task: Any, cfg: dict) -> None:
         self.robot = robot

@@ -61,10 +61,9 @@ class manip_task(SkillBase):
                 if own in entry:  # (it went into the Config, unread: the task's arm moved)
                     raise ValueError(f"{path}: skills[{i}] ({key}): {own} is the task's for every entry (give it to "
                                      f"ManipTask), not an entry's")
-            unknown = cls.unknown_keys(entry)
-            if unknown:
-                raise ValueError(f"{path}: skills[{i}] ({key}): unknown key(s) {', '.join(unknown)} (it takes: "
-                                 f"{', '.join(cls.known_keys())})")
+            refused = cls.keys_refused(entry)
+            if refused:
+                raise ValueError(f"{path}: skills[{i}] ({key}): {refused}")
             specify = {}
             for pname in list(cls.elements) + list(cls.optional_elements):
                 if pname in entry:

@@ -177,7 +177,7 @@ class _Builder:
         return ""
 
     # -- actions ----------------------------------------------------------------------
-    def param_type(self, concept: str) -> tuple[Any, bool]:
+    def planning_type_of(self, concept: str) -> tuple[Any, bool]:
         """A parameter's planning type, and whether it needs an (is:Concept ?p) precondition:
         when an element of the concept reaches it only through a parent the one-parent
         hierarchy did not keep (a Robot below sumo:Agent and skiros:PhysicalObject, the
@@ -189,7 +189,7 @@ class _Builder:
 
     def action(self, s: SkillSpec) -> Any:
         from unified_planning.shortcuts import Equals, InstantaneousAction, Not, Or, Variable
-        typed = {k: self.param_type(concept) for k, concept in s.params}
+        typed = {k: self.planning_type_of(concept) for k, concept in s.params}
         act = InstantaneousAction(safe(s.name), **{safe(k): typed[k][0] for k, _ in s.params})
         p = {k: act.parameter(safe(k)) for k, _ in s.params}
         for k, concept in s.params:

@@ -185,12 +185,13 @@ def main(args) -> int:
     if args.out:
         Path(args.out).write_text(json.dumps({"states": player.states, "replies": player.replies,
                                               "last_state": state_dict(player.last_msg) if player.last_msg else None}))
-    print(json.dumps({"ok": r.ok, "error": r.error, "frames": r.frames, "sim_time_s": r.sim_time_ns * 1e-9,
+    ok, error = r.ok, r.error
+    if ok and player.steps:  # (the session was shorter than the script: it did not do what it says)
+        ok, error = False, (f"{len(player.steps)} step(s) not played: the session ended at sim time "
+                            f"{r.sim_time_ns * 1e-9:.3f} s, before the step at {player.steps[0]['at_s']} s")
+        print(f"error: sim-script: {error}", file=sys.stderr)
+    print(json.dumps({"ok": ok, "error": error, "frames": r.frames, "sim_time_s": r.sim_time_ns * 1e-9,
                       "digest": r.digest_hex, "replies": len(player.replies),
                       "rejected": sum(1 for x in player.replies if not x["accepted"]), "bad_input": player.bad,
                       "steps_left": len(player.steps)}), flush=True)
-    if r.ok and player.steps:  # (the session was shorter than the script: it did not do what it says)
-        print(f"error: sim-script: {len(player.steps)} step(s) not played: the session ended at sim time "
-              f"{r.sim_time_ns * 1e-9:.3f} s, before the step at {player.steps[0]['at_s']} s", file=sys.stderr)
-        return 1
-    return 0 if r.ok else 1
+    return 0 if ok else 1

@@ -11,6 +11,7 @@ call, so a skill decides the same way on every run.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from typing import Any
@@ -48,6 +49,9 @@ def top_down(yaw: float) -> tuple[float, float, float, float]:
 def fold(yaw: float) -> float:
     """The yaw within [-45, 45] degrees that grasps a square the same way."""
     return (yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
+
+
+log = logging.getLogger("skillbus.skills")
 
 
 def command_id(label: str) -> str:
@@ -373,9 +377,12 @@ class _ArmMotion(PrimitiveBase):
 
     def onEnd(self):
         """Ended by an exception in execute() (the skill process then fails it): the arm is
-        stopped as on any failure on the way."""
+        stopped as on any failure on the way, and the log says so (the failure's message is
+        the exception's)."""
         if self.state != State.Success and getattr(self, "cmd", None) is not None:
-            self._stop()
+            said = self._stop()
+            if said:
+                log.warning("%s ended by a failure: %s", self.label, said)
         return True
 
     def onPreempt(self):
@@ -383,8 +390,8 @@ class _ArmMotion(PrimitiveBase):
         holds where it is instead of going on with the trajectory."""
         if self.cmd is None:
             return self.fail(f"preempted: {self.label} had not moved yet", -1)
-        self._stop()
-        return self.fail(f"preempted: {self.label} stopped on the way to {self.what}, holding", -1)
+        said = self._stop()
+        return self.fail(f"preempted: {self.label} on the way to {self.what}: {said or 'stopped already'}", -1)
 
 
 class move_arm(_ArmMotion):
