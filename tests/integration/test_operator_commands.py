@@ -10,6 +10,7 @@ printed "cannot expand: ... no reply within 30.0 s" after half a minute.
 
 from __future__ import annotations
 
+from skillbus.waiting import wait_until
 from test_launch_run_dir import box, skillbus_in, wait_no_procs  # noqa: F401 (box: a fixture)
 
 LAUNCH = ["launch", "--wall-clock", "--no-task", "--run-dir", "robot"]
@@ -19,6 +20,9 @@ def test_operator_commands_are_allowed_by_the_systems_policy(box, tmp_path):  # 
     rc, out, err = skillbus_in(box, tmp_path, *LAUNCH, timeout=120)
     assert rc == 0, out + err
     try:
+        # (launch returns once every program runs; the skill process registers a moment later)
+        wait_until(lambda: "ClearTable" in skillbus_in(box, tmp_path, "skills", timeout=60)[1], 60,
+                   "the skill process registered")
         rc, out, err = skillbus_in(box, tmp_path, "tree", "ClearTable", timeout=60)
         assert rc == 0 and "cannot expand" not in out, out + err
         lines = out.splitlines()

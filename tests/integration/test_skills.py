@@ -305,3 +305,13 @@ def test_a_lockstep_manager_says_which_run_it_is(sandbox):
         sandbox.kill(mgr)
         sandbox.wait(mgr, 10)
     assert 0 not in seen and seen[0] != seen[1], seen
+
+
+def test_a_manager_with_no_skills_yet_says_so(sandbox):
+    # Right after `skillbus launch` (it returns once every program runs) the skill process
+    # may not have registered: "unknown skill 'ClearTable' (available: none)" read as if
+    # the skill did not exist.
+    sandbox.start("skill_mgr", [mgr_binary(), "--wall-clock"])
+    for command in (["run", "ClearTable", "--timeout", "10"], ["tree", "ClearTable"]):
+        rc, _, err = cli(sandbox, *command)
+        assert rc == 2 and "error: unknown skill 'ClearTable': the skill manager has no skills yet" in err, err

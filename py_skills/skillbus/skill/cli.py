@@ -384,6 +384,20 @@ class ManagerWatch:
         return ""
 
 
+def unknown_skill(name: str, lst: skill_list_t) -> str:
+    """Why `name` is no skill of the manager's list, with what it has: none at all is said as
+    such (right after `skillbus launch` the skill processes may not have registered yet).
+
+    >>> unknown_skill("Pick", skill_list_t())
+    "unknown skill 'Pick': the skill manager has no skills yet (no skill process has registered with it: still starting, or not running? `skillbus skills` lists them)"
+    """
+    have = sorted({d.type for d in lst.skills})
+    if not have:
+        return (f"unknown skill {name!r}: the skill manager has no skills yet (no skill process has registered with "
+                f"it: still starting, or not running? `skillbus skills` lists them)")
+    return f"unknown skill {name!r} (available: {', '.join(have)})"
+
+
 def _run(args, intr: Interrupts) -> int:
     from skillbus.monitor import watch_url
     bus = open_bus(watch_url(args.url))  # (a large receive buffer: progress is not lost while it prints)
@@ -394,8 +408,7 @@ def _run(args, intr: Interrupts) -> int:
     req = skill_start_t()
     known = {d.type for d in lst.skills} | {d.label for d in lst.skills}
     if args.skill not in known:
-        print(f"error: unknown skill {args.skill!r} (available: {', '.join(sorted({d.type for d in lst.skills})) or 'none'})",
-              file=sys.stderr)
+        print(f"error: {unknown_skill(args.skill, lst)}", file=sys.stderr)
         return 2
     by_label = next((d for d in lst.skills if d.label == args.skill and d.type != args.skill), None)
     if by_label and args.label and args.label != by_label.label:  # (it was ignored: the label ran)

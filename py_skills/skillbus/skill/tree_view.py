@@ -232,8 +232,8 @@ def main(args) -> int:
             ex = Expander(bus, lst, getattr(args, "robot", None))
             found = ex.find(args.target, args.target)
             if found is None:
-                known = ", ".join(sorted({d.type for d in lst.skills})) or "none"
-                print(f"error: unknown skill {args.target!r} (available: {known})", file=sys.stderr)
+                from skillbus.skill.cli import unknown_skill
+                print(f"error: {unknown_skill(args.target, lst)}", file=sys.stderr)
                 return 2
             try:
                 given = {p.key: p for p in (typed_param(found[0], t) for t in args.param)}
