@@ -18,23 +18,13 @@ pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
 
 from skillbus.msgs import header_t, lockstep_clock_t, skill_manager_info_t, wm_element_t  # noqa: E402
+from support.stand_in_bus import StandInBus  # noqa: E402
 
 TOKEN = {"X-Skillbus-Token": "T"}
 
 
-class SilentBus:
-    def __init__(self) -> None:
-        self.n = 0
-
-    def subscribe(self, channel, handler, queue_capacity=0):
-        self.n += 1
-        return self.n
-
-    def unsubscribe(self, sid):
-        pass
-
-    def publish(self, channel, data):
-        pass
+class SilentBus(StandInBus):
+    """Nothing ever arrives: the console's bus thread waits as on a bus no server answers."""
 
     def handle(self, timeout):
         import time

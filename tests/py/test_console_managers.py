@@ -10,22 +10,7 @@ from __future__ import annotations
 from skillbus.console import live
 from skillbus.console.live import LiveSkills
 from skillbus.msgs import skill_manager_info_t, skill_node_progress_t, skill_progress_t
-
-
-class Bus:
-    def __init__(self) -> None:
-        self.n, self.subs = 0, {}
-
-    def subscribe(self, channel, handler, **options):
-        self.n += 1
-        self.subs[self.n] = (channel, handler)
-        return self.n
-
-    def unsubscribe(self, sid):
-        self.subs.pop(sid, None)
-
-    def publish(self, channel, data):
-        pass
+from support.stand_in_bus import StandInBus
 
 
 def announce(skills: LiveSkills, incarnation: int = 1) -> None:
@@ -49,7 +34,7 @@ def test_a_manager_is_dropped_after_three_unanswered_probes_whatever_the_time(mo
     now = [0.0]
     monkeypatch.setattr(live.time, "monotonic", lambda: now[0])
     events: list[dict] = []
-    skills = LiveSkills(Bus(), events.append)
+    skills = LiveSkills(StandInBus(), events.append)
     announce(skills)
     progress(skills)
     now[0] += 60.0  # (a bus thread held for a minute: no probe went out meanwhile)

@@ -11,44 +11,30 @@ from skillbus.console import views3d
 from skillbus.console.scene3d import Scene3D
 from skillbus.console.views3d import LiveSim
 from skillbus.msgs import sim_state_t
+from support.stand_in_bus import StandInBus
 
 
-class Bus:
-    def __init__(self) -> None:
-        self.n, self.subs = 0, {}
-
-    def subscribe(self, channel, handler, **options):
-        self.n += 1
-        self.subs[self.n] = (channel, handler)
-        return self.n
-
-    def unsubscribe(self, sid):
-        self.subs.pop(sid, None)
-
-    def deliver(self, frame: int) -> bool:
-        """A physics state of `frame` to whoever hears SB_SIM_STATE; whether someone did."""
-        s = sim_state_t()
-        s.header.frame = frame
-        heard = [h for ch, h in self.subs.values() if ch.endswith("SB_SIM_STATE")]
-        for h in heard:
-            h("SB_SIM_STATE", s.encode())
-        return bool(heard)
+def deliver(bus: StandInBus, frame: int) -> bool:
+    """A physics state of `frame` to whoever hears SB_SIM_STATE; whether someone did."""
+    s = sim_state_t()
+    s.header.frame = frame
+    return bus.deliver("SB_SIM_STATE", s.encode())
 
 
 def test_a_script_polling_the_state_without_a_page_gets_the_latest_with_its_age(monkeypatch):
     now = [1000.0]
     monkeypatch.setattr(views3d.time, "monotonic", lambda: now[0])
-    bus = Bus()
+    bus = StandInBus()
     sim = LiveSim(bus, Scene3D(paths.demo_scene()), lambda event: None)
     assert sim.latest() is None  # nothing heard yet
     now[0] += 0.1
     sim.send(False)  # the chore, no page open
-    assert bus.deliver(7), "the state is no longer heard right after the call"
+    assert deliver(bus, 7), "the state is no longer heard right after the call"
     now[0] += 0.5
     view = sim.latest()
     assert view["frame"] == 7 and view["age_s"] == 0.5, view
     now[0] += views3d.ASKED_GRACE_S + 1  # no call for a while: not heard any more
     sim.send(False)
-    assert not bus.deliver(8)
+    assert not deliver(bus, 8)
     view = sim.latest()  # the old state, and how old it is
     assert view["frame"] == 7 and view["age_s"] > views3d.ASKED_GRACE_S, view

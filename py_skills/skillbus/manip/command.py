@@ -52,12 +52,17 @@ def _vector(value: Any, n: int, what: str) -> tuple[float, ...]:
     return out
 
 
+def _finite(v: Any) -> bool:
+    """A finite number (numpy's too), not a bool."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
+
+
 def _number(params: dict, key: str, low: float, low_ok: bool) -> None:
     """params[key], when given, is a finite number above `low` (or at it, `low_ok`)."""
     if key not in params or params[key] is None:
         return
     v = params[key]
-    ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and (v > low or (low_ok and v == low))
+    ok = _finite(v) and (v > low or (low_ok and v == low))
     if not ok:
         raise ValueError(f"manip command: params[{key!r}] must be a finite number {'>=' if low_ok else '>'} {low:g}, "
                          f"not {v!r}")
@@ -75,7 +80,7 @@ def _check_params(params: dict) -> None:
         raise ValueError(f"manip command: params['fallback'] can only be 'free', not {params['fallback']!r}")
     if params.get("motion") == "joints":
         for name, q in params["joints"].items():
-            if not isinstance(q, numbers.Real) or isinstance(q, bool) or not math.isfinite(q):
+            if not _finite(q):
                 raise ValueError(f"manip command: params['joints'][{name!r}] must be a finite number, not {q!r}")
 
 

@@ -21,9 +21,10 @@ failure that names ``skill.failure_reason``. Each command must finish within
 ``cfg["command_timeout_s"]`` of sim time (20 s by default), counted from the end of its
 trajectory as planned once the robot has taken it (a slow move is not a stuck one).
 
-A failure (a timeout, a refusal, a skill's method raising) while a trajectory is being
-played stops the arm where it is (``arm.hold``), as a stop does: a failed skill never
-leaves the arm moving on a command nobody watches any more.
+A failure (a timeout, a skill's method or an interface raising) while a trajectory is
+being played stops the arm where it is (``arm.hold``), as a stop does: a failed skill
+never leaves the arm moving on a command nobody watches any more (a motion the robot
+refused moved nothing, and holds nothing).
 """
 
 from __future__ import annotations
